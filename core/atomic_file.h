@@ -1,0 +1,21 @@
+#pragma once
+// Write-to-temporary-then-rename, so a final name only ever holds a complete file.
+#include <functional>
+#include <string>
+
+namespace aperture {
+
+/// A temporary path in the same directory as `finalPath` (".name.tmp-PID-N"), so rename is
+/// atomic on the same filesystem.
+std::string temporaryPathFor(const std::string& finalPath);
+
+/// Calls write(tmpPath), fsyncs the file, renames it over `finalPath`. If write throws or any
+/// step fails, the temporary file is removed, `finalPath` is untouched, and Error is thrown
+/// naming `finalPath` and the reason (e.g. "No space left on device").
+void writeAtomically(const std::string& finalPath,
+                     const std::function<void(const std::string& tmpPath)>& write);
+
+/// Writes `text` to `finalPath` atomically.
+void writeTextAtomically(const std::string& finalPath, const std::string& text);
+
+}  // namespace aperture

@@ -1,0 +1,46 @@
+#pragma once
+// Multi-channel EXR output and input through OpenEXR.
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/framebuffer.h"
+
+namespace aperture {
+
+/// EXR compression by name: none rle zips zip piz pxr24 b44 b44a dwaa dwab.
+enum class ExrCompression { None, Rle, Zips, Zip, Piz, Pxr24, B44, B44a, Dwaa, Dwab };
+ExrCompression parseExrCompression(const std::string& name);  ///< throws Error listing names
+std::string exrCompressionName(ExrCompression c);
+
+struct ExrOptions {
+  ExrCompression compression = ExrCompression::Zip;
+  bool halfColor = false;  ///< R G B A as half; geometry channels are always float32
+};
+
+/// What the header records beside the pixels.
+struct ExrMetadata {
+  CameraDescription camera;
+  double renderSeconds = 0;
+  /// Further string attributes (software version, mesh, settings).
+  std::vector<std::pair<std::string, std::string>> strings;
+};
+
+/// Writes every allocated AOV of `fb` to `path` with the channel names of the README
+/// (R G B A, Z, T, N.X.., P.X.., primID, geomID). The header carries the camera (type, eye, U,
+/// V, W, d, viewport), the standard worldToCamera and worldToNDC matrices (float, OpenEXR's
+/// row-vector convention) and double versions "aperture.worldToCamera"/"aperture.worldToNDC",
+/// spp and render time. Written to a temporary file in the same directory and renamed:
+/// a failure leaves no file under `path` and any previous file intact. Throws Error.
+void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata& meta,
+              const ExrOptions& options = {});
+
+/// Reads an EXR written by writeExr back into a Framebuffer (AOVs from the channel names;
+/// half channels widened to float). Throws Error for unreadable or incomplete files.
+Framebuffer readExr(const std::string& path, ExrMetadata* meta = nullptr);
+
+/// True if `path` is a complete, readable EXR (every scanline present); used by --resume.
+bool isCompleteExr(const std::string& path);
+
+}  // namespace aperture

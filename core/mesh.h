@@ -1,0 +1,77 @@
+#pragma once
+// Triangle meshes as loaded from PLY, OBJ or a procedural generator.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace aperture {
+
+/// Embree reads up to 16 bytes at the address of the last vertex; positions carry this many
+/// zero floats after the last xyz triple so the buffer can be shared with Embree as is.
+inline constexpr size_t kVertexPaddingFloats = 4;
+
+/// What the loader saw, reported to the user and in bench output.
+struct MeshStats {
+  size_t fileBytes = 0;              ///< bytes of the source file (0 for procedural meshes)
+  double loadSeconds = 0;            ///< wall time of loadMesh
+  size_t sourceFaces = 0;            ///< faces/strips/polygons in the file before triangulation
+  size_t nonFiniteVertices = 0;      ///< vertices with a NaN or Inf coordinate (set to 0)
+  size_t droppedTriangles = 0;       ///< triangles dropped because they use a non-finite vertex
+  size_t degenerateTriangles = 0;    ///< triangles with a repeated index (kept; Embree skips them)
+};
+
+/// An indexed triangle mesh. World position of vertex k is anchor + positions[3k..3k+2].
+/// The anchor is chosen at load (the bounding-box centre in camera-relative mode, the origin
+/// in world-space mode) and kept in double so far-from-origin meshes keep float precision.
+struct Mesh {
+  std::string name;                ///< file path or procedural spec it came from
+  glm::dvec3 anchor{0.0};          ///< world-space origin of `positions`, scene units
+  std::vector<float> positions;    ///< 3 * vertexCount floats, then kVertexPaddingFloats zeros
+  std::vector<uint32_t> indices;   ///< 3 per triangle, each < vertexCount
+  size_t vertexCount = 0;
+  /// Optional: loaders of double-precision sources (PLY double properties, procedural scenes)
+  /// fill this instead of `positions`; finishMesh() anchors it in double and clears it.
+  std::vector<double> positionsDouble;
+  MeshStats stats;
+
+  size_t triangleCount() const { return indices.size() / 3; }
+  glm::vec3 vertex(size_t k) const {
+    return {positions[3 * k], positions[3 * k + 1], positions[3 * k + 2]};
+  }
+  /// Bounds of the finite vertices relative to the anchor; empty mesh gives min > max.
+  void bounds(glm::vec3& lo, glm::vec3& hi) const;
+};
+
+/// How coordinates are stored.
+enum class Placement {
+  CameraRelative,  ///< anchor = bounding-box centre (computed in double); default
+  WorldSpace,      ///< anchor = origin: float32 world coordinates, for measuring the difference
+};
+
+struct LoadOptions {
+  Placement placement = Placement::CameraRelative;
+  /// Applied in double to every vertex before anchoring (x' = scale * x + translate).
+  glm::dvec3 translate{0.0};
+  double scale = 1.0;
+};
+
+/// Loads `spec`: a path ending in .ply or .obj (case-insensitive), or "procedural:NAME?k=v&k=v"
+/// (see procedural.cpp for the names). Throws Error naming the file and the problem: unreadable,
+/// truncated, bad number, counts larger than the file, an index out of range.
+Mesh loadMesh(const std::string& spec, const LoadOptions& options = {});
+
+/// Loaders for one format each (loadMesh dispatches). They fill positions in world space
+/// (anchor 0, no padding); finishMesh() then validates, anchors and pads.
+Mesh loadPly(const std::string& path);
+Mesh loadObj(const std::string& path);
+Mesh makeProcedural(const std::string& spec);
+
+/// Counts and zeroes non-finite vertices, drops the triangles using them, counts degenerate
+/// triangles, checks every index (< vertexCount, else Error naming `name`), applies the
+/// options' transform and anchor, and pads positions for Embree.
+void finishMesh(Mesh& mesh, const LoadOptions& options);
+
+}  // namespace aperture

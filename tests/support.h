@@ -1,0 +1,30 @@
+#pragma once
+// Helpers shared by the test files.
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace aperture::test {
+
+/// ../shared beside the project (absolute), as configured by CMake.
+std::string sharedDir();
+/// Path of a mesh under ../shared/meshes, or "" when ../shared is absent.
+std::string sharedMesh(const std::string& relative);
+/// A fresh empty directory under the build tree's temp area, unique per test.
+std::string scratchDir();
+/// Path of the built `aperture` executable.
+std::string apertureBinary();
+/// Runs a shell command, returns its exit code (-1 if killed by a signal); stdout+stderr
+/// go to *output when given.
+int runCommand(const std::string& command, std::string* output = nullptr);
+/// Writes a file (binary-safe).
+void writeFile(const std::string& path, const std::string& bytes);
+bool fileExists(const std::string& path);
+
+}  // namespace aperture::test
+
+/// Skips the current test with a message when a ../shared mesh is missing.
+#define APERTURE_REQUIRE_SHARED_MESH(var, rel)                                         \
+  const std::string var = ::aperture::test::sharedMesh(rel);                           \
+  if (var.empty()) GTEST_SKIP() << "../shared/meshes/" rel " is absent (no ../shared " \
+                                   "beside the project); this test needs it"
