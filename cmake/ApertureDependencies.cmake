@@ -21,3 +21,19 @@ endif()
 if(APERTURE_BUILD_BENCH)
   aperture_require(benchmark libbenchmark-dev)
 endif()
+
+# Debian 12's OpenImageIO config lists /usr/include/opencv4 (an optional build dependency of
+# the package) among its include directories; CMake rejects a missing path, so drop any that
+# do not exist instead of installing OpenCV.
+foreach(target OpenImageIO::OpenImageIO OpenImageIO::OpenImageIO_Util)
+  get_target_property(dirs ${target} INTERFACE_INCLUDE_DIRECTORIES)
+  if(dirs)
+    set(kept)
+    foreach(dir IN LISTS dirs)
+      if(EXISTS "${dir}")
+        list(APPEND kept "${dir}")
+      endif()
+    endforeach()
+    set_target_properties(${target} PROPERTIES INTERFACE_INCLUDE_DIRECTORIES "${kept}")
+  endif()
+endforeach()

@@ -1,0 +1,66 @@
+#include "cameras/frame.h"
+
+#include <cmath>
+
+#include "core/error.h"
+
+namespace aperture {
+
+void requireFinite(double x, const char* what) {
+  if (!std::isfinite(x)) throw Error(cat("camera: ", what, " is not finite (", x, ")"));
+}
+
+void requireFinite(const glm::dvec3& v, const char* what) {
+  if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
+    throw Error(cat("camera: ", what, " (", v.x, ",", v.y, ",", v.z, ") is not finite"));
+}
+
+CameraFrame CameraFrame::fromDirection(const glm::dvec3& eye, const glm::dvec3& view,
+                                       const glm::dvec3& up) {
+  requireFinite(eye, "eye");
+  requireFinite(view, "view direction");
+  requireFinite(up, "up");
+  const double viewLen = glm::length(view), upLen = glm::length(up);
+  if (!(viewLen > 0)) throw Error("camera: the view direction is zero (eye == look-at point?)");
+  if (!(upLen > 0)) throw Error("camera: the up vector is zero");
+  CameraFrame f;
+  f.e = eye;
+  f.w = -view / viewLen;
+  // Normalise up first so the parallel test is scale-free; |up × W| = sin(angle between them).
+  const glm::dvec3 cross = glm::cross(up / upLen, f.w);
+  const double s = glm::length(cross);
+  if (!(s > 1e-15))
+    throw Error(cat("camera: up (", up.x, ",", up.y, ",", up.z,
+                    ") is parallel to the view direction (", view.x, ",", view.y, ",", view.z,
+                    ")"));
+  f.u = cross / s;
+  f.v = glm::cross(f.w, f.u);
+  // One Gram-Schmidt pass removes the rounding left in V so the frame is orthonormal to ~1 ulp.
+  f.v = glm::normalize(f.v - glm::dot(f.v, f.u) * f.u);
+  return f;
+}
+
+CameraFrame CameraFrame::fromLookAt(const glm::dvec3& eye, const glm::dvec3& at,
+                                    const glm::dvec3& up) {
+  requireFinite(at, "look-at point");
+  if (eye == at)
+    throw Error(cat("camera: the look-at point equals the eye (", eye.x, ",", eye.y, ",", eye.z,
+                    ")"));
+  return fromDirection(eye, at - eye, up);
+}
+
+glm::dmat4 CameraFrame::cameraFromWorld() const {
+  // Rows are U, V, W; translation −R·e. GLM is column-major: m[col][row].
+  glm::dmat4 m(1.0);
+  for (int c = 0; c < 3; ++c) {
+    m[c][0] = u[c];
+    m[c][1] = v[c];
+    m[c][2] = w[c];
+  }
+  m[3][0] = -glm::dot(u, e);
+  m[3][1] = -glm::dot(v, e);
+  m[3][2] = -glm::dot(w, e);
+  return m;
+}
+
+}  // namespace aperture
