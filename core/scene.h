@@ -1,0 +1,82 @@
+#pragma once
+// The Embree device and scene (BVH) built over loaded meshes.
+#include <embree3/rtcore.h>
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "core/mesh.h"
+
+namespace aperture {
+
+/// One Embree device for the process; its error callback turns Embree errors into Error
+/// exceptions (thrown from the next checked call), and a memory monitor tracks Embree's bytes.
+class Device {
+ public:
+  /// `config` is passed to rtcNewDevice (e.g. "threads=2"); empty for Embree's defaults.
+  explicit Device(const std::string& config = "");
+  ~Device();
+  Device(const Device&) = delete;
+  Device& operator=(const Device&) = delete;
+
+  RTCDevice handle() const { return device_; }
+  /// Throws Error if Embree reported an error since the last call.
+  void check(const char* what) const;
+  /// Bytes Embree currently holds (from its memory monitor callback).
+  long long memoryBytes() const;
+  /// The ISA Embree chose for this CPU ("AVX512", "AVX2", ...), from rtcGetDeviceProperty.
+  std::string isaName() const;
+
+  struct State;
+
+ private:
+  RTCDevice device_ = nullptr;
+  std::unique_ptr<State> state_;
+};
+
+enum class BvhQuality { Low, Medium, High };
+BvhQuality parseBvhQuality(const std::string& name);  ///< "low|medium|high", else Error
+const char* bvhQualityName(BvhQuality q);
+
+struct BuildOptions {
+  BvhQuality quality = BvhQuality::High;
+  bool robust = false;   ///< RTC_SCENE_FLAG_ROBUST: watertight, slower traversal
+  bool compact = false;  ///< RTC_SCENE_FLAG_COMPACT: less memory, slower traversal
+};
+
+struct BuildStats {
+  size_t triangles = 0;
+  double buildSeconds = 0;     ///< rtcCommitScene wall time
+  long long embreeBytes = 0;   ///< Embree's memory after the build
+};
+
+/// An Embree scene over meshes that outlive it (their vertex and index buffers are shared
+/// with Embree, not copied). geomID k is meshes[k]. All meshes must share one anchor, which
+/// becomes the render origin of the cameras.
+class Scene {
+ public:
+  Scene(const Device& device, const std::vector<const Mesh*>& meshes,
+        const BuildOptions& options = {});
+  ~Scene();
+  Scene(const Scene&) = delete;
+  Scene& operator=(const Scene&) = delete;
+
+  RTCScene handle() const { return scene_; }
+  const BuildStats& stats() const { return stats_; }
+  const BuildOptions& options() const { return options_; }
+  /// World position of render-space origin (the meshes' shared anchor), double precision.
+  const glm::dvec3& renderOrigin() const { return renderOrigin_; }
+
+ private:
+  const Device& device_;
+  RTCScene scene_ = nullptr;
+  BuildOptions options_;
+  BuildStats stats_;
+  glm::dvec3 renderOrigin_{0.0};
+};
+
+}  // namespace aperture
