@@ -57,6 +57,9 @@ struct HitView {
   unsigned primID(int k) const {
     if constexpr (N == 1) return p.hit.primID; else return p.hit.primID[k];
   }
+  unsigned instID(int k) const {
+    if constexpr (N == 1) return p.hit.instID[0]; else return p.hit.instID[0][k];
+  }
   float ngX(int k) const { if constexpr (N == 1) return p.hit.Ng_x; else return p.hit.Ng_x[k]; }
   float ngY(int k) const { if constexpr (N == 1) return p.hit.Ng_y; else return p.hit.Ng_y[k]; }
   float ngZ(int k) const { if constexpr (N == 1) return p.hit.Ng_z; else return p.hit.Ng_z[k]; }

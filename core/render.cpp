@@ -89,7 +89,13 @@ void renderTile(const FramePlan& plan, int x0, int y0, int x1, int y1, TileCount
           const size_t px = size_t(by + k / kBW) * size_t(fb.width) + size_t(bx + k % kBW);
           const float t = hit.t(k);
           glm::vec3 n(0.0f);
-          if (needNormal) n = glm::normalize(glm::vec3(hit.ngX(k), hit.ngY(k), hit.ngZ(k)));
+          const unsigned inst = hit.instID(k);
+          const unsigned object = inst == RTC_INVALID_GEOMETRY_ID ? hit.geomID(k) : inst;
+          if (needNormal) {
+            glm::vec3 ng(hit.ngX(k), hit.ngY(k), hit.ngZ(k));
+            if (inst != RTC_INVALID_GEOMETRY_ID) ng = plan.scene.normalFromMesh(inst) * ng;
+            n = glm::normalize(ng);
+          }
           if (plan.color) {
             const glm::vec3 dir(lanes.dirX[k], lanes.dirY[k], lanes.dirZ[k]);
             shade[k] += std::fabs(glm::dot(n, dir));
@@ -117,7 +123,7 @@ void renderTile(const FramePlan& plan, int x0, int y0, int x1, int y1, TileCount
             fb.position[3 * px + 2] = float(p.z);
           }
           if (plan.primId) fb.primId[px] = hit.primID(k);
-          if (plan.geomId) fb.geomId[px] = hit.geomID(k);
+          if (plan.geomId) fb.geomId[px] = object;
         }
       }
       if (!plan.color) continue;

@@ -2,7 +2,10 @@
 
 #include <atomic>
 #include <chrono>
+#include <map>
 #include <mutex>
+
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "core/error.h"
 
@@ -101,39 +104,101 @@ const char* bvhQualityName(BvhQuality q) {
   return "?";
 }
 
-Scene::Scene(const Device& device, const std::vector<const Mesh*>& meshes,
-             const BuildOptions& options)
-    : device_(device), options_(options) {
-  if (meshes.empty()) throw Error("scene: no meshes");
-  renderOrigin_ = meshes.front()->anchor;
-  for (const Mesh* m : meshes)
-    if (m->anchor != renderOrigin_)
+namespace {
+
+std::vector<SceneObject> untransformed(const std::vector<const Mesh*>& meshes) {
+  std::vector<SceneObject> objects;
+  for (const Mesh* m : meshes) {
+    if (m->anchor != meshes.front()->anchor)
       throw Error(cat("scene: mesh '", m->name, "' has a different anchor than '",
                       meshes.front()->name, "'"));
+    objects.push_back({m, glm::dmat4(1.0)});
+  }
+  return objects;
+}
+
+RTCGeometry triangleGeometry(const Device& device, const Mesh& m, RTCBuildQuality quality) {
+  // Embree may read 16 bytes at the last vertex: the loader pads positions for that.
+  APERTURE_CHECK_OP(m.positions.size(), >=, 3 * m.vertexCount + kVertexPaddingFloats - 1);
+  RTCGeometry geom = rtcNewGeometry(device.handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
+  rtcSetGeometryBuildQuality(geom, quality);
+  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                             m.positions.data(), 0, 3 * sizeof(float), m.vertexCount);
+  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, m.indices.data(),
+                             0, 3 * sizeof(uint32_t), m.triangleCount());
+  rtcCommitGeometry(geom);
+  device.check(cat("adding mesh '", m.name, "'").c_str());
+  return geom;
+}
+
+}  // namespace
+
+Scene::Scene(const Device& device, const std::vector<const Mesh*>& meshes,
+             const BuildOptions& options)
+    : Scene(device, untransformed(meshes), options) {}
+
+Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
+             const BuildOptions& options)
+    : device_(device), options_(options) {
+  if (objects.empty()) throw Error("scene: no meshes");
+  renderOrigin_ = glm::dvec3(objects.front().worldFromMesh * glm::dvec4(objects.front().mesh->anchor, 1.0));
+  std::map<const Mesh*, size_t> uses;
+  for (const SceneObject& o : objects) ++uses[o.mesh];
+
   const long long bytesBefore = device.memoryBytes();
   const auto start = std::chrono::steady_clock::now();
-  scene_ = rtcNewScene(device.handle());
-  device.check("rtcNewScene");
+  const RTCBuildQuality quality = toEmbree(options.quality);
   int flags = RTC_SCENE_FLAG_NONE;
   if (options.robust) flags |= RTC_SCENE_FLAG_ROBUST;
   if (options.compact) flags |= RTC_SCENE_FLAG_COMPACT;
-  rtcSetSceneFlags(scene_, RTCSceneFlags(flags));
-  rtcSetSceneBuildQuality(scene_, toEmbree(options.quality));
-  for (size_t k = 0; k < meshes.size(); ++k) {
-    const Mesh& m = *meshes[k];
-    // Embree may read 16 bytes at the last vertex: the loader pads positions for that.
-    APERTURE_CHECK_OP(m.positions.size(), >=, 3 * m.vertexCount + kVertexPaddingFloats - 1);
-    RTCGeometry geom = rtcNewGeometry(device.handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
-    rtcSetGeometryBuildQuality(geom, toEmbree(options.quality));
-    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                               m.positions.data(), 0, 3 * sizeof(float), m.vertexCount);
-    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                               m.indices.data(), 0, 3 * sizeof(uint32_t), m.triangleCount());
-    rtcCommitGeometry(geom);
-    rtcAttachGeometryByID(scene_, geom, unsigned(k));
-    rtcReleaseGeometry(geom);
-    device.check(cat("adding mesh '", m.name, "'").c_str());
+  auto newScene = [&] {
+    RTCScene s = rtcNewScene(device.handle());
+    device.check("rtcNewScene");
+    rtcSetSceneFlags(s, RTCSceneFlags(flags));
+    rtcSetSceneBuildQuality(s, quality);
+    return s;
+  };
+  scene_ = newScene();
+  std::map<const Mesh*, RTCScene> built;  // sub-scene of each instanced mesh
+  normalFromMesh_.assign(objects.size(), glm::mat3(1.0f));
+  for (size_t k = 0; k < objects.size(); ++k) {
+    const Mesh& m = *objects[k].mesh;
     stats_.triangles += m.triangleCount();
+    const bool direct = uses[&m] == 1 && objects[k].worldFromMesh == glm::dmat4(1.0) &&
+                        m.anchor == renderOrigin_;
+    if (direct) {
+      RTCGeometry geom = triangleGeometry(device, m, quality);
+      rtcAttachGeometryByID(scene_, geom, unsigned(k));
+      rtcReleaseGeometry(geom);
+      stats_.uniqueTriangles += m.triangleCount();
+      continue;
+    }
+    auto it = built.find(&m);
+    if (it == built.end()) {
+      RTCScene sub = newScene();
+      RTCGeometry geom = triangleGeometry(device, m, quality);
+      rtcAttachGeometryByID(sub, geom, 0);
+      rtcReleaseGeometry(geom);
+      rtcCommitScene(sub);
+      device.check(cat("building the BVH of mesh '", m.name, "'").c_str());
+      it = built.emplace(&m, sub).first;
+      subScenes_.push_back(sub);
+      stats_.uniqueTriangles += m.triangleCount();
+    }
+    // Render space from mesh-local space, composed in double: T(−origin) · M · T(anchor).
+    const glm::dmat4 renderFromLocal = glm::translate(glm::dmat4(1.0), -renderOrigin_) *
+                                       objects[k].worldFromMesh *
+                                       glm::translate(glm::dmat4(1.0), m.anchor);
+    const glm::mat4 xf(renderFromLocal);
+    RTCGeometry inst = rtcNewGeometry(device.handle(), RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(inst, it->second);
+    rtcSetGeometryTransform(inst, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &xf[0][0]);
+    rtcCommitGeometry(inst);
+    rtcAttachGeometryByID(scene_, inst, unsigned(k));
+    rtcReleaseGeometry(inst);
+    device.check(cat("instancing mesh '", m.name, "'").c_str());
+    normalFromMesh_[k] = glm::mat3(glm::transpose(glm::inverse(glm::dmat3(renderFromLocal))));
+    ++instanced_;
   }
   rtcCommitScene(scene_);
   device.check("rtcCommitScene (BVH build)");
@@ -144,6 +209,7 @@ Scene::Scene(const Device& device, const std::vector<const Mesh*>& meshes,
 
 Scene::~Scene() {
   if (scene_) rtcReleaseScene(scene_);
+  for (RTCScene s : subScenes_) rtcReleaseScene(s);
 }
 
 }  // namespace aperture

@@ -211,3 +211,41 @@ TEST(RenderAovs, OnlyRequestedBuffersAreWritten) {
   EXPECT_TRUE(fb.rgba.empty() && fb.normal.empty() && fb.primId.empty());
   EXPECT_NEAR(fb.depth[0], 3.0, 3e-6);
 }
+
+TEST(RenderInstances, RepeatedMeshMatchesCopiesAndReportsObjectIds) {
+  Device device;
+  Mesh sphere = sphereMesh(1.0, {0, 0, 0}, 64, 32);
+  // Two placements of one mesh: translated left, and rotated 90° about y + translated right.
+  glm::dmat4 left = glm::dmat4(1.0), right = glm::dmat4(1.0);
+  left[3] = glm::dvec4(-1.5, 0, 0, 1);
+  right[0] = glm::dvec4(0, 0, -1, 0);
+  right[2] = glm::dvec4(1, 0, 0, 0);
+  right[3] = glm::dvec4(1.5, 0, 0, 1);
+  Scene instanced(device, std::vector<SceneObject>{{&sphere, left}, {&sphere, right}});
+  EXPECT_EQ(instanced.instanceCount(), 2u);
+  EXPECT_EQ(instanced.stats().uniqueTriangles, sphere.triangleCount());
+  EXPECT_EQ(instanced.stats().triangles, 2 * sphere.triangleCount());
+  // The same two spheres with the transforms baked into copies (an independent path).
+  auto baked = [&](const glm::dmat4& m) {
+    std::vector<glm::dvec3> v;
+    for (size_t k = 0; k < sphere.vertexCount; ++k)
+      v.push_back(glm::dvec3(m * glm::dvec4(glm::dvec3(sphere.vertex(k)), 1.0)));
+    return meshFrom(v, sphere.indices, glm::dvec3(0.0));
+  };
+  Mesh a = baked(left), b = baked(right);
+  // Both copies are anchored at the origin, used once and untransformed: attached directly.
+  Scene copies(device, std::vector<SceneObject>{{&a, glm::dmat4(1.0)}, {&b, glm::dmat4(1.0)}});
+  EXPECT_EQ(copies.instanceCount(), 0u);
+  CameraParams p = lookAt({0.2, 1.0, 5.0}, {0, 0, 0}, 64, 40, 50.0);
+  const AovMask aovs = parseAovList("depth,normal,primid,geomid");
+  Framebuffer fi = render(instanced, p, aovs), fc = render(copies, p, aovs);
+  int hits = 0;
+  for (size_t px = 0; px < fi.pixelCount(); ++px) {
+    ASSERT_EQ(fi.geomId[px], fc.geomId[px]) << px;
+    if (fi.geomId[px] == kInvalidId) continue;
+    ++hits;
+    EXPECT_NEAR(fi.depth[px], fc.depth[px], 1e-4 * fc.depth[px]);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(fi.normal[3 * px + c], fc.normal[3 * px + c], 1e-3);
+  }
+  EXPECT_GT(hits, 300);
+}
