@@ -222,8 +222,9 @@ Mesh makeQuad(const Params& p) {
   Mesh m;
   Builder b{m.positionsDouble, m.indices};
   double h = p.at("size") / 2, z = p.at("z");
-  b.quad(b.addVertex(-h, -h, z), b.addVertex(h, -h, z), b.addVertex(h, h, z),
-         b.addVertex(-h, h, z));
+  uint32_t v0 = b.addVertex(-h, -h, z), v1 = b.addVertex(h, -h, z);
+  uint32_t v2 = b.addVertex(h, h, z), v3 = b.addVertex(-h, h, z);
+  b.quad(v0, v1, v2, v3);
   m.vertexCount = 4;
   return m;
 }
