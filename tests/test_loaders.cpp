@@ -406,13 +406,14 @@ TEST(LoaderShared, BunnyPlyAndObjAgree) {
   ASSERT_EQ(obj.triangleCount(), 69451u);
   EXPECT_EQ(ply.vertexCount, 35947u);
   EXPECT_EQ(obj.vertexCount, 35947u);
-  // The OBJ keeps the PLY's vertex and face order; compare the triangles' corner positions.
+  // The OBJ keeps the PLY's vertex and face order (checked below) but prints 6 decimals
+  // where the PLY has 6 significant digits: corners agree to the OBJ's rounding, 5e-7.
   size_t sameIndices = 0;
   for (size_t t = 0; t < ply.triangleCount(); ++t) {
     bool same = true;
     for (int c = 0; c < 3; ++c) {
       glm::vec3 a = ply.vertex(ply.indices[3 * t + c]), b = obj.vertex(obj.indices[3 * t + c]);
-      for (int i = 0; i < 3; ++i) ASSERT_NEAR(a[i], b[i], 1e-6f) << "triangle " << t;
+      for (int i = 0; i < 3; ++i) ASSERT_NEAR(a[i], b[i], 6e-7f) << "triangle " << t;
       same = same && ply.indices[3 * t + c] == obj.indices[3 * t + c];
     }
     sameIndices += same;
