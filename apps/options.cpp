@@ -173,7 +173,7 @@ CameraParams CameraOptions::toParams(const glm::dvec3& worldLo, const glm::dvec3
     const glm::dvec3 view = p.dir ? glm::normalize(*p.dir)
                                   : glm::normalize(glm::dvec3(-0.35, -0.45, -1.0));
     const glm::dvec3 target = p.at.value_or(centre);
-    p.eye = target - view * (1.05 * radius / std::sin(halfFov));
+    p.eye = target - view * (0.8 * radius / std::sin(halfFov));
     if (!p.dir) p.at = target;
   }
   if (p.d && !p.viewport) throw Error("--d needs --viewport (the viewport at that distance)");
