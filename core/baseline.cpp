@@ -24,11 +24,11 @@ BaselineTracer::BaselineTracer(const Camera& camera, int width, int height, int 
     Tile t{rays16_.size(), 0};
     for (int by = y0; by < y1; by += 4)
       for (int bx = x0; bx < x1; bx += 4) {
-        std::array<int, 16> valid;
-        camera.generate(PacketRequest{bx, by, 4, 4, 0}, lanes, valid.data());
+        ValidMask valid;
+        camera.generate(PacketRequest{bx, by, 4, 4, 0}, lanes, valid.lanes);
         for (int k = 0; k < 16; ++k) {
-          if (by + k / 4 >= height || bx + k % 4 >= width) valid[k] = 0;
-          rays_ += valid[k] != 0;
+          if (by + k / 4 >= height || bx + k % 4 >= width) valid.lanes[k] = 0;
+          rays_ += valid.lanes[k] != 0;
         }
         rays16_.push_back(packet.ray);
         valid_.push_back(valid);
@@ -53,7 +53,7 @@ double BaselineTracer::traceFrame(const Scene& scene) const {
           for (size_t p = tiles_[t].first; p < tiles_[t].first + tiles_[t].count; ++p) {
             packet.ray = rays16_[p];
             clearHits<16>(packet);
-            rtcIntersect16(valid_[p].data(), scene.handle(), &ctx, &packet);
+            rtcIntersect16(valid_[p].lanes, scene.handle(), &ctx, &packet);
           }
       },
       tbb::simple_partitioner());

@@ -1,7 +1,6 @@
 #pragma once
 // The benchmark ceiling: the camera's rays, generated once up front, traced by bare
 // rtcIntersect16 with nothing else (no shading, no framebuffer).
-#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -26,7 +25,10 @@ class BaselineTracer {
     size_t first, count;  // packets
   };
   std::vector<RTCRay16> rays16_;
-  std::vector<std::array<int, 16>> valid_;
+  struct alignas(64) ValidMask {  // rtcIntersect16 requires a 64-byte aligned mask
+    int lanes[16];
+  };
+  std::vector<ValidMask> valid_;
   std::vector<Tile> tiles_;
   uint64_t rays_ = 0;
 };
