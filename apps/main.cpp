@@ -1,2 +1,41 @@
-// Placeholder entry point; replaced by the CLI.
-int main() { return 0; }
+// aperture: render triangle meshes through Embree ray packets into multi-channel EXR files.
+#include <cstdio>
+#include <exception>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "apps/commands.h"
+#include "core/error.h"
+
+int main(int argc, char** argv) {
+  using namespace aperture::app;
+  CLI::App app{"aperture " APERTURE_VERSION
+               ": batch-render and benchmark large triangle meshes with Embree ray packets"};
+  app.set_version_flag("--version", "aperture " APERTURE_VERSION);
+  app.require_subcommand(1);
+  std::vector<std::pair<CLI::App*, Command>> commands;
+  auto add = [&](Command (*make)(CLI::App&)) {
+    const size_t before = app.get_subcommands({}).size();
+    Command run = make(app);
+    commands.emplace_back(app.get_subcommands({})[before], std::move(run));
+  };
+  add(addRenderCommand);
+  add(addBenchCommand);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);  // --help/--version exit 0, usage errors exit 2 with a message
+  }
+  try {
+    for (auto& [sub, run] : commands)
+      if (sub->parsed()) return run();
+  } catch (const aperture::Error& e) {
+    std::fprintf(stderr, "aperture: error: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "aperture: internal error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

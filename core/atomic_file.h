@@ -5,15 +5,19 @@
 
 namespace aperture {
 
-/// A temporary path in the same directory as `finalPath` (".name.tmp-PID-N"), so rename is
-/// atomic on the same filesystem.
-std::string temporaryPathFor(const std::string& finalPath);
+/// A temporary path in the same directory as `finalPath` (".name.tmp-PID-N" followed by
+/// `suffix`), so rename is atomic on the same filesystem. N counts up within the process.
+/// `suffix` keeps an extension visible to writers that pick the format from the name
+/// (".png").
+std::string temporaryPathFor(const std::string& finalPath, const std::string& suffix = "");
 
 /// Calls write(tmpPath), fsyncs the file, renames it over `finalPath`. If write throws or any
 /// step fails, the temporary file is removed, `finalPath` is untouched, and Error is thrown
-/// naming `finalPath` and the reason (e.g. "No space left on device").
+/// naming `finalPath` and the reason (e.g. "No space left on device"). The directory of
+/// `finalPath` must exist. `suffix` is passed to temporaryPathFor.
 void writeAtomically(const std::string& finalPath,
-                     const std::function<void(const std::string& tmpPath)>& write);
+                     const std::function<void(const std::string& tmpPath)>& write,
+                     const std::string& suffix = "");
 
 /// Writes `text` to `finalPath` atomically.
 void writeTextAtomically(const std::string& finalPath, const std::string& text);

@@ -37,7 +37,9 @@ void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata&
               const ExrOptions& options = {});
 
 /// Reads an EXR written by writeExr back into a Framebuffer (AOVs from the channel names;
-/// half channels widened to float). Throws Error for unreadable or incomplete files.
+/// half channels widened to float). With `meta`, the header comes back as written, except
+/// that string attributes (camera extras, `strings`) come back sorted by name. Throws Error
+/// for unreadable or incomplete files.
 Framebuffer readExr(const std::string& path, ExrMetadata* meta = nullptr);
 
 /// True if `path` is a complete, readable EXR (every scanline present); used by --resume.

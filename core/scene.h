@@ -49,16 +49,28 @@ struct BuildOptions {
 };
 
 struct BuildStats {
-  size_t triangles = 0;
+  size_t triangles = 0;        ///< triangles as placed (an instanced mesh counts each time)
+  size_t uniqueTriangles = 0;  ///< triangles stored (each mesh once)
   double buildSeconds = 0;     ///< rtcCommitScene wall time
   long long embreeBytes = 0;   ///< Embree's memory after the build
 };
 
+/// One placement of a mesh: world = worldFromMesh · (mesh.anchor + position).
+struct SceneObject {
+  const Mesh* mesh = nullptr;
+  glm::dmat4 worldFromMesh{1.0};
+};
+
 /// An Embree scene over meshes that outlive it (their vertex and index buffers are shared
-/// with Embree, not copied). geomID k is meshes[k]. All meshes must share one anchor, which
-/// becomes the render origin of the cameras.
+/// with Embree, not copied). Object k gets top-level geomID k. An object whose mesh appears
+/// once, untransformed, with the render origin as its anchor is attached directly; a mesh
+/// placed several times (or transformed) is built once as a sub-scene and placed by Embree
+/// instances. The render origin is the first object's anchor.
 class Scene {
  public:
+  Scene(const Device& device, const std::vector<SceneObject>& objects,
+        const BuildOptions& options = {});
+  /// Each mesh once, untransformed; all must share one anchor.
   Scene(const Device& device, const std::vector<const Mesh*>& meshes,
         const BuildOptions& options = {});
   ~Scene();
@@ -70,6 +82,11 @@ class Scene {
   const BuildOptions& options() const { return options_; }
   /// World position of render-space origin (the meshes' shared anchor), double precision.
   const glm::dvec3& renderOrigin() const { return renderOrigin_; }
+  /// Number of objects placed by an Embree instance (0 when nothing repeats).
+  size_t instanceCount() const { return instanced_; }
+  /// World-space normal of an instanced hit: Embree reports Ng in the mesh's space.
+  /// Indexed by the top-level geomID (hit.instID[0]).
+  const glm::mat3& normalFromMesh(unsigned object) const { return normalFromMesh_[object]; }
 
  private:
   const Device& device_;
@@ -77,6 +94,9 @@ class Scene {
   BuildOptions options_;
   BuildStats stats_;
   glm::dvec3 renderOrigin_{0.0};
+  size_t instanced_ = 0;
+  std::vector<glm::mat3> normalFromMesh_;
+  std::vector<RTCScene> subScenes_;
 };
 
 }  // namespace aperture

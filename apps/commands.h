@@ -1,0 +1,14 @@
+#pragma once
+// Subcommands of the `aperture` executable; each registers its options and returns the
+// function that runs it (exit code).
+#include <functional>
+
+#include <CLI/CLI.hpp>
+
+namespace aperture::app {
+
+using Command = std::function<int()>;
+Command addRenderCommand(CLI::App& app);
+Command addBenchCommand(CLI::App& app);
+
+}  // namespace aperture::app

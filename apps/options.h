@@ -1,0 +1,74 @@
+#pragma once
+// Option groups shared by the subcommands (render, bench, camera), with their validation.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "cameras/params.h"
+#include "core/framebuffer.h"
+#include "core/mesh.h"
+#include "core/render.h"
+#include "core/scene.h"
+
+namespace aperture::app {
+
+struct SceneOptions {
+  std::vector<std::string> meshes;  ///< empty: the default procedural scene
+  std::string quality = "high";
+  bool robust = false, compact = false, worldSpace = false;
+  LoadOptions loadOptions() const;
+  BuildOptions buildOptions() const;
+};
+
+/// Camera flags as text, converted by toParams() with errors that name the flag and value.
+struct CameraOptions {
+  std::string type = "perspective", eye, at, dir, up = "0,1,0", viewport, sensor, fovAxis = "y";
+  std::string shift, obliqueDir, obliqueAngles, lon, lat;
+  double fov = 0, d = 0, focalLength = 0, aperture = 0, focus = 0, fisheyeFov = 180;
+  bool architectural = false;
+  std::string size = "960,540";
+  int spp = 1;
+  /// Builds the parameters; with no --eye the camera frames the scene's bounds (world space).
+  CameraParams toParams(const glm::dvec3& worldLo, const glm::dvec3& worldHi) const;
+};
+
+struct RenderOptions {
+  std::string aovs = "color,depth";
+  int packet = 16, tile = 32, threads = 0;
+  RenderSettings settings(int spp) const;
+};
+
+void addSceneOptions(CLI::App& app, SceneOptions& o);
+void addCameraOptions(CLI::App& app, CameraOptions& o);
+void addRenderOptions(CLI::App& app, RenderOptions& o);
+
+/// Parses "X,Y,Z" / "A,B" for `flag`; throws Error("--eye: expected X,Y,Z ...").
+glm::dvec3 parseVec3(const std::string& flag, const std::string& text);
+glm::dvec2 parseVec2(const std::string& flag, const std::string& text);
+
+/// Loaded meshes + Embree scene, logged as they are made.
+struct LoadedScene {
+  std::vector<Mesh> meshes;
+  std::unique_ptr<Scene> scene;
+  glm::dvec3 worldLo{0.0}, worldHi{0.0};
+  double loadSeconds = 0;
+  size_t fileBytes = 0;
+};
+std::vector<Mesh> loadMeshes(const SceneOptions& o, bool quiet);
+LoadedScene loadScene(const Device& device, const SceneOptions& o, bool quiet);
+
+/// Limits TBB (and so Embree's builder) to n threads while alive; n = 0 keeps all cores.
+class ThreadLimit {
+ public:
+  explicit ThreadLimit(int n);
+  ~ThreadLimit();
+  int threads() const { return threads_; }
+
+ private:
+  std::unique_ptr<struct ThreadLimitImpl> impl_;
+  int threads_;
+};
+
+}  // namespace aperture::app

@@ -1,0 +1,63 @@
+#include "core/baseline.h"
+
+#include <pmmintrin.h>
+#include <xmmintrin.h>
+
+#include <chrono>
+#include <cstring>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "core/packet.h"
+
+namespace aperture {
+
+BaselineTracer::BaselineTracer(const Camera& camera, int width, int height, int tileSize) {
+  const int tilesX = (width + tileSize - 1) / tileSize;
+  const int tilesY = (height + tileSize - 1) / tileSize;
+  alignas(64) RTCRayHit16 packet;
+  RayLanes lanes = rayLanes<16>(packet);
+  for (int tile = 0; tile < tilesX * tilesY; ++tile) {
+    const int x0 = (tile % tilesX) * tileSize, y0 = (tile / tilesX) * tileSize;
+    const int x1 = std::min(x0 + tileSize, width), y1 = std::min(y0 + tileSize, height);
+    Tile t{rays16_.size(), 0};
+    for (int by = y0; by < y1; by += 4)
+      for (int bx = x0; bx < x1; bx += 4) {
+        std::array<int, 16> valid;
+        camera.generate(PacketRequest{bx, by, 4, 4, 0}, lanes, valid.data());
+        for (int k = 0; k < 16; ++k) {
+          if (by + k / 4 >= height || bx + k % 4 >= width) valid[k] = 0;
+          rays_ += valid[k] != 0;
+        }
+        rays16_.push_back(packet.ray);
+        valid_.push_back(valid);
+        ++t.count;
+      }
+    tiles_.push_back(t);
+  }
+}
+
+double BaselineTracer::traceFrame(const Scene& scene) const {
+  const auto start = std::chrono::steady_clock::now();
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, tiles_.size(), 1),
+      [&](const tbb::blocked_range<size_t>& range) {
+        _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+        _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+        alignas(64) RTCRayHit16 packet;
+        for (size_t t = range.begin(); t != range.end(); ++t)
+          for (size_t p = tiles_[t].first; p < tiles_[t].first + tiles_[t].count; ++p) {
+            packet.ray = rays16_[p];
+            clearHits<16>(packet);
+            rtcIntersect16(valid_[p].data(), scene.handle(), &ctx, &packet);
+          }
+      },
+      tbb::simple_partitioner());
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace aperture

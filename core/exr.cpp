@@ -1,0 +1,336 @@
+#include "core/exr.h"
+
+#include <Imath/ImathBox.h>
+#include <Imath/ImathMatrix.h>
+#include <Imath/ImathVec.h>
+#include <Imath/half.h>
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfDoubleAttribute.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfIntAttribute.h>
+#include <OpenEXR/ImfMatrixAttribute.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfStandardAttributes.h>
+#include <OpenEXR/ImfStringAttribute.h>
+#include <OpenEXR/ImfVecAttribute.h>
+
+#include <cstddef>
+#include <exception>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace aperture {
+
+namespace {
+
+struct CompressionName {
+  const char* name;
+  ExrCompression value;
+  Imf::Compression imf;
+};
+constexpr CompressionName kCompressions[] = {
+    {"none", ExrCompression::None, Imf::NO_COMPRESSION},
+    {"rle", ExrCompression::Rle, Imf::RLE_COMPRESSION},
+    {"zips", ExrCompression::Zips, Imf::ZIPS_COMPRESSION},
+    {"zip", ExrCompression::Zip, Imf::ZIP_COMPRESSION},
+    {"piz", ExrCompression::Piz, Imf::PIZ_COMPRESSION},
+    {"pxr24", ExrCompression::Pxr24, Imf::PXR24_COMPRESSION},
+    {"b44", ExrCompression::B44, Imf::B44_COMPRESSION},
+    {"b44a", ExrCompression::B44a, Imf::B44A_COMPRESSION},
+    {"dwaa", ExrCompression::Dwaa, Imf::DWAA_COMPRESSION},
+    {"dwab", ExrCompression::Dwab, Imf::DWAB_COMPRESSION},
+};
+
+Imf::Compression toImf(ExrCompression c) {
+  for (const auto& entry : kCompressions)
+    if (entry.value == c) return entry.imf;
+  throw Error(cat("invalid EXR compression value ", int(c)));
+}
+
+// Matrix convention. CameraDescription holds GLM matrices for column vectors (p' = M p), and
+// GLM indexes m[column][row]. OpenEXR/Imath matrices act on row vectors (p' = p X) and index
+// x[row][column]. Since X = transpose(M) and the index orders are swapped as well, the element
+// arrays coincide: X[i][j] = M[i][j] with GLM's indexing.
+Imath::M44d toImath(const glm::dmat4& m) {
+  Imath::M44d x;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) x[i][j] = m[i][j];
+  return x;
+}
+
+glm::dmat4 toGlm(const Imath::M44d& x) {
+  glm::dmat4 m(1.0);
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) m[i][j] = x[i][j];
+  return m;
+}
+
+Imath::V3d toImath(const glm::dvec3& v) { return Imath::V3d(v.x, v.y, v.z); }
+glm::dvec3 toGlm(const Imath::V3d& v) { return glm::dvec3(v.x, v.y, v.z); }
+
+const char* const kColorNames[4] = {"R", "G", "B", "A"};
+const char* const kNormalNames[3] = {"N.X", "N.Y", "N.Z"};
+const char* const kPositionNames[3] = {"P.X", "P.Y", "P.Z"};
+
+/// Adds a channel and a slice over interleaved data (`components` values a pixel).
+void addChannel(Imf::Header& header, Imf::FrameBuffer& frame, const char* name,
+                Imf::PixelType type, const void* data, size_t valueSize, int components,
+                int width) {
+  header.channels().insert(name, Imf::Channel(type));
+  const size_t xStride = valueSize * size_t(components);
+  frame.insert(name, Imf::Slice(type, static_cast<char*>(const_cast<void*>(data)), xStride,
+                                xStride * size_t(width)));
+}
+
+void addHeaderAttributes(Imf::Header& header, const ExrMetadata& meta) {
+  const CameraDescription& cam = meta.camera;
+  const Imath::M44d worldToCamera = toImath(cam.cameraFromWorld);
+  const Imath::M44d worldToNdc = toImath(cam.ndcFromWorld);
+  Imf::addWorldToCamera(header, Imath::M44f(worldToCamera));
+  Imf::addWorldToNDC(header, Imath::M44f(worldToNdc));
+  header.insert("aperture.worldToCamera", Imf::M44dAttribute(worldToCamera));
+  header.insert("aperture.worldToNDC", Imf::M44dAttribute(worldToNdc));
+  header.insert("aperture.camera.type", Imf::StringAttribute(cam.type));
+  header.insert("aperture.camera.eye", Imf::V3dAttribute(toImath(cam.eye)));
+  header.insert("aperture.camera.U", Imf::V3dAttribute(toImath(cam.u)));
+  header.insert("aperture.camera.V", Imf::V3dAttribute(toImath(cam.v)));
+  header.insert("aperture.camera.W", Imf::V3dAttribute(toImath(cam.w)));
+  header.insert("aperture.camera.d", Imf::DoubleAttribute(cam.d));
+  header.insert("aperture.camera.viewport", Imf::V2dAttribute(Imath::V2d(cam.vw, cam.vh)));
+  header.insert("aperture.spp", Imf::IntAttribute(cam.spp));
+  header.insert("aperture.renderSeconds", Imf::DoubleAttribute(meta.renderSeconds));
+  for (const auto& [name, value] : cam.extra)
+    header.insert("aperture.camera." + name, Imf::StringAttribute(value));
+  for (const auto& [name, value] : meta.strings) header.insert(name, Imf::StringAttribute(value));
+  header.insert("software", Imf::StringAttribute("aperture " APERTURE_VERSION));
+}
+
+template <typename T, typename A>
+const T* findValue(const Imf::Header& header, const char* name) {
+  const A* attribute = header.findTypedAttribute<A>(name);
+  return attribute ? &attribute->value() : nullptr;
+}
+
+void readHeaderAttributes(const Imf::Header& header, int width, int height, ExrMetadata* meta) {
+  *meta = ExrMetadata();
+  CameraDescription& cam = meta->camera;
+  cam.width = width;
+  cam.height = height;
+  if (auto* m = findValue<Imath::M44d, Imf::M44dAttribute>(header, "aperture.worldToCamera"))
+    cam.cameraFromWorld = toGlm(*m);
+  else if (Imf::hasWorldToCamera(header))
+    cam.cameraFromWorld = toGlm(Imath::M44d(Imf::worldToCamera(header)));
+  if (auto* m = findValue<Imath::M44d, Imf::M44dAttribute>(header, "aperture.worldToNDC"))
+    cam.ndcFromWorld = toGlm(*m);
+  else if (Imf::hasWorldToNDC(header))
+    cam.ndcFromWorld = toGlm(Imath::M44d(Imf::worldToNDC(header)));
+  if (auto* s = findValue<std::string, Imf::StringAttribute>(header, "aperture.camera.type"))
+    cam.type = *s;
+  const std::pair<const char*, glm::dvec3*> vectors[] = {{"aperture.camera.eye", &cam.eye},
+                                                         {"aperture.camera.U", &cam.u},
+                                                         {"aperture.camera.V", &cam.v},
+                                                         {"aperture.camera.W", &cam.w}};
+  for (const auto& [name, target] : vectors)
+    if (auto* v = findValue<Imath::V3d, Imf::V3dAttribute>(header, name)) *target = toGlm(*v);
+  if (auto* d = findValue<double, Imf::DoubleAttribute>(header, "aperture.camera.d")) cam.d = *d;
+  if (auto* v = findValue<Imath::V2d, Imf::V2dAttribute>(header, "aperture.camera.viewport")) {
+    cam.vw = v->x;
+    cam.vh = v->y;
+  }
+  if (auto* n = findValue<int, Imf::IntAttribute>(header, "aperture.spp")) cam.spp = *n;
+  if (auto* t = findValue<double, Imf::DoubleAttribute>(header, "aperture.renderSeconds"))
+    meta->renderSeconds = *t;
+
+  // Every other string attribute: camera extras back into `extra`, the rest into `strings`.
+  const std::string extraPrefix = "aperture.camera.";
+  for (auto it = header.begin(); it != header.end(); ++it) {
+    const auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute());
+    if (!s) continue;
+    const std::string name = it.name();
+    if (name == "aperture.camera.type" || name == "software") continue;
+    if (name.compare(0, extraPrefix.size(), extraPrefix) == 0)
+      cam.extra.emplace_back(name.substr(extraPrefix.size()), s->value());
+    else
+      meta->strings.emplace_back(name, s->value());
+  }
+}
+
+}  // namespace
+
+ExrCompression parseExrCompression(const std::string& name) {
+  std::string known;
+  for (const auto& entry : kCompressions) {
+    if (name == entry.name) return entry.value;
+    known += std::string(known.empty() ? "" : " ") + entry.name;
+  }
+  throw Error(cat("unknown EXR compression '", name, "' (known: ", known, ")"));
+}
+
+std::string exrCompressionName(ExrCompression c) {
+  for (const auto& entry : kCompressions)
+    if (entry.value == c) return entry.name;
+  throw Error(cat("invalid EXR compression value ", int(c)));
+}
+
+void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata& meta,
+              const ExrOptions& options) {
+  if (fb.width <= 0 || fb.height <= 0)
+    throw Error(cat("cannot write '", path, "': empty framebuffer (", fb.width, "x", fb.height,
+                    ")"));
+  const size_t n = fb.pixelCount();
+  auto checkSize = [&](const char* aov, size_t have, size_t perPixel) {
+    if (have != n * perPixel)
+      throw Error(cat("cannot write '", path, "': AOV ", aov, " holds ", have, " values, ",
+                      "expected ", n * perPixel));
+  };
+
+  Imf::Header header(fb.width, fb.height);
+  header.compression() = toImf(options.compression);
+  addHeaderAttributes(header, meta);
+
+  Imf::FrameBuffer frame;
+  std::vector<half> halfColor;
+  const int w = fb.width;
+  if (fb.has(kAovColor)) {
+    checkSize("color", fb.rgba.size(), 4);
+    if (options.halfColor) {
+      halfColor.assign(fb.rgba.begin(), fb.rgba.end());
+      for (int c = 0; c < 4; ++c)
+        addChannel(header, frame, kColorNames[c], Imf::HALF, halfColor.data() + c, sizeof(half),
+                   4, w);
+    } else {
+      for (int c = 0; c < 4; ++c)
+        addChannel(header, frame, kColorNames[c], Imf::FLOAT, fb.rgba.data() + c, sizeof(float),
+                   4, w);
+    }
+  }
+  if (fb.has(kAovDepth)) {
+    checkSize("depth", fb.depth.size(), 1);
+    addChannel(header, frame, "Z", Imf::FLOAT, fb.depth.data(), sizeof(float), 1, w);
+  }
+  if (fb.has(kAovDistance)) {
+    checkSize("distance", fb.distance.size(), 1);
+    addChannel(header, frame, "T", Imf::FLOAT, fb.distance.data(), sizeof(float), 1, w);
+  }
+  if (fb.has(kAovNormal)) {
+    checkSize("normal", fb.normal.size(), 3);
+    for (int c = 0; c < 3; ++c)
+      addChannel(header, frame, kNormalNames[c], Imf::FLOAT, fb.normal.data() + c,
+                 sizeof(float), 3, w);
+  }
+  if (fb.has(kAovPosition)) {
+    checkSize("position", fb.position.size(), 3);
+    for (int c = 0; c < 3; ++c)
+      addChannel(header, frame, kPositionNames[c], Imf::FLOAT, fb.position.data() + c,
+                 sizeof(float), 3, w);
+  }
+  if (fb.has(kAovPrimId)) {
+    checkSize("primid", fb.primId.size(), 1);
+    addChannel(header, frame, "primID", Imf::UINT, fb.primId.data(), sizeof(uint32_t), 1, w);
+  }
+  if (fb.has(kAovGeomId)) {
+    checkSize("geomid", fb.geomId.size(), 1);
+    addChannel(header, frame, "geomID", Imf::UINT, fb.geomId.data(), sizeof(uint32_t), 1, w);
+  }
+  if (header.channels().begin() == header.channels().end())
+    throw Error(cat("cannot write '", path, "': the framebuffer holds no AOV"));
+
+  writeAtomically(path, [&](const std::string& tmp) {
+    Imf::OutputFile file(tmp.c_str(), header);
+    file.setFrameBuffer(frame);
+    file.writePixels(fb.height);
+  });
+}
+
+Framebuffer readExr(const std::string& path, ExrMetadata* meta) {
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imf::Header& header = file.header();
+    const Imath::Box2i window = header.dataWindow();
+    const int width = window.max.x - window.min.x + 1;
+    const int height = window.max.y - window.min.y + 1;
+    if (!file.isComplete()) throw Error("incomplete file (missing scanlines)");
+
+    const Imf::ChannelList& channels = header.channels();
+    auto present = [&](const char* name) { return channels.findChannel(name) != nullptr; };
+    auto anyPresent = [&](const char* const* names, int count) {
+      for (int i = 0; i < count; ++i)
+        if (present(names[i])) return true;
+      return false;
+    };
+    AovMask mask = 0;
+    if (anyPresent(kColorNames, 4)) mask |= kAovColor;
+    if (present("Z")) mask |= kAovDepth;
+    if (present("T")) mask |= kAovDistance;
+    if (anyPresent(kNormalNames, 3)) mask |= kAovNormal;
+    if (anyPresent(kPositionNames, 3)) mask |= kAovPosition;
+    if (present("primID")) mask |= kAovPrimId;
+    if (present("geomID")) mask |= kAovGeomId;
+    if (mask == 0) throw Error("no aperture channels (R G B A, Z, T, N.*, P.*, primID, geomID)");
+
+    Framebuffer fb(width, height, mask);
+    Imf::FrameBuffer frame;
+    auto insert = [&](const char* name, Imf::PixelType type, void* data, size_t valueSize,
+                      int components, double fill) {
+      const size_t xStride = valueSize * size_t(components);
+      frame.insert(name, Imf::Slice::Make(type, data, window, xStride, xStride * size_t(width),
+                                          1, 1, fill));
+    };
+    if (mask & kAovColor)
+      for (int c = 0; c < 4; ++c)
+        insert(kColorNames[c], Imf::FLOAT, fb.rgba.data() + c, sizeof(float), 4,
+               c == 3 ? 1.0 : 0.0);
+    if (mask & kAovDepth) insert("Z", Imf::FLOAT, fb.depth.data(), sizeof(float), 1, 0.0);
+    if (mask & kAovDistance) insert("T", Imf::FLOAT, fb.distance.data(), sizeof(float), 1, 0.0);
+    if (mask & kAovNormal)
+      for (int c = 0; c < 3; ++c)
+        insert(kNormalNames[c], Imf::FLOAT, fb.normal.data() + c, sizeof(float), 3, 0.0);
+    if (mask & kAovPosition)
+      for (int c = 0; c < 3; ++c)
+        insert(kPositionNames[c], Imf::FLOAT, fb.position.data() + c, sizeof(float), 3, 0.0);
+    if (mask & kAovPrimId)
+      insert("primID", Imf::UINT, fb.primId.data(), sizeof(uint32_t), 1, double(kInvalidId));
+    if (mask & kAovGeomId)
+      insert("geomID", Imf::UINT, fb.geomId.data(), sizeof(uint32_t), 1, double(kInvalidId));
+    file.setFrameBuffer(frame);
+    file.readPixels(window.min.y, window.max.y);
+    if (meta) readHeaderAttributes(header, width, height, meta);
+    return fb;
+  } catch (const std::exception& e) {
+    throw Error(cat("cannot read EXR '", path, "': ", e.what()));
+  }
+}
+
+bool isCompleteExr(const std::string& path) {
+  try {
+    Imf::InputFile file(path.c_str());
+    if (!file.isComplete()) return false;
+    // The line offset table of a truncated file can still look complete, so decode every
+    // scanline into one reused row per channel (y stride 0).
+    const Imath::Box2i window = file.header().dataWindow();
+    const size_t width = size_t(window.max.x - window.min.x + 1);
+    const Imf::ChannelList& channels = file.header().channels();
+    size_t channelCount = 0;
+    for (auto it = channels.begin(); it != channels.end(); ++it) ++channelCount;
+    std::vector<uint32_t> row(width * channelCount);
+    Imf::FrameBuffer frame;
+    size_t index = 0;
+    for (auto it = channels.begin(); it != channels.end(); ++it, ++index) {
+      const Imf::PixelType type = it.channel().type == Imf::UINT ? Imf::UINT : Imf::FLOAT;
+      char* base = reinterpret_cast<char*>(row.data() + index * width) -
+                   std::ptrdiff_t(window.min.x) * std::ptrdiff_t(sizeof(uint32_t));
+      frame.insert(it.name(), Imf::Slice(type, base, sizeof(uint32_t), 0, it.channel().xSampling,
+                                         it.channel().ySampling));
+    }
+    file.setFrameBuffer(frame);
+    file.readPixels(window.min.y, window.max.y);
+    return true;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+}  // namespace aperture

@@ -1,0 +1,142 @@
+#include "core/mesh.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "core/error.h"
+
+namespace aperture {
+
+namespace {
+
+std::string lowerExtension(const std::string& path) {
+  size_t slash = path.find_last_of('/');
+  size_t dot = path.find_last_of('.');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+  std::string ext = path.substr(dot);
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+}  // namespace
+
+void Mesh::bounds(glm::vec3& lo, glm::vec3& hi) const {
+  lo = glm::vec3(std::numeric_limits<float>::max());
+  hi = glm::vec3(-std::numeric_limits<float>::max());
+  for (size_t k = 0; k < vertexCount; ++k) {
+    glm::vec3 v = vertex(k);
+    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) continue;
+    lo = glm::min(lo, v);
+    hi = glm::max(hi, v);
+  }
+}
+
+Mesh loadMesh(const std::string& spec, const LoadOptions& options) {
+  auto start = std::chrono::steady_clock::now();
+  Mesh mesh;
+  if (spec.rfind("procedural:", 0) == 0) {
+    mesh = makeProcedural(spec);
+  } else {
+    std::string ext = lowerExtension(spec);
+    if (ext == ".ply") {
+      mesh = loadPly(spec);
+    } else if (ext == ".obj") {
+      mesh = loadObj(spec);
+    } else {
+      throw Error(cat(spec, ": unknown mesh file extension '", ext,
+                      "' (expected .ply, .obj or procedural:NAME)"));
+    }
+  }
+  finishMesh(mesh, options);
+  mesh.stats.loadSeconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return mesh;
+}
+
+void finishMesh(Mesh& mesh, const LoadOptions& options) {
+  const size_t n = mesh.vertexCount;
+  const bool fromDouble = !mesh.positionsDouble.empty() || mesh.positions.empty();
+  if (fromDouble) {
+    APERTURE_CHECK_OP(mesh.positionsDouble.size(), ==, 3 * n);
+  } else {
+    APERTURE_CHECK_OP(mesh.positions.size(), >=, 3 * n);
+  }
+  APERTURE_CHECK_OP(mesh.indices.size() % 3, ==, 0u);
+  auto coord = [&](size_t i) -> double {
+    return fromDouble ? mesh.positionsDouble[i] : double(mesh.positions[i]);
+  };
+
+  // Index range check before anything else touches the vertices.
+  size_t badIndices = 0;
+  size_t firstBadAt = 0;
+  uint32_t firstBad = 0;
+  for (size_t i = 0; i < mesh.indices.size(); ++i)
+    if (mesh.indices[i] >= n) {
+      if (badIndices++ == 0) {
+        firstBad = mesh.indices[i];
+        firstBadAt = i / 3;
+      }
+    }
+  if (badIndices)
+    throw Error(cat(mesh.name, ": ", badIndices, " vertex indices out of range (the mesh has ", n,
+                    " vertices); the first is ", firstBad, " in triangle ", firstBadAt));
+
+  // Transform in double, mark non-finite vertices and take the bounding box of the rest.
+  auto world = [&](size_t k) {
+    return options.scale * glm::dvec3(coord(3 * k), coord(3 * k + 1), coord(3 * k + 2)) +
+           options.translate;
+  };
+  std::vector<uint8_t> bad(n, 0);
+  glm::dvec3 lo(std::numeric_limits<double>::max());
+  glm::dvec3 hi(-std::numeric_limits<double>::max());
+  size_t nonFinite = 0;
+  for (size_t k = 0; k < n; ++k) {
+    glm::dvec3 v = world(k);
+    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
+      bad[k] = 1;
+      ++nonFinite;
+    } else {
+      lo = glm::min(lo, v);
+      hi = glm::max(hi, v);
+    }
+  }
+  mesh.stats.nonFiniteVertices = nonFinite;
+
+  // Drop triangles using a non-finite vertex; count (and keep) degenerate ones.
+  size_t out = 0, dropped = 0, degenerate = 0;
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    uint32_t a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
+    if (nonFinite && (bad[a] || bad[b] || bad[c])) {
+      ++dropped;
+      continue;
+    }
+    if (a == b || b == c || a == c) ++degenerate;
+    mesh.indices[out++] = a;
+    mesh.indices[out++] = b;
+    mesh.indices[out++] = c;
+  }
+  mesh.indices.resize(out);
+  mesh.stats.droppedTriangles = dropped;
+  mesh.stats.degenerateTriangles = degenerate;
+
+  if (options.placement == Placement::WorldSpace || nonFinite == n)
+    mesh.anchor = glm::dvec3(0.0);
+  else
+    mesh.anchor = 0.5 * (lo + hi);
+
+  // Non-finite vertices are stored as 0 relative to the anchor (no triangle uses them). Float
+  // sources are rewritten in place: vertex k is read before it is overwritten.
+  if (fromDouble) mesh.positions.assign(3 * n + kVertexPaddingFloats, 0.0f);
+  mesh.positions.resize(3 * n + kVertexPaddingFloats);
+  std::fill(mesh.positions.begin() + 3 * n, mesh.positions.end(), 0.0f);
+  for (size_t k = 0; k < n; ++k) {
+    glm::dvec3 v = bad[k] ? glm::dvec3(0.0) : world(k) - mesh.anchor;
+    for (int a = 0; a < 3; ++a) mesh.positions[3 * k + a] = float(v[a]);
+  }
+  mesh.positionsDouble.clear();
+  mesh.positionsDouble.shrink_to_fit();
+}
+
+}  // namespace aperture

@@ -1,0 +1,98 @@
+#pragma once
+// Embree packet types by width, and RayLanes views into them.
+#include <embree3/rtcore.h>
+
+#include "core/camera.h"
+
+namespace aperture {
+
+template <int N>
+struct PacketOf;
+template <>
+struct PacketOf<1> {
+  using type = RTCRayHit;
+};
+template <>
+struct PacketOf<4> {
+  using type = RTCRayHit4;
+};
+template <>
+struct PacketOf<8> {
+  using type = RTCRayHit8;
+};
+template <>
+struct PacketOf<16> {
+  using type = RTCRayHit16;
+};
+
+/// Block shape (columns x rows) of a packet of N rays: 1x1, 2x2, 4x2, 4x4.
+constexpr int blockWidthFor(int n) { return n == 1 ? 1 : n == 4 ? 2 : 4; }
+constexpr int blockHeightFor(int n) { return n / blockWidthFor(n); }
+
+/// Lane pointers into an RTCRayHitN (for N = 1 the scalar fields).
+template <int N>
+RayLanes rayLanes(typename PacketOf<N>::type& p) {
+  RayLanes l;
+  l.width = N;
+  if constexpr (N == 1) {
+    l.orgX = &p.ray.org_x, l.orgY = &p.ray.org_y, l.orgZ = &p.ray.org_z, l.tnear = &p.ray.tnear;
+    l.dirX = &p.ray.dir_x, l.dirY = &p.ray.dir_y, l.dirZ = &p.ray.dir_z, l.time = &p.ray.time;
+    l.tfar = &p.ray.tfar, l.mask = &p.ray.mask, l.id = &p.ray.id, l.flags = &p.ray.flags;
+  } else {
+    l.orgX = p.ray.org_x, l.orgY = p.ray.org_y, l.orgZ = p.ray.org_z, l.tnear = p.ray.tnear;
+    l.dirX = p.ray.dir_x, l.dirY = p.ray.dir_y, l.dirZ = p.ray.dir_z, l.time = p.ray.time;
+    l.tfar = p.ray.tfar, l.mask = p.ray.mask, l.id = p.ray.id, l.flags = p.ray.flags;
+  }
+  return l;
+}
+
+/// Per-lane hit fields of an RTCRayHitN after intersection.
+template <int N>
+struct HitView {
+  typename PacketOf<N>::type& p;
+  float t(int k) const { if constexpr (N == 1) return p.ray.tfar; else return p.ray.tfar[k]; }
+  unsigned geomID(int k) const {
+    if constexpr (N == 1) return p.hit.geomID; else return p.hit.geomID[k];
+  }
+  unsigned primID(int k) const {
+    if constexpr (N == 1) return p.hit.primID; else return p.hit.primID[k];
+  }
+  unsigned instID(int k) const {
+    if constexpr (N == 1) return p.hit.instID[0]; else return p.hit.instID[0][k];
+  }
+  float ngX(int k) const { if constexpr (N == 1) return p.hit.Ng_x; else return p.hit.Ng_x[k]; }
+  float ngY(int k) const { if constexpr (N == 1) return p.hit.Ng_y; else return p.hit.Ng_y[k]; }
+  float ngZ(int k) const { if constexpr (N == 1) return p.hit.Ng_z; else return p.hit.Ng_z[k]; }
+};
+
+/// Sets hit.geomID of every lane to RTC_INVALID_GEOMETRY_ID (required before rtcIntersect).
+template <int N>
+void clearHits(typename PacketOf<N>::type& p) {
+  if constexpr (N == 1) {
+    p.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    p.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  } else {
+    for (int k = 0; k < N; ++k) {
+      p.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+      p.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+  }
+}
+
+/// rtcIntersectN for the packet width; `valid` is Embree's −1/0 lane mask (unused for N = 1).
+template <int N>
+void intersect(RTCScene scene, RTCIntersectContext* ctx, const int* valid,
+               typename PacketOf<N>::type& p) {
+  if constexpr (N == 1) {
+    (void)valid;
+    rtcIntersect1(scene, ctx, &p);
+  } else if constexpr (N == 4) {
+    rtcIntersect4(valid, scene, ctx, &p);
+  } else if constexpr (N == 8) {
+    rtcIntersect8(valid, scene, ctx, &p);
+  } else {
+    rtcIntersect16(valid, scene, ctx, &p);
+  }
+}
+
+}  // namespace aperture

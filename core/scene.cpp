@@ -1,0 +1,215 @@
+#include "core/scene.h"
+
+#include <atomic>
+#include <chrono>
+#include <map>
+#include <mutex>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "core/error.h"
+
+namespace aperture {
+
+struct Device::State {
+  std::mutex mutex;
+  std::string pendingError;  // first error since the last check()
+  std::atomic<long long> bytes{0};
+};
+
+namespace {
+
+const char* errorName(RTCError code) {
+  switch (code) {
+    case RTC_ERROR_NONE: return "none";
+    case RTC_ERROR_UNKNOWN: return "unknown error";
+    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
+    case RTC_ERROR_CANCELLED: return "cancelled";
+  }
+  return "unrecognised error";
+}
+
+// Called by Embree on any thread; an exception must not cross Embree's C frames, so the
+// message is stored and thrown by the next Device::check().
+void onEmbreeError(void* user, RTCError code, const char* str) {
+  auto* state = static_cast<Device::State*>(user);
+  std::lock_guard<std::mutex> lock(state->mutex);
+  if (state->pendingError.empty())
+    state->pendingError = cat("Embree: ", errorName(code), str ? cat(": ", str) : std::string());
+}
+
+bool onEmbreeMemory(void* user, ssize_t bytes, bool /*post*/) {
+  static_cast<Device::State*>(user)->bytes += bytes;
+  return true;
+}
+
+RTCBuildQuality toEmbree(BvhQuality q) {
+  switch (q) {
+    case BvhQuality::Low: return RTC_BUILD_QUALITY_LOW;
+    case BvhQuality::Medium: return RTC_BUILD_QUALITY_MEDIUM;
+    case BvhQuality::High: return RTC_BUILD_QUALITY_HIGH;
+  }
+  return RTC_BUILD_QUALITY_HIGH;
+}
+
+}  // namespace
+
+Device::Device(const std::string& config) : state_(std::make_unique<State>()) {
+  device_ = rtcNewDevice(config.empty() ? nullptr : config.c_str());
+  if (!device_)
+    throw Error(cat("Embree: cannot create a device (config '", config, "'): ",
+                    errorName(rtcGetDeviceError(nullptr))));
+  rtcSetDeviceErrorFunction(device_, onEmbreeError, state_.get());
+  rtcSetDeviceMemoryMonitorFunction(device_, onEmbreeMemory, state_.get());
+}
+
+Device::~Device() {
+  if (device_) rtcReleaseDevice(device_);
+}
+
+void Device::check(const char* what) const {
+  std::string message;
+  {
+    std::lock_guard<std::mutex> lock(state_->mutex);
+    message.swap(state_->pendingError);
+  }
+  if (!message.empty()) throw Error(cat(message, " (during ", what, ")"));
+}
+
+long long Device::memoryBytes() const { return state_->bytes.load(); }
+
+std::string Device::isaName() const {
+  if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED)) return "AVX512";
+  if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED)) return "AVX2";
+  if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED)) return "SSE4.2";
+  return "unknown";
+}
+
+BvhQuality parseBvhQuality(const std::string& name) {
+  if (name == "low") return BvhQuality::Low;
+  if (name == "medium") return BvhQuality::Medium;
+  if (name == "high") return BvhQuality::High;
+  throw Error(cat("unknown BVH quality '", name, "' (known: low, medium, high)"));
+}
+
+const char* bvhQualityName(BvhQuality q) {
+  switch (q) {
+    case BvhQuality::Low: return "low";
+    case BvhQuality::Medium: return "medium";
+    case BvhQuality::High: return "high";
+  }
+  return "?";
+}
+
+namespace {
+
+std::vector<SceneObject> untransformed(const std::vector<const Mesh*>& meshes) {
+  std::vector<SceneObject> objects;
+  for (const Mesh* m : meshes) {
+    if (m->anchor != meshes.front()->anchor)
+      throw Error(cat("scene: mesh '", m->name, "' has a different anchor than '",
+                      meshes.front()->name, "'"));
+    objects.push_back({m, glm::dmat4(1.0)});
+  }
+  return objects;
+}
+
+RTCGeometry triangleGeometry(const Device& device, const Mesh& m, RTCBuildQuality quality) {
+  // Embree may read 16 bytes at the last vertex: the loader pads positions for that.
+  APERTURE_CHECK_OP(m.positions.size(), >=, 3 * m.vertexCount + kVertexPaddingFloats - 1);
+  RTCGeometry geom = rtcNewGeometry(device.handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
+  rtcSetGeometryBuildQuality(geom, quality);
+  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                             m.positions.data(), 0, 3 * sizeof(float), m.vertexCount);
+  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, m.indices.data(),
+                             0, 3 * sizeof(uint32_t), m.triangleCount());
+  rtcCommitGeometry(geom);
+  device.check(cat("adding mesh '", m.name, "'").c_str());
+  return geom;
+}
+
+}  // namespace
+
+Scene::Scene(const Device& device, const std::vector<const Mesh*>& meshes,
+             const BuildOptions& options)
+    : Scene(device, untransformed(meshes), options) {}
+
+Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
+             const BuildOptions& options)
+    : device_(device), options_(options) {
+  if (objects.empty()) throw Error("scene: no meshes");
+  renderOrigin_ = glm::dvec3(objects.front().worldFromMesh * glm::dvec4(objects.front().mesh->anchor, 1.0));
+  std::map<const Mesh*, size_t> uses;
+  for (const SceneObject& o : objects) ++uses[o.mesh];
+
+  const long long bytesBefore = device.memoryBytes();
+  const auto start = std::chrono::steady_clock::now();
+  const RTCBuildQuality quality = toEmbree(options.quality);
+  int flags = RTC_SCENE_FLAG_NONE;
+  if (options.robust) flags |= RTC_SCENE_FLAG_ROBUST;
+  if (options.compact) flags |= RTC_SCENE_FLAG_COMPACT;
+  auto newScene = [&] {
+    RTCScene s = rtcNewScene(device.handle());
+    device.check("rtcNewScene");
+    rtcSetSceneFlags(s, RTCSceneFlags(flags));
+    rtcSetSceneBuildQuality(s, quality);
+    return s;
+  };
+  scene_ = newScene();
+  std::map<const Mesh*, RTCScene> built;  // sub-scene of each instanced mesh
+  normalFromMesh_.assign(objects.size(), glm::mat3(1.0f));
+  for (size_t k = 0; k < objects.size(); ++k) {
+    const Mesh& m = *objects[k].mesh;
+    stats_.triangles += m.triangleCount();
+    const bool direct = uses[&m] == 1 && objects[k].worldFromMesh == glm::dmat4(1.0) &&
+                        m.anchor == renderOrigin_;
+    if (direct) {
+      RTCGeometry geom = triangleGeometry(device, m, quality);
+      rtcAttachGeometryByID(scene_, geom, unsigned(k));
+      rtcReleaseGeometry(geom);
+      stats_.uniqueTriangles += m.triangleCount();
+      continue;
+    }
+    auto it = built.find(&m);
+    if (it == built.end()) {
+      RTCScene sub = newScene();
+      RTCGeometry geom = triangleGeometry(device, m, quality);
+      rtcAttachGeometryByID(sub, geom, 0);
+      rtcReleaseGeometry(geom);
+      rtcCommitScene(sub);
+      device.check(cat("building the BVH of mesh '", m.name, "'").c_str());
+      it = built.emplace(&m, sub).first;
+      subScenes_.push_back(sub);
+      stats_.uniqueTriangles += m.triangleCount();
+    }
+    // Render space from mesh-local space, composed in double: T(−origin) · M · T(anchor).
+    const glm::dmat4 renderFromLocal = glm::translate(glm::dmat4(1.0), -renderOrigin_) *
+                                       objects[k].worldFromMesh *
+                                       glm::translate(glm::dmat4(1.0), m.anchor);
+    const glm::mat4 xf(renderFromLocal);
+    RTCGeometry inst = rtcNewGeometry(device.handle(), RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(inst, it->second);
+    rtcSetGeometryTransform(inst, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &xf[0][0]);
+    rtcCommitGeometry(inst);
+    rtcAttachGeometryByID(scene_, inst, unsigned(k));
+    rtcReleaseGeometry(inst);
+    device.check(cat("instancing mesh '", m.name, "'").c_str());
+    normalFromMesh_[k] = glm::mat3(glm::transpose(glm::inverse(glm::dmat3(renderFromLocal))));
+    ++instanced_;
+  }
+  rtcCommitScene(scene_);
+  device.check("rtcCommitScene (BVH build)");
+  stats_.buildSeconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stats_.embreeBytes = device.memoryBytes() - bytesBefore;
+}
+
+Scene::~Scene() {
+  if (scene_) rtcReleaseScene(scene_);
+  for (RTCScene s : subScenes_) rtcReleaseScene(s);
+}
+
+}  // namespace aperture

@@ -1,0 +1,189 @@
+// End-to-end tests of the `aperture` executable: exit codes, messages, no partial outputs,
+// bit-identical EXRs across packet widths and threads, EXR header reprojection.
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "core/exr.h"
+#include "tests/support.h"
+
+using namespace aperture;
+using aperture::test::apertureBinary;
+using aperture::test::runCommand;
+using aperture::test::scratchDir;
+
+namespace {
+
+std::string quote(const std::string& s) { return "'" + s + "'"; }
+
+template <typename T>
+bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+bool samePixels(const Framebuffer& a, const Framebuffer& b) {
+  return a.width == b.width && a.height == b.height && a.aovs == b.aovs && sameBits(a.rgba, b.rgba) &&
+         sameBits(a.depth, b.depth) && sameBits(a.distance, b.distance) && sameBits(a.normal, b.normal) &&
+         sameBits(a.position, b.position) && sameBits(a.primId, b.primId) && sameBits(a.geomId, b.geomId);
+}
+
+const char* kBunnyView = " --eye -0.02,0.11,0.35 --at -0.017,0.11,0 --up 0,1,0 --fov 30";
+
+}  // namespace
+
+TEST(Cli, HelpAndVersionExitZero) {
+  std::string out;
+  EXPECT_EQ(runCommand(apertureBinary() + " --help", &out), 0);
+  EXPECT_NE(out.find("render"), std::string::npos);
+  EXPECT_EQ(runCommand(apertureBinary() + " render --help", &out), 0);
+  EXPECT_NE(out.find("--bvh-quality"), std::string::npos);
+  EXPECT_EQ(runCommand(apertureBinary() + " --version", &out), 0);
+  EXPECT_NE(out.find("aperture"), std::string::npos);
+}
+
+TEST(Cli, DefaultSceneRendersExrAndPreview) {
+  const std::string dir = scratchDir();
+  std::string out;
+  ASSERT_EQ(runCommand(apertureBinary() + " render --size 64,48 --out " + dir + "/d.exr --preview " +
+                           dir + "/d.png", &out), 0) << out;
+  const Framebuffer fb = readExr(dir + "/d.exr");
+  EXPECT_EQ(fb.width, 64);
+  EXPECT_EQ(fb.aovs, parseAovList("color,depth"));
+  int hits = 0;
+  for (size_t px = 0; px < fb.pixelCount(); ++px) hits += fb.rgba[4 * px + 3] > 0;
+  EXPECT_GT(hits, 64 * 48 / 10) << "the default camera should see the default scene";
+  EXPECT_TRUE(test::fileExists(dir + "/d.png"));
+}
+
+TEST(Cli, BadFlagValuesNameTheFlagAndValueAndWriteNothing) {
+  const std::string dir = scratchDir(), exr = dir + "/x.exr";
+  struct Case {
+    std::string args, expect;
+  } cases[] = {
+      {"--eye 1,2", "--eye"},
+      {"--eye 0,0,5 --at 0,0,0 --up 0,0,1", "parallel"},
+      {"--eye 0,0,5 --at 0,0,5", "look-at point equals the eye"},
+      {"--up 0,0,0 --eye 1,1,1", "up vector is zero"},
+      {"--fov 180 --eye 0,0,5", "fov 180"},
+      {"--d -1 --viewport 1,1 --eye 0,0,5", "d = -1"},
+      {"--d 1 --viewport 0,1 --eye 0,0,5", "viewport"},
+      {"--size 0,10", "--size"},
+      {"--size 100000,100000", "--size"},
+      {"--aov color,bogus", "bogus"},
+      {"--packet 3", "packet width 3"},
+      {"--tile 30", "tile size 30"},
+      {"--compression lzma", "lzma"},
+      {"--bvh-quality ultra", "ultra"},
+      {"--mesh /nonexistent/m.ply", "/nonexistent/m.ply"},
+      {"--eye nan,0,1", "non-finite"},
+  };
+  for (const Case& c : cases) {
+    std::string out;
+    const int rc = runCommand(apertureBinary() + " render --out " + exr + " " + c.args, &out);
+    EXPECT_NE(rc, 0) << c.args;
+    EXPECT_GT(rc, 0) << c.args << " (killed by a signal)";
+    EXPECT_NE(out.find(c.expect), std::string::npos) << c.args << "\n" << out;
+    EXPECT_FALSE(test::fileExists(exr)) << c.args;
+  }
+}
+
+TEST(Cli, MalformedMeshCorpusFailsCleanlyWithoutOutput) {
+  const std::string dir = scratchDir(), exr = dir + "/x.exr";
+  const std::string bad = std::string(APERTURE_TESTS_DIR) + "/data/bad/";
+  std::ifstream manifest(bad + "EXPECTED.txt");
+  std::string line;
+  int files = 0;
+  while (std::getline(manifest, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    const auto tab = line.find('\t');
+    const std::string name = line.substr(0, tab), expect = line.substr(tab + 1);
+    std::string out;
+    const int rc = runCommand("ulimit -v 2000000; timeout 10 " + apertureBinary() +
+                                  " render --size 8,8 --out " + exr + " --mesh " + quote(bad + name),
+                              &out);
+    EXPECT_EQ(rc, 1) << name << "\n" << out;
+    EXPECT_NE(out.find(name), std::string::npos) << "message must name the file: " << out;
+    EXPECT_NE(out.find(expect), std::string::npos) << name << ": " << out;
+    EXPECT_FALSE(test::fileExists(exr)) << name;
+    ++files;
+  }
+  EXPECT_GE(files, 30);
+  // An empty file and a directory, made here.
+  test::writeFile(dir + "/empty.ply", "");
+  std::string out;
+  EXPECT_EQ(runCommand(apertureBinary() + " render --out " + exr + " --mesh " + dir + "/empty.ply", &out), 1);
+  EXPECT_NE(out.find("empty.ply"), std::string::npos) << out;
+  std::filesystem::create_directories(dir + "/adir.ply");
+  EXPECT_EQ(runCommand(apertureBinary() + " render --out " + exr + " --mesh " + dir + "/adir.ply", &out), 1);
+  EXPECT_NE(out.find("directory"), std::string::npos) << out;
+  EXPECT_FALSE(test::fileExists(exr));
+}
+
+TEST(Cli, PacketWidthsAndThreadsGiveBitIdenticalExrOnBunny) {
+  APERTURE_REQUIRE_SHARED_MESH(bunny, "stanford/bun_zipper.ply");
+  const std::string dir = scratchDir();
+  Framebuffer ref;
+  for (int packet : {1, 4, 8, 16})
+    for (int threads : {1, 2}) {
+      const std::string exr = dir + "/p" + std::to_string(packet) + "t" + std::to_string(threads) + ".exr";
+      std::string out;
+      ASSERT_EQ(runCommand(apertureBinary() + " render --quiet --mesh " + bunny + kBunnyView +
+                               " --size 203,157 --aov all --packet " + std::to_string(packet) +
+                               " --threads " + std::to_string(threads) + " --tile " +
+                               std::to_string(8 * packet) + " --out " + exr, &out), 0) << out;
+      const Framebuffer fb = readExr(exr);
+      if (ref.width == 0) {
+        ref = fb;
+        int hits = 0;
+        for (uint32_t id : fb.primId) hits += id != kInvalidId;
+        EXPECT_GT(hits, 203 * 157 / 4);
+      } else {
+        EXPECT_TRUE(samePixels(fb, ref)) << "packet " << packet << " threads " << threads;
+      }
+    }
+}
+
+TEST(Cli, HeaderMatricesReprojectPositionsToTheirPixels) {
+  APERTURE_REQUIRE_SHARED_MESH(bunny, "stanford/bun_zipper.ply");
+  const std::string exr = scratchDir() + "/b.exr";
+  std::string out;
+  ASSERT_EQ(runCommand(apertureBinary() + " render --quiet --mesh " + bunny + kBunnyView +
+                           " --size 120,90 --aov position,depth --out " + exr, &out), 0) << out;
+  ExrMetadata meta;
+  const Framebuffer fb = readExr(exr, &meta);
+  const glm::dmat4 ndcFromWorld = meta.camera.ndcFromWorld;
+  int checked = 0;
+  for (int i = 0; i < fb.height; ++i)
+    for (int j = 0; j < fb.width; ++j) {
+      const size_t px = size_t(i) * size_t(fb.width) + size_t(j);
+      if (!std::isfinite(fb.depth[px])) continue;
+      const glm::dvec4 p(fb.position[3 * px], fb.position[3 * px + 1], fb.position[3 * px + 2], 1.0);
+      const glm::dvec4 q = ndcFromWorld * p;
+      const double x = q.x / q.w * fb.width, y = q.y / q.w * fb.height;
+      EXPECT_NEAR(x, j + 0.5, 1e-2) << i << "," << j;
+      EXPECT_NEAR(y, i + 0.5, 1e-2) << i << "," << j;
+      // And camera space depth agrees with Z.
+      const glm::dvec4 c = meta.camera.cameraFromWorld * p;
+      EXPECT_NEAR(-c.z, fb.depth[px], 1e-5 * fb.depth[px]);
+      ++checked;
+    }
+  EXPECT_GT(checked, 1000);
+}
+
+TEST(Cli, BenchReportsRenderAndBaselineInJson) {
+  const std::string json = scratchDir() + "/b.json";
+  std::string out;
+  ASSERT_EQ(runCommand(apertureBinary() + " bench --quiet --size 64,64 --frames 3 --warmup 1 --builds 2 "
+                           "--baseline --mesh 'procedural:sphere' --json " + json, &out), 0) << out;
+  std::ifstream in(json);
+  std::stringstream text;
+  text << in.rdbuf();
+  for (const char* key : {"\"mrays_per_s_median\"", "\"baseline_mrays_per_s_median\"",
+                          "\"build_seconds_median\"", "\"embree_bytes_per_triangle\"", "\"isa\""})
+    EXPECT_NE(text.str().find(key), std::string::npos) << key;
+  EXPECT_NE(out.find("render / baseline"), std::string::npos) << out;
+}

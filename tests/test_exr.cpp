@@ -1,0 +1,580 @@
+// EXR output/input and atomic file writes.
+#include <Imath/ImathBox.h>
+#include <Imath/ImathMatrix.h>
+#include <Imath/half.h>
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfMatrixAttribute.h>
+#include <OpenEXR/ImfStandardAttributes.h>
+#include <OpenEXR/ImfStringAttribute.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include <glm/glm.hpp>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/exr.h"
+#include "tests/support.h"
+
+namespace aperture {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr AovMask kAllAovs = kAovColor | kAovDepth | kAovDistance | kAovNormal | kAovPosition |
+                             kAovPrimId | kAovGeomId;
+const float kInf = std::numeric_limits<float>::infinity();
+
+/// Every AOV filled with distinct values; every 5th pixel is a miss (+inf, invalid ids).
+Framebuffer patterned(int w, int h) {
+  Framebuffer fb(w, h, kAllAovs);
+  for (size_t i = 0; i < fb.pixelCount(); ++i) {
+    const float f = float(i);
+    for (int c = 0; c < 4; ++c) fb.rgba[4 * i + c] = 0.013f * f + 0.21f * float(c) + 0.001f;
+    for (int c = 0; c < 3; ++c) {
+      fb.normal[3 * i + c] = std::sin(0.7f * f + float(c));
+      fb.position[3 * i + c] = -3.3f + 0.117f * f * float(c + 1);
+    }
+    if (i % 5 == 0) {
+      fb.depth[i] = fb.distance[i] = kInf;
+      fb.primId[i] = fb.geomId[i] = kInvalidId;
+    } else {
+      fb.depth[i] = 1.5f + 0.37f * f;
+      fb.distance[i] = 1.7f + 0.41f * f;
+      fb.primId[i] = uint32_t(1000003u * i + 7u);
+      fb.geomId[i] = uint32_t(i % 3);
+    }
+  }
+  return fb;
+}
+
+std::string readBytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+std::vector<std::string> listDir(const std::string& dir) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir)) names.push_back(entry.path().filename());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+/// Reads one channel of `path` with OpenEXR directly (not through readExr).
+template <typename T>
+std::vector<T> readChannel(Imf::InputFile& file, const char* name, Imf::PixelType as) {
+  const Imath::Box2i dw = file.header().dataWindow();
+  const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+  std::vector<T> out(size_t(w) * size_t(h));
+  Imf::FrameBuffer frame;
+  frame.insert(name, Imf::Slice::Make(as, out.data(), dw, sizeof(T)));
+  file.setFrameBuffer(frame);
+  file.readPixels(dw.min.y, dw.max.y);
+  return out;
+}
+
+void expectFloatsEqual(const std::vector<float>& got, const std::vector<float>& want,
+                       const char* what) {
+  ASSERT_EQ(got.size(), want.size()) << what;
+  for (size_t i = 0; i < got.size(); ++i)
+    ASSERT_EQ(std::memcmp(&got[i], &want[i], sizeof(float)), 0)
+        << what << "[" << i << "]: " << got[i] << " vs " << want[i];
+}
+
+std::vector<float> component(const std::vector<float>& v, int c, int n) {
+  std::vector<float> out;
+  for (size_t i = c; i < v.size(); i += size_t(n)) out.push_back(v[i]);
+  return out;
+}
+
+void checkDirectRead(const std::string& path, const Framebuffer& fb, bool halfColor) {
+  Imf::InputFile file(path.c_str());
+  std::map<std::string, Imf::PixelType> channels;
+  for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it)
+    channels[it.name()] = it.channel().type;
+  const Imf::PixelType colorType = halfColor ? Imf::HALF : Imf::FLOAT;
+  const std::map<std::string, Imf::PixelType> expected = {
+      {"R", colorType},     {"G", colorType},     {"B", colorType},     {"A", colorType},
+      {"Z", Imf::FLOAT},    {"T", Imf::FLOAT},    {"N.X", Imf::FLOAT},  {"N.Y", Imf::FLOAT},
+      {"N.Z", Imf::FLOAT},  {"P.X", Imf::FLOAT},  {"P.Y", Imf::FLOAT},  {"P.Z", Imf::FLOAT},
+      {"primID", Imf::UINT}, {"geomID", Imf::UINT}};
+  EXPECT_EQ(channels, expected);
+  const Imath::Box2i dw = file.header().dataWindow();
+  EXPECT_EQ(dw.max.x - dw.min.x + 1, fb.width);
+  EXPECT_EQ(dw.max.y - dw.min.y + 1, fb.height);
+
+  const char* rgba[4] = {"R", "G", "B", "A"};
+  for (int c = 0; c < 4; ++c) {
+    const std::vector<float> got = readChannel<float>(file, rgba[c], Imf::FLOAT);
+    const std::vector<float> want = component(fb.rgba, c, 4);
+    if (!halfColor) {
+      expectFloatsEqual(got, want, rgba[c]);
+    } else {
+      ASSERT_EQ(got.size(), want.size());
+      for (size_t i = 0; i < got.size(); ++i)  // half: 11 significant bits, round to nearest
+        ASSERT_NEAR(got[i], want[i], std::abs(want[i]) * std::ldexp(1.0, -11) + 1e-7)
+            << rgba[c] << "[" << i << "]";
+    }
+  }
+  expectFloatsEqual(readChannel<float>(file, "Z", Imf::FLOAT), fb.depth, "Z");
+  expectFloatsEqual(readChannel<float>(file, "T", Imf::FLOAT), fb.distance, "T");
+  const char* n[3] = {"N.X", "N.Y", "N.Z"};
+  const char* p[3] = {"P.X", "P.Y", "P.Z"};
+  for (int c = 0; c < 3; ++c) {
+    expectFloatsEqual(readChannel<float>(file, n[c], Imf::FLOAT), component(fb.normal, c, 3),
+                      n[c]);
+    expectFloatsEqual(readChannel<float>(file, p[c], Imf::FLOAT), component(fb.position, c, 3),
+                      p[c]);
+  }
+  EXPECT_EQ(readChannel<uint32_t>(file, "primID", Imf::UINT), fb.primId);
+  EXPECT_EQ(readChannel<uint32_t>(file, "geomID", Imf::UINT), fb.geomId);
+}
+
+TEST(Exr, RoundTripFloatThroughOpenExr) {
+  const std::string path = test::scratchDir() + "/all.exr";
+  const Framebuffer fb = patterned(13, 7);
+  writeExr(path, fb, ExrMetadata{});
+  checkDirectRead(path, fb, false);
+}
+
+TEST(Exr, RoundTripHalfColorThroughOpenExr) {
+  const std::string path = test::scratchDir() + "/half.exr";
+  const Framebuffer fb = patterned(9, 11);
+  ExrOptions options;
+  options.halfColor = true;
+  writeExr(path, fb, ExrMetadata{}, options);
+  checkDirectRead(path, fb, true);
+}
+
+TEST(Exr, ReadExrRestoresEveryAov) {
+  const std::string path = test::scratchDir() + "/all.exr";
+  const Framebuffer fb = patterned(10, 6);
+  writeExr(path, fb, ExrMetadata{});
+  const Framebuffer back = readExr(path);
+  EXPECT_EQ(back.width, fb.width);
+  EXPECT_EQ(back.height, fb.height);
+  EXPECT_EQ(back.aovs, kAllAovs);
+  expectFloatsEqual(back.rgba, fb.rgba, "rgba");
+  expectFloatsEqual(back.depth, fb.depth, "depth");
+  expectFloatsEqual(back.distance, fb.distance, "distance");
+  expectFloatsEqual(back.normal, fb.normal, "normal");
+  expectFloatsEqual(back.position, fb.position, "position");
+  EXPECT_EQ(back.primId, fb.primId);
+  EXPECT_EQ(back.geomId, fb.geomId);
+}
+
+TEST(Exr, OnlyRequestedAovsAreWritten) {
+  const std::string path = test::scratchDir() + "/some.exr";
+  Framebuffer fb(4, 3, kAovDepth | kAovGeomId);
+  fb.depth[5] = 2.5f;
+  fb.geomId[2] = 9;
+  writeExr(path, fb, ExrMetadata{});
+  Imf::InputFile file(path.c_str());
+  std::vector<std::string> names;
+  for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it)
+    names.push_back(it.name());
+  EXPECT_EQ(names, (std::vector<std::string>{"Z", "geomID"}));
+  const Framebuffer back = readExr(path);
+  EXPECT_EQ(back.aovs, kAovDepth | kAovGeomId);
+  EXPECT_EQ(back.depth[5], 2.5f);
+  EXPECT_EQ(back.geomId[2], 9u);
+  EXPECT_TRUE(back.rgba.empty());
+}
+
+TEST(Exr, CompressionNamesParse) {
+  const char* names[] = {"none", "rle",  "zips", "zip",  "piz",
+                         "pxr24", "b44", "b44a", "dwaa", "dwab"};
+  for (const char* name : names) EXPECT_EQ(exrCompressionName(parseExrCompression(name)), name);
+  try {
+    parseExrCompression("lzw");
+    FAIL() << "no error for an unknown compression";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("lzw"), std::string::npos) << what;
+    EXPECT_NE(what.find("piz"), std::string::npos) << what;
+    EXPECT_NE(what.find("dwab"), std::string::npos) << what;
+  }
+}
+
+TEST(Exr, EveryCompressionWritesAReadableFile) {
+  const std::string dir = test::scratchDir();
+  const Framebuffer fb = patterned(40, 37);  // several scanline blocks for every compression
+  const std::string lossless[] = {"none", "rle", "zips", "zip", "piz"};
+  for (const char* name : {"none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa",
+                           "dwab"}) {
+    SCOPED_TRACE(name);
+    for (bool halfColor : {false, true}) {
+      SCOPED_TRACE(halfColor ? "half color" : "float color");
+      const std::string path = dir + "/" + name + (halfColor ? "-half" : "") + ".exr";
+      ExrOptions options;
+      options.compression = parseExrCompression(name);
+      options.halfColor = halfColor;
+      writeExr(path, fb, ExrMetadata{}, options);
+      EXPECT_TRUE(isCompleteExr(path));
+      const Framebuffer back = readExr(path);
+      // Integer channels are lossless under every compression.
+      EXPECT_EQ(back.primId, fb.primId);
+      EXPECT_EQ(back.geomId, fb.geomId);
+      const bool exact = std::find(std::begin(lossless), std::end(lossless), std::string(name)) !=
+                         std::end(lossless);
+      if (exact) {
+        expectFloatsEqual(back.depth, fb.depth, "depth");
+        expectFloatsEqual(back.distance, fb.distance, "distance");
+        expectFloatsEqual(back.normal, fb.normal, "normal");
+        expectFloatsEqual(back.position, fb.position, "position");
+        if (!halfColor) expectFloatsEqual(back.rgba, fb.rgba, "rgba");
+      } else {
+        // Lossy: DWA also quantises FLOAT channels named like CIE XYZ (Z, N.X, P.Y, ...).
+        for (size_t i = 0; i < fb.depth.size(); ++i) {
+          if (std::isinf(fb.depth[i])) {
+            EXPECT_EQ(back.depth[i], fb.depth[i]);
+          } else {
+            EXPECT_NEAR(back.depth[i], fb.depth[i], 2e-2 * fb.depth[i]) << i;
+          }
+        }
+        for (size_t i = 0; i < fb.position.size(); ++i)
+          EXPECT_NEAR(back.position[i], fb.position[i], 2e-2 * (1 + std::abs(fb.position[i])));
+        for (size_t i = 0; i < fb.rgba.size(); ++i)
+          EXPECT_NEAR(back.rgba[i], fb.rgba[i], 0.1 * (1 + fb.rgba[i])) << i;
+      }
+    }
+  }
+}
+
+TEST(Exr, CompressionIsRecordedInTheHeader) {
+  const std::string dir = test::scratchDir();
+  const Framebuffer fb = patterned(8, 8);
+  const std::pair<const char*, Imf::Compression> cases[] = {{"none", Imf::NO_COMPRESSION},
+                                                            {"piz", Imf::PIZ_COMPRESSION},
+                                                            {"dwab", Imf::DWAB_COMPRESSION}};
+  for (const auto& [name, imf] : cases) {
+    ExrOptions options;
+    options.compression = parseExrCompression(name);
+    writeExr(dir + "/c.exr", fb, ExrMetadata{}, options);
+    Imf::InputFile file((dir + "/c.exr").c_str());
+    EXPECT_EQ(file.header().compression(), imf) << name;
+  }
+}
+
+glm::dmat4 testMatrix(double seed) {
+  glm::dmat4 m;
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) m[c][r] = seed + 0.1 * c - 0.37 * r + 1e-9 * (4 * c + r);
+  return m;
+}
+
+TEST(Exr, HeaderMetadataRoundTrip) {
+  const std::string path = test::scratchDir() + "/meta.exr";
+  ExrMetadata meta;
+  CameraDescription& cam = meta.camera;
+  cam.type = "thinlens";
+  cam.eye = {1.5, -2.25, 3.1234567890123};
+  cam.u = {0.6, 0.8, 0};
+  cam.v = {0, 0, 1};
+  cam.w = {0.8, -0.6, 0};
+  cam.d = 0.7654321;
+  cam.vw = 1.25;
+  cam.vh = 0.8;
+  cam.width = 6;
+  cam.height = 4;
+  cam.spp = 17;
+  cam.cameraFromWorld = testMatrix(0.3);
+  cam.ndcFromWorld = testMatrix(-1.7);
+  cam.extra = {{"fov", "60"}, {"aperture", "0.05"}};
+  meta.renderSeconds = 12.375;
+  meta.strings = {{"aperture.mesh", "bunny.obj"}, {"aperture.settings", "{\"x\": 1}"}};
+  writeExr(path, Framebuffer(6, 4, kAovColor), meta);
+
+  ExrMetadata back;
+  readExr(path, &back);
+  EXPECT_EQ(back.camera.type, cam.type);
+  EXPECT_EQ(back.camera.eye, cam.eye);
+  EXPECT_EQ(back.camera.u, cam.u);
+  EXPECT_EQ(back.camera.v, cam.v);
+  EXPECT_EQ(back.camera.w, cam.w);
+  EXPECT_EQ(back.camera.d, cam.d);
+  EXPECT_EQ(back.camera.vw, cam.vw);
+  EXPECT_EQ(back.camera.vh, cam.vh);
+  EXPECT_EQ(back.camera.width, 6);
+  EXPECT_EQ(back.camera.height, 4);
+  EXPECT_EQ(back.camera.spp, 17);
+  EXPECT_EQ(back.camera.cameraFromWorld, cam.cameraFromWorld);
+  EXPECT_EQ(back.camera.ndcFromWorld, cam.ndcFromWorld);
+  // Header attributes are kept sorted by name, so the pairs come back in name order.
+  auto sorted = [](std::vector<std::pair<std::string, std::string>> v) {
+    std::sort(v.begin(), v.end());
+    return v;
+  };
+  EXPECT_EQ(back.camera.extra, sorted(cam.extra));
+  EXPECT_EQ(back.renderSeconds, 12.375);
+  EXPECT_EQ(back.strings, sorted(meta.strings));
+
+  // The same values as OpenEXR sees them: standard float matrices and named attributes.
+  Imf::InputFile file(path.c_str());
+  const Imf::Header& h = file.header();
+  ASSERT_TRUE(Imf::hasWorldToCamera(h));
+  ASSERT_TRUE(Imf::hasWorldToNDC(h));
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) {
+      EXPECT_EQ(Imf::worldToCamera(h)[i][j], float(cam.cameraFromWorld[i][j]));
+      EXPECT_EQ(Imf::worldToNDC(h)[i][j], float(cam.ndcFromWorld[i][j]));
+    }
+  const auto* fov = h.findTypedAttribute<Imf::StringAttribute>("aperture.camera.fov");
+  ASSERT_NE(fov, nullptr);
+  EXPECT_EQ(fov->value(), "60");
+  const auto* software = h.findTypedAttribute<Imf::StringAttribute>("software");
+  ASSERT_NE(software, nullptr);
+  EXPECT_EQ(software->value(), "aperture " APERTURE_VERSION);
+  EXPECT_NE(h.findTypedAttribute<Imf::M44dAttribute>("aperture.worldToNDC"), nullptr);
+}
+
+/// A pinhole camera built by hand: looks from `eye` at `target`, image plane at distance d with
+/// a vw x vh viewport, W x H pixels. NDC x = column / W, y = row / H (top-left origin).
+struct HandCamera {
+  glm::dvec3 eye, u, v, w;
+  double d, vw, vh;
+  int width, height;
+
+  CameraDescription describe() const {
+    CameraDescription c;
+    c.type = "perspective";
+    c.eye = eye;
+    c.u = u;
+    c.v = v;
+    c.w = w;
+    c.d = d;
+    c.vw = vw;
+    c.vh = vh;
+    c.width = width;
+    c.height = height;
+    glm::dmat4 rotation(1.0);  // rows U, V, W (GLM: m[column][row])
+    for (int k = 0; k < 3; ++k) {
+      rotation[k][0] = u[k];
+      rotation[k][1] = v[k];
+      rotation[k][2] = w[k];
+    }
+    glm::dmat4 translation(1.0);
+    translation[3] = glm::dvec4(-eye, 1.0);
+    c.cameraFromWorld = rotation * translation;
+    // Camera space (x, y, z) -> homogeneous (d x / vw + 0.5 (-z), -d y / vh + 0.5 (-z), 1, -z).
+    glm::dmat4 projection(0.0);
+    projection[0][0] = d / vw;
+    projection[2][0] = -0.5;
+    projection[1][1] = -d / vh;
+    projection[2][1] = -0.5;
+    projection[3][2] = 1.0;
+    projection[2][3] = -1.0;
+    c.ndcFromWorld = projection * c.cameraFromWorld;
+    return c;
+  }
+
+  /// The pixel `p` projects to by similar triangles (no matrices); false if off-image.
+  bool pixelOf(const glm::dvec3& p, int* row, int* col) const {
+    const glm::dvec3 q = p - eye;
+    const double x = glm::dot(q, u), y = glm::dot(q, v), z = glm::dot(q, w);
+    if (z >= 0) return false;
+    const double planeX = d * x / -z, planeY = d * y / -z;
+    const double ndcX = (planeX + vw / 2) / vw, ndcY = (vh / 2 - planeY) / vh;
+    *col = int(std::floor(ndcX * width));
+    *row = int(std::floor(ndcY * height));
+    return *col >= 0 && *col < width && *row >= 0 && *row < height;
+  }
+};
+
+TEST(Exr, WorldToNdcReprojectsPositionsIntoTheirPixels) {
+  HandCamera cam;
+  cam.eye = {2.0, 1.0, 5.0};
+  const glm::dvec3 target{0.2, -0.3, 0.1}, up{0, 1, 0};
+  cam.w = glm::normalize(cam.eye - target);
+  cam.u = glm::normalize(glm::cross(up, cam.w));
+  cam.v = glm::cross(cam.w, cam.u);
+  cam.d = 1.3;
+  cam.vw = 1.6;
+  cam.vh = 0.9;
+  cam.width = 32;
+  cam.height = 18;
+
+  // Known points spread through the view volume, each stored at the pixel it projects to.
+  Framebuffer fb(cam.width, cam.height, kAovPosition | kAovPrimId);
+  std::vector<std::pair<int, int>> filled;
+  for (int k = 0; k < 400; ++k) {
+    const glm::dvec3 p = target + glm::dvec3(std::sin(1.3 * k) * 2.0, std::cos(0.7 * k) * 1.1,
+                                             std::sin(0.31 * k + 1.0) * 1.5);
+    int row, col;
+    if (!cam.pixelOf(p, &row, &col)) continue;
+    const size_t i = size_t(row) * cam.width + col;
+    for (int c = 0; c < 3; ++c) fb.position[3 * i + c] = float(p[c]);
+    fb.primId[i] = uint32_t(k);
+    filled.emplace_back(row, col);
+  }
+  ASSERT_GT(filled.size(), 50u);
+  ExrMetadata meta;
+  meta.camera = cam.describe();
+  const std::string path = test::scratchDir() + "/reproject.exr";
+  writeExr(path, fb, meta);
+
+  Imf::InputFile file(path.c_str());
+  const Imath::M44f m = Imf::worldToNDC(file.header());
+  const Framebuffer back = readExr(path);
+  int checked = 0;
+  for (int row = 0; row < cam.height; ++row)
+    for (int col = 0; col < cam.width; ++col) {
+      const size_t i = size_t(row) * cam.width + col;
+      if (back.primId[i] == kInvalidId) continue;
+      // Imath row-vector convention: [x y z 1] * M, then divide by w.
+      const float p[4] = {back.position[3 * i], back.position[3 * i + 1],
+                          back.position[3 * i + 2], 1.0f};
+      double h[4] = {0, 0, 0, 0};
+      for (int j = 0; j < 4; ++j)
+        for (int k = 0; k < 4; ++k) h[j] += double(p[k]) * m[k][j];
+      const double ndcX = h[0] / h[3], ndcY = h[1] / h[3];
+      EXPECT_EQ(int(std::floor(ndcX * cam.width)), col) << "row " << row << " ndc " << ndcX;
+      EXPECT_EQ(int(std::floor(ndcY * cam.height)), row) << "col " << col << " ndc " << ndcY;
+      ++checked;
+    }
+  EXPECT_GT(checked, 50);
+}
+
+TEST(Exr, IsCompleteExrDetectsDamage) {
+  const std::string dir = test::scratchDir();
+  const std::string good = dir + "/good.exr";
+  ExrOptions options;
+  options.compression = ExrCompression::None;
+  writeExr(good, patterned(64, 64), ExrMetadata{}, options);
+  EXPECT_TRUE(isCompleteExr(good));
+
+  const std::string bytes = readBytes(good);
+  test::writeFile(dir + "/half.exr", bytes.substr(0, bytes.size() / 2));
+  EXPECT_FALSE(isCompleteExr(dir + "/half.exr"));
+  test::writeFile(dir + "/nearly.exr", bytes.substr(0, bytes.size() - 1));
+  EXPECT_FALSE(isCompleteExr(dir + "/nearly.exr"));
+  test::writeFile(dir + "/empty.exr", "");
+  EXPECT_FALSE(isCompleteExr(dir + "/empty.exr"));
+  test::writeFile(dir + "/text.exr", "this is not an OpenEXR file\n");
+  EXPECT_FALSE(isCompleteExr(dir + "/text.exr"));
+  EXPECT_FALSE(isCompleteExr(dir + "/missing.exr"));
+
+  try {
+    readExr(dir + "/half.exr");
+    FAIL() << "no error reading a truncated file";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("half.exr"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Atomic, TemporaryPathIsAHiddenSiblingWithSuffix) {
+  const std::string a = temporaryPathFor("/some/dir/out.png", ".png");
+  const std::string b = temporaryPathFor("/some/dir/out.png", ".png");
+  const std::string prefix = "/some/dir/.out.png.tmp-" + std::to_string(::getpid()) + "-";
+  EXPECT_EQ(a.compare(0, prefix.size(), prefix), 0) << a;
+  EXPECT_EQ(a.substr(a.size() - 4), ".png");
+  EXPECT_NE(a, b);
+  EXPECT_EQ(temporaryPathFor("bare.exr").compare(0, 14, ".bare.exr.tmp-"), 0);
+}
+
+TEST(Atomic, MissingDirectoryThrowsAndCreatesNothing) {
+  const std::string dir = test::scratchDir();
+  const std::string path = dir + "/absent/out.exr";
+  try {
+    writeExr(path, patterned(4, 4), ExrMetadata{});
+    FAIL() << "no error for a missing directory";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(dir + "/absent"), std::string::npos) << what;
+  }
+  EXPECT_FALSE(fs::exists(dir + "/absent"));
+  EXPECT_TRUE(listDir(dir).empty());
+}
+
+TEST(Atomic, ThrowingWriterKeepsThePreviousFile) {
+  const std::string dir = test::scratchDir();
+  const std::string path = dir + "/notes.txt";
+  writeTextAtomically(path, "previous contents\n");
+  try {
+    writeAtomically(path, [](const std::string& tmp) {
+      test::writeFile(tmp, "half-written");
+      throw Error("simulated failure");
+    });
+    FAIL() << "the writer's exception was swallowed";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(path), std::string::npos) << what;
+    EXPECT_NE(what.find("simulated failure"), std::string::npos) << what;
+  }
+  EXPECT_EQ(readBytes(path), "previous contents\n");
+  EXPECT_EQ(listDir(dir), std::vector<std::string>{"notes.txt"});
+
+  writeTextAtomically(path, "new contents\n");
+  EXPECT_EQ(readBytes(path), "new contents\n");
+  EXPECT_EQ(listDir(dir), std::vector<std::string>{"notes.txt"});
+}
+
+TEST(Atomic, FullDiskKeepsThePreviousExr) {
+  const std::string dir = test::scratchDir();
+  const std::string path = dir + "/frame.exr";
+  writeExr(path, patterned(8, 8), ExrMetadata{});
+  const std::string before = readBytes(path);
+  ASSERT_FALSE(before.empty());
+
+  int fds[2];
+  ASSERT_EQ(::pipe(fds), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    // Child: files may not grow past 64 KiB; a write beyond fails with EFBIG.
+    ::close(fds[0]);
+    ::alarm(60);
+    ::signal(SIGXFSZ, SIG_IGN);
+    rlimit limit{64 * 1024, 64 * 1024};
+    ::setrlimit(RLIMIT_FSIZE, &limit);
+    std::string message = "no error";
+    int code = 2;
+    try {
+      ExrOptions options;
+      options.compression = ExrCompression::None;
+      writeExr(path, patterned(256, 256), ExrMetadata{}, options);  // ~3.4 MB
+    } catch (const Error& e) {
+      message = e.what();
+      code = 0;
+    } catch (const std::exception& e) {
+      message = std::string("not an aperture::Error: ") + e.what();
+      code = 3;
+    }
+    ssize_t ignored = ::write(fds[1], message.data(), message.size());
+    (void)ignored;
+    ::_exit(code);
+  }
+  ::close(fds[1]);
+  std::string message;
+  char buf[512];
+  ssize_t got;
+  while ((got = ::read(fds[0], buf, sizeof buf)) > 0) message.append(buf, size_t(got));
+  ::close(fds[0]);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status)) << "child died, status " << status;
+  EXPECT_EQ(WEXITSTATUS(status), 0) << message;
+  EXPECT_NE(message.find(path), std::string::npos) << message;
+  EXPECT_NE(message.find(std::strerror(EFBIG)), std::string::npos) << message;
+  EXPECT_EQ(readBytes(path), before);
+  EXPECT_EQ(listDir(dir), std::vector<std::string>{"frame.exr"});
+}
+
+}  // namespace
+}  // namespace aperture

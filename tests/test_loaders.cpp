@@ -1,0 +1,466 @@
+// PLY and OBJ loaders, loadMesh dispatch and errors, finishMesh anchoring.
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+#include "core/error.h"
+#include "core/mesh.h"
+#include "tests/support.h"
+
+namespace aperture {
+namespace {
+
+using test::scratchDir;
+using test::writeFile;
+
+/// The reference mesh every PLY variant below encodes: 6 vertices, a quad, a pentagon, a triangle.
+const std::vector<double> kVerts = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0.5, 2, -1.25, -3, 4.5, 7};
+const std::vector<std::vector<int>> kFaces = {{0, 1, 2, 3}, {0, 1, 4, 5, 3}, {5, 2, 1}};
+// Fans: quad -> (0,1,2),(0,2,3); pentagon -> (0,1,4),(0,4,5),(0,5,3); triangle as is.
+const std::vector<uint32_t> kTriangles = {0, 1, 2, 0, 2, 3, 0, 1, 4, 0, 4, 5, 0, 5, 3, 5, 2, 1};
+
+/// Appends binary values in a chosen byte order.
+struct Bytes {
+  bool bigEndian = false;
+  std::string s;
+  template <typename T>
+  void put(T v) {
+    char b[sizeof(T)];
+    std::memcpy(b, &v, sizeof(T));
+    if (bigEndian)
+      for (size_t i = sizeof(T); i-- > 0;) s += b[i];
+    else
+      s.append(b, sizeof(T));
+  }
+};
+
+std::string tmpFile(const std::string& name, const std::string& bytes) {
+  std::string path = scratchDir() + "/" + name;
+  writeFile(path, bytes);
+  return path;
+}
+
+std::vector<double> worldVertices(const Mesh& m) {
+  std::vector<double> v;
+  if (!m.positionsDouble.empty()) return m.positionsDouble;
+  for (size_t i = 0; i < 3 * m.vertexCount; ++i) v.push_back(m.positions[i]);
+  return v;
+}
+
+void expectReference(const Mesh& m, bool doubles) {
+  ASSERT_EQ(m.vertexCount, 6u);
+  EXPECT_EQ(!m.positionsDouble.empty(), doubles);
+  std::vector<double> v = worldVertices(m);
+  ASSERT_EQ(v.size(), kVerts.size());
+  for (size_t i = 0; i < v.size(); ++i) EXPECT_EQ(v[i], kVerts[i]) << "coordinate " << i;
+  EXPECT_EQ(m.indices, kTriangles);
+  EXPECT_EQ(m.stats.sourceFaces, 3u);
+}
+
+TEST(PlyAscii, ExtraPropertiesListsAndPolygons) {
+  std::ostringstream s;
+  s << "ply\nformat ascii 1.0\ncomment test\nelement vertex 6\nproperty float confidence\n"
+       "property float x\nproperty list uchar int neighbours\nproperty float y\n"
+       "property float z\nproperty uchar red\nelement face 3\nproperty list uchar int "
+       "vertex_indices\nproperty int flags\nend_header\n";
+  for (int i = 0; i < 6; ++i)
+    s << "0.5 " << kVerts[3 * i] << " 2 7 8 " << kVerts[3 * i + 1] << " " << kVerts[3 * i + 2]
+      << " 255\n";
+  for (const auto& f : kFaces) {
+    s << f.size();
+    for (int k : f) s << " " << k;
+    s << " 42\n";
+  }
+  expectReference(loadPly(tmpFile("a.ply", s.str())), false);
+}
+
+struct BinaryCase {
+  const char* name;
+  bool bigEndian;
+  bool doubles;
+  const char* countType;
+  const char* indexType;
+};
+
+class PlyBinary : public ::testing::TestWithParam<BinaryCase> {};
+
+template <typename T>
+void putAs(Bytes& b, const char* type, T v) {
+  std::string t = type;
+  if (t == "uchar" || t == "uint8") b.put(uint8_t(v));
+  else if (t == "char" || t == "int8") b.put(int8_t(v));
+  else if (t == "ushort" || t == "uint16") b.put(uint16_t(v));
+  else if (t == "short" || t == "int16") b.put(int16_t(v));
+  else if (t == "uint" || t == "uint32") b.put(uint32_t(v));
+  else if (t == "int" || t == "int32") b.put(int32_t(v));
+  else FAIL() << "type " << t;
+}
+
+TEST_P(PlyBinary, EncodesTheReferenceMesh) {
+  const BinaryCase& c = GetParam();
+  Bytes b;
+  b.bigEndian = c.bigEndian;
+  const char* real = c.doubles ? "double" : "float";
+  b.s = std::string("ply\nformat ") + (c.bigEndian ? "binary_big_endian" : "binary_little_endian") +
+        " 1.0\nelement vertex 6\nproperty " + real + " x\nproperty " + real +
+        " y\nproperty list ushort float normals\nproperty " + real +
+        " z\nelement face 3\nproperty uchar kind\nproperty list " + c.countType + " " +
+        c.indexType + " vertex_indices\nelement material 2\nproperty float shininess\n"
+        "property list uchar uchar name\nend_header\n";
+  for (int i = 0; i < 6; ++i) {
+    for (int a = 0; a < 2; ++a)
+      c.doubles ? b.put(kVerts[3 * i + a]) : b.put(float(kVerts[3 * i + a]));
+    b.put(uint16_t(2));
+    b.put(1.5f);
+    b.put(-2.5f);
+    c.doubles ? b.put(kVerts[3 * i + 2]) : b.put(float(kVerts[3 * i + 2]));
+  }
+  for (const auto& f : kFaces) {
+    b.put(uint8_t(9));
+    putAs(b, c.countType, f.size());
+    for (int k : f) putAs(b, c.indexType, k);
+  }
+  for (int m = 0; m < 2; ++m) {
+    b.put(0.25f);
+    b.put(uint8_t(3));
+    b.s += "abc";
+  }
+  expectReference(loadPly(tmpFile("b.ply", b.s)), c.doubles);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    PlyVariants, PlyBinary,
+    ::testing::Values(BinaryCase{"le_float_uchar_int", false, false, "uchar", "int"},
+                      BinaryCase{"be_float_uchar_int", true, false, "uchar", "int"},
+                      BinaryCase{"le_double_ushort_short", false, true, "ushort", "short"},
+                      BinaryCase{"be_double_int_uint", true, true, "int", "uint"},
+                      BinaryCase{"le_float_uint8_int32", false, false, "uint8", "int32"},
+                      BinaryCase{"be_float_char_ushort", true, false, "char", "ushort"},
+                      BinaryCase{"le_double_int16_uint32", false, true, "int16", "uint32"}),
+    [](const auto& p) { return std::string(p.param.name); });
+
+// Plain layout (float xyz, uchar/int faces) goes through the loader's fast paths.
+TEST(PlyBinary, FastPathLayout) {
+  for (bool be : {false, true}) {
+    Bytes b;
+    b.bigEndian = be;
+    b.s = std::string("ply\nformat ") + (be ? "binary_big_endian" : "binary_little_endian") +
+          " 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
+          "element face 3\nproperty list uchar int vertex_indices\nend_header\n";
+    for (double v : kVerts) b.put(float(v));
+    for (const auto& f : kFaces) {
+      b.put(uint8_t(f.size()));
+      for (int k : f) b.put(int32_t(k));
+    }
+    expectReference(loadPly(tmpFile("f.ply", b.s)), false);
+  }
+}
+
+// Strip 0 1 2 3 4 gives (0,1,2) (2,1,3) (2,3,4); -1 restarts: 5 3 1 gives (5,3,1).
+TEST(PlyTristrips, RestartsAndAlternatingWinding) {
+  const std::vector<uint32_t> expected = {0, 1, 2, 2, 1, 3, 2, 3, 4, 5, 3, 1};
+  std::string header =
+      "element vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
+      "element tristrips 1\nproperty list int int vertex_indices\nend_header\n";
+  std::ostringstream a;
+  a << "ply\nformat ascii 1.0\n" << header;
+  for (int i = 0; i < 6; ++i)
+    a << kVerts[3 * i] << " " << kVerts[3 * i + 1] << " " << kVerts[3 * i + 2] << "\n";
+  a << "9 0 1 2 3 4 -1 5 3 1\n";
+  Mesh ma = loadPly(tmpFile("s.ply", a.str()));
+  EXPECT_EQ(ma.indices, expected);
+  EXPECT_EQ(ma.stats.sourceFaces, 2u);
+
+  Bytes b;
+  b.s = "ply\nformat binary_little_endian 1.0\n" + header;
+  for (double v : kVerts) b.put(float(v));
+  b.put(int32_t(9));
+  for (int v : {0, 1, 2, 3, 4, -1, 5, 3, 1}) b.put(int32_t(v));
+  EXPECT_EQ(loadPly(tmpFile("s2.ply", b.s)).indices, expected);
+}
+
+TEST(PlyAscii, VertexIndexNameAndCrlf) {
+  std::string s =
+      "ply\r\nformat ascii 1.0\r\nelement vertex 3\r\nproperty float32 x\r\nproperty float32 "
+      "y\r\nproperty float32 z\r\nelement face 1\r\nproperty list uint8 int32 vertex_index\r\n"
+      "end_header\r\n0 0 0\r\n1 0 0\r\n0 1 0\r\n3 0 1 2\r\n";
+  Mesh m = loadPly(tmpFile("c.ply", s));
+  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2}));
+  EXPECT_EQ(m.positions, (std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0}));
+}
+
+TEST(ObjLoader, CornerFormsNegativeIndicesPolygonsIgnoredStatements) {
+  const std::string obj =
+      "# comment\nmtllib x.mtl\no thing\ng group\ns 1\nusemtl red\n"
+      "v 0 0 0\nv 1 0 0 1.0\nv 1 1 0\nv 0 1 0   # trailing comment\n"
+      "vt 0 0\nvt 1 0\nvn 0 0 1\nvp 0.5\n"
+      "f 1 2 3\n"
+      "f 1/1 3/2 4/1\n"
+      "f 1//1 2//1 3//1 4//1\n"
+      "v 0.5 2 -1.25\nv -3 4.5 7\n"
+      "f -6/1/1 -5/2/1 -2/1/1 -1/1/1 -3/2/1\n"
+      "l 1 2\np 3\n\tf\t1 2 3\r\n";
+  Mesh m = loadObj(tmpFile("t.obj", obj));
+  ASSERT_EQ(m.vertexCount, 6u);
+  EXPECT_EQ(m.positionsDouble, kVerts);
+  const std::vector<uint32_t> expected = {0, 1, 2, 0, 2, 3, 0, 1, 2, 0, 2, 3,
+                                          0, 1, 4, 0, 4, 5, 0, 5, 3, 0, 1, 2};
+  EXPECT_EQ(m.indices, expected);
+  EXPECT_EQ(m.stats.sourceFaces, 5u);
+}
+
+TEST(ObjLoader, ForwardReferenceIsAllowed) {
+  Mesh m = loadObj(tmpFile("fw.obj", "f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"));
+  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2}));
+}
+
+std::string expectError(const std::string& spec) {
+  try {
+    loadMesh(spec);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << spec << " loaded without an error";
+  return "";
+}
+
+// Each file under tests/data/bad must fail in the loader with its manifest substring and
+// the file's name in the message.
+TEST(LoaderBadFiles, EveryCorpusFileFailsWithItsMessage) {
+  const std::string dir = std::string(APERTURE_TESTS_DIR) + "/data/bad";
+  std::ifstream manifest(dir + "/EXPECTED.txt");
+  ASSERT_TRUE(manifest) << "missing " << dir << "/EXPECTED.txt";
+  std::string line;
+  int count = 0;
+  while (std::getline(manifest, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    size_t tab = line.find('\t');
+    ASSERT_NE(tab, std::string::npos) << "manifest line without a tab: " << line;
+    std::string file = line.substr(0, tab), expected = line.substr(tab + 1);
+    ASSERT_TRUE(test::fileExists(dir + "/" + file)) << file;
+    auto start = std::chrono::steady_clock::now();
+    std::string msg = expectError(dir + "/" + file);
+    double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_NE(msg.find(file), std::string::npos) << file << ": message lacks the file: " << msg;
+    EXPECT_NE(msg.find(expected), std::string::npos)
+        << file << ": expected '" << expected << "' in: " << msg;
+    EXPECT_LT(seconds, 5.0) << file << " (a bad file must fail fast)";
+    ++count;
+  }
+  EXPECT_GE(count, 20);
+}
+
+TEST(LoaderErrors, DirectoryMissingUnknownExtension) {
+  std::string dir = scratchDir() + "/meshdir.ply";
+  std::filesystem::create_directories(dir);
+  std::string msg = expectError(dir);
+  EXPECT_NE(msg.find("is a directory"), std::string::npos) << msg;
+  EXPECT_NE(msg.find(dir), std::string::npos) << msg;
+
+  msg = expectError(scratchDir() + "/absent.obj");
+  EXPECT_NE(msg.find("absent.obj: no such file"), std::string::npos) << msg;
+
+  msg = expectError(tmpFile("model.STL", "solid x\n"));
+  EXPECT_NE(msg.find("model.STL: unknown mesh file extension '.stl'"), std::string::npos) << msg;
+}
+
+TEST(LoaderErrors, ExtensionIsCaseInsensitive) {
+  Mesh m = loadMesh(tmpFile("UPPER.OBJ", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"));
+  EXPECT_EQ(m.triangleCount(), 1u);
+}
+
+TEST(LoaderErrors, HugeBinaryCountFailsWithoutAllocating) {
+  std::string s =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+      "property float y\nproperty float z\nelement face 1000000000000\n"
+      "property list uchar int vertex_indices\nend_header\n" +
+      std::string(100, '\0');
+  std::string msg = expectError(tmpFile("huge.ply", s));
+  EXPECT_NE(msg.find("claims 1000000000000 items"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("larger than the file"), std::string::npos) << msg;
+}
+
+TEST(LoaderErrors, NonFiniteVerticesAreCountedAndTheirTrianglesDropped) {
+  std::string s =
+      "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 3\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\nnan 1 0\n0 1 0\n5 inf 0\n3 0 1 3\n3 0 1 2\n3 1 4 3\n";
+  Mesh m = loadMesh(tmpFile("nan.ply", s));
+  EXPECT_EQ(m.stats.nonFiniteVertices, 2u);
+  EXPECT_EQ(m.stats.droppedTriangles, 2u);
+  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 3}));
+  // Anchor from the finite vertices only: bbox (0,0,0)-(1,1,0).
+  EXPECT_EQ(m.anchor, glm::dvec3(0.5, 0.5, 0));
+  EXPECT_EQ(m.vertex(2), glm::vec3(0));
+  EXPECT_EQ(m.vertex(4), glm::vec3(0));
+  EXPECT_EQ(m.vertex(1), glm::vec3(0.5, -0.5, 0));
+}
+
+// ---- finishMesh ----
+
+Mesh triangleSoup() {
+  Mesh m;
+  m.name = "soup";
+  m.positionsDouble = {1, 2, 3, 5, 2, 3, 1, 8, 3, 1, 2, 11, 3, 3, 3};
+  m.vertexCount = 5;
+  m.indices = {0, 1, 2, 0, 1, 3, 1, 2, 3, 4, 4, 0};
+  return m;
+}
+
+TEST(FinishMesh, AnchorIsBoundingBoxCentreAndPositionsArePadded) {
+  Mesh m = triangleSoup();
+  finishMesh(m, {});
+  EXPECT_EQ(m.anchor, glm::dvec3(3, 5, 7));
+  ASSERT_EQ(m.positions.size(), 15 + kVertexPaddingFloats);
+  for (size_t i = 15; i < m.positions.size(); ++i) EXPECT_EQ(m.positions[i], 0.0f);
+  EXPECT_EQ(m.vertex(0), glm::vec3(-2, -3, -4));
+  EXPECT_EQ(m.vertex(3), glm::vec3(-2, -3, 4));
+  EXPECT_TRUE(m.positionsDouble.empty());
+  EXPECT_EQ(m.stats.degenerateTriangles, 1u);
+  EXPECT_EQ(m.triangleCount(), 4u);
+  glm::vec3 lo, hi;
+  m.bounds(lo, hi);
+  EXPECT_EQ(lo, glm::vec3(-2, -3, -4));
+  EXPECT_EQ(hi, glm::vec3(2, 3, 4));
+}
+
+TEST(FinishMesh, WorldSpaceAnchorIsOriginAndScaleTranslateApply) {
+  Mesh m = triangleSoup();
+  LoadOptions o;
+  o.placement = Placement::WorldSpace;
+  o.scale = 2;
+  o.translate = {1, 0, -1};
+  finishMesh(m, o);
+  EXPECT_EQ(m.anchor, glm::dvec3(0));
+  EXPECT_EQ(m.vertex(1), glm::vec3(11, 4, 5));
+}
+
+TEST(FinishMesh, OutOfRangeIndexNamesTheMeshAndCountsBadIndices) {
+  Mesh m = triangleSoup();
+  m.indices = {0, 1, 7, 0, 9, 2, 1, 2, 3};
+  try {
+    finishMesh(m, {});
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    std::string msg = e.what();
+    EXPECT_NE(msg.find("soup: 2 vertex indices out of range"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("the first is 7 in triangle 0"), std::string::npos) << msg;
+  }
+}
+
+TEST(FinishMesh, FarFromOriginKeepsRelativePrecision) {
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\n"
+      "property double z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n";
+  // Dyadic values stay exact when offset by 1e7 in double, so only the anchoring can differ.
+  const double pts[4][3] = {{0.125, 0.5, -0.25}, {1.0625, 0.5, -0.25}, {0.375, 1.75, 0.0625},
+                            {0.875, 0.1875, 0.625}};
+  std::ostringstream near, far;
+  near.precision(17);
+  far.precision(17);
+  near << ply;
+  far << ply;
+  for (const auto& p : pts) {
+    near << p[0] << " " << p[1] << " " << p[2] << "\n";
+    far << p[0] + 1e7 << " " << p[1] - 1e7 << " " << p[2] + 1e7 << "\n";
+  }
+  near << "3 0 1 2\n3 0 2 3\n";
+  far << "3 0 1 2\n3 0 2 3\n";
+  Mesh a = loadMesh(tmpFile("near.ply", near.str()));
+  Mesh b = loadMesh(tmpFile("far.ply", far.str()));
+  LoadOptions shifted;
+  shifted.translate = {-1e7, 1e7, 3e7};
+  Mesh c = loadMesh(tmpFile("near2.ply", near.str()), shifted);
+  const double size = 1.5;
+  for (size_t k = 0; k < 4; ++k)
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_NEAR(b.vertex(k)[i], a.vertex(k)[i], 1e-9 * size) << k << " " << i;
+      EXPECT_NEAR(c.vertex(k)[i], a.vertex(k)[i], 1e-9 * size) << k << " " << i;
+    }
+  EXPECT_NEAR(b.anchor.x - a.anchor.x, 1e7, 1e-6);
+  EXPECT_NEAR(c.anchor.z - a.anchor.z, 3e7, 1e-6);
+  // In world space, float32 cannot hold the offsets: the shapes differ.
+  LoadOptions world;
+  world.placement = Placement::WorldSpace;
+  Mesh w = loadMesh(tmpFile("far2.ply", far.str()), world);
+  EXPECT_GT(std::fabs(double(w.vertex(1).x - w.vertex(0).x) - (pts[1][0] - pts[0][0])), 1e-3);
+}
+
+// ---- Shared meshes ----
+
+TEST(LoaderShared, BunnyPlyAndObjAgree) {
+  APERTURE_REQUIRE_SHARED_MESH(plyPath, "stanford/bun_zipper.ply");
+  APERTURE_REQUIRE_SHARED_MESH(objPath, "obj/stanford-bunny.obj");
+  LoadOptions world;
+  world.placement = Placement::WorldSpace;
+  Mesh ply = loadMesh(plyPath, world);
+  Mesh obj = loadMesh(objPath, world);
+  ASSERT_EQ(ply.triangleCount(), 69451u);
+  ASSERT_EQ(obj.triangleCount(), 69451u);
+  EXPECT_EQ(ply.vertexCount, 35947u);
+  EXPECT_EQ(obj.vertexCount, 35947u);
+  // The OBJ keeps the PLY's vertex and face order (checked below) but prints 6 decimals
+  // where the PLY has 6 significant digits: corners agree to the OBJ's rounding, 5e-7.
+  size_t sameIndices = 0;
+  for (size_t t = 0; t < ply.triangleCount(); ++t) {
+    bool same = true;
+    for (int c = 0; c < 3; ++c) {
+      glm::vec3 a = ply.vertex(ply.indices[3 * t + c]), b = obj.vertex(obj.indices[3 * t + c]);
+      for (int i = 0; i < 3; ++i) ASSERT_NEAR(a[i], b[i], 6e-7f) << "triangle " << t;
+      same = same && ply.indices[3 * t + c] == obj.indices[3 * t + c];
+    }
+    sameIndices += same;
+  }
+  EXPECT_EQ(sameIndices, ply.triangleCount());
+}
+
+double megabytesPerSecond(const Mesh& m) {
+  return double(m.stats.fileBytes) / 1e6 / m.stats.loadSeconds;
+}
+
+TEST(LoaderShared, IgeaStrips) {
+  APERTURE_REQUIRE_SHARED_MESH(path, "ply/igea.ply");
+  Mesh m = loadMesh(path);
+  // The README's 268,686 counts every strip triangle, degenerate ones included; they are kept
+  // (Embree skips them) and reported in degenerateTriangles.
+  EXPECT_EQ(m.triangleCount(), 268686u);
+  EXPECT_EQ(m.vertexCount, 134345u);
+  std::cout << "[ info ] igea: " << m.stats.degenerateTriangles << " degenerate triangles, "
+            << m.stats.sourceFaces << " strips\n";
+}
+
+TEST(LoaderShared, CrownAndDragonLoadSpeed) {
+  APERTURE_REQUIRE_SHARED_MESH(crown, "scenes/crown_flat.ply");
+  APERTURE_REQUIRE_SHARED_MESH(dragon, "stanford/dragon_vrip.ply");
+  Mesh c = loadMesh(crown);
+  EXPECT_EQ(c.triangleCount(), 3540214u);
+  EXPECT_EQ(c.vertexCount, 1868139u);
+  Mesh d = loadMesh(dragon);
+  EXPECT_EQ(d.triangleCount(), 871414u);
+  EXPECT_EQ(d.vertexCount, 437645u);
+  // For information only; no timing assertions.
+  std::cout << "[ info ] crown: " << c.stats.loadSeconds << " s, " << megabytesPerSecond(c)
+            << " MB/s; dragon (ASCII): " << d.stats.loadSeconds << " s, "
+            << megabytesPerSecond(d) << " MB/s\n";
+}
+
+TEST(LoaderShared, BathroomAndSmallObjs) {
+  APERTURE_REQUIRE_SHARED_MESH(bath, "scenes/contemporary-bathroom_flat.ply");
+  APERTURE_REQUIRE_SHARED_MESH(teapot, "obj/teapot.obj");
+  APERTURE_REQUIRE_SHARED_MESH(spot, "obj/spot.obj");
+  APERTURE_REQUIRE_SHARED_MESH(res4, "stanford/bun_zipper_res4.ply");
+  EXPECT_EQ(loadMesh(bath).triangleCount(), 592188u);
+  EXPECT_EQ(loadMesh(teapot).triangleCount(), 6320u);
+  EXPECT_EQ(loadMesh(spot).triangleCount(), 5856u);
+  EXPECT_EQ(loadMesh(res4).triangleCount(), 948u);
+}
+
+}  // namespace
+}  // namespace aperture
