@@ -20,7 +20,67 @@ PerspectiveCamera::PerspectiveCamera(const CameraParams& p, const glm::dvec3& re
     : PacketCamera(p, renderOrigin, typeName),
       lensRadius_(lensRadius),
       focusDistance_(focusDistance),
-      focusOverD_(focusDistance / d_) {}
+      focusOverD_(focusDistance / d_) {
+  if (spp_ == 1 && lensRadius_ == 0) {
+    // x = j + ½ is exactly what samplePosition gives at 1 spp, so the tables hold the very
+    // values rayAt computes.
+    // Three more entries each way: tail lanes of a 4-wide block past the edge get their
+    // (masked) rays from the same formula too.
+    double v;
+    uCol_.resize(size_t(width_) + 3);
+    vRow_.resize(size_t(height_) + 3);
+    for (int j = 0; j < width_ + 3; ++j) rasterToPlane(j + 0.5, 0.5, uCol_[size_t(j)], v);
+    for (int i = 0; i < height_ + 3; ++i) rasterToPlane(0.5, i + 0.5, v, vRow_[size_t(i)]);
+  }
+}
+
+void PerspectiveCamera::generate(const PacketRequest& req, RayLanes& out, int* valid) const {
+  if (uCol_.empty())
+    PacketCamera::generate(req, out, valid);
+  else
+    generatePinholeCentres(req, out, valid);
+}
+
+void PerspectiveCamera::generatePinholeCentres(const PacketRequest& req, RayLanes& out,
+                                               int* valid) const {
+  const int lanes = req.blockW * req.blockH;
+  alignas(64) double uLane[16], vLane[16];
+  for (int k = 0; k < lanes; ++k) {
+    const int i = req.y0 + k / req.blockW, j = req.x0 + k % req.blockW;
+    valid[k] = i < height_ && j < width_ ? -1 : 0;
+    uLane[k] = uCol_[size_t(std::min(j, width_ + 2))];
+    vLane[k] = vRow_[size_t(std::min(i, height_ + 2))];
+  }
+  // rayAt's pinhole branch term by term: (u·U + v·V) − d·W, times 1 / its length.
+  // Computed into local arrays (no aliasing, so the loop vectorises), then stored.
+  const glm::dvec3 U = frame_.u, V = frame_.v, dW = d_ * frame_.w;
+  alignas(64) float dx[16], dy[16], dz[16];
+  for (int k = 0; k < lanes; ++k) {
+    const double px = (uLane[k] * U.x + vLane[k] * V.x) - dW.x;
+    const double py = (uLane[k] * U.y + vLane[k] * V.y) - dW.y;
+    const double pz = (uLane[k] * U.z + vLane[k] * V.z) - dW.z;
+    const double invLen = 1.0 / std::sqrt((px * px + py * py) + pz * pz);
+    dx[k] = float(px * invLen);
+    dy[k] = float(py * invLen);
+    dz[k] = float(pz * invLen);
+  }
+  const float ox = float(renderEyeD_.x), oy = float(renderEyeD_.y), oz = float(renderEyeD_.z);
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int k = 0; k < lanes; ++k) {
+    out.dirX[k] = dx[k];
+    out.dirY[k] = dy[k];
+    out.dirZ[k] = dz[k];
+    out.orgX[k] = ox;
+    out.orgY[k] = oy;
+    out.orgZ[k] = oz;
+    out.tnear[k] = 0.0f;
+    out.tfar[k] = inf;
+    out.time[k] = 0.0f;
+    out.mask[k] = 0xFFFFFFFFu;
+    out.id[k] = unsigned(k);
+    out.flags[k] = 0;
+  }
+}
 
 std::optional<glm::dvec2> PerspectiveCamera::project(const glm::dvec3& worldPoint) const {
   const glm::dvec3 p = worldPoint - frame_.e;

@@ -1,6 +1,8 @@
 #pragma once
 // The perspective camera of the lecture, with shift, the architectural mode and an optional
 // thin lens (the thin-lens camera is this class with a lens radius; see thinlens.cpp).
+#include <vector>
+
 #include "cameras/base.h"
 #include "cameras/thinlens.h"
 
@@ -32,10 +34,16 @@ class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
       dir = toFocus / glm::length(toFocus);
     } else {
       org = renderEyeD_;
-      dir = pinhole / glm::length(pinhole);
+      // One reciprocal, three products (as generatePinholeCentres, which must match it).
+      dir = pinhole * (1.0 / std::sqrt((pinhole.x * pinhole.x + pinhole.y * pinhole.y) +
+                                       pinhole.z * pinhole.z));
     }
     return true;
   }
+
+  /// Pinhole at 1 spp (every frame of a batch or benchmark) takes a table-driven SoA path
+  /// that computes exactly rayAt()'s expressions; everything else the shared packet loop.
+  void generate(const PacketRequest& req, RayLanes& out, int* valid) const override;
 
   bool stochastic() const override { return spp_ > 1 || lensRadius_ > 0; }
   std::optional<glm::dvec2> project(const glm::dvec3& worldPoint) const override;
@@ -48,7 +56,12 @@ class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
   void describeExtra(CameraDescription& c) const override;
 
  private:
+  void generatePinholeCentres(const PacketRequest& req, RayLanes& out, int* valid) const;
+
   double lensRadius_ = 0, focusDistance_ = 1, focusOverD_ = 1;
+  /// Image-plane u of each column's centre and v of each row's centre (rasterToPlane of
+  /// j + ½ and i + ½), for the 1-spp pinhole path.
+  std::vector<double> uCol_, vRow_;
 };
 
 }  // namespace aperture
