@@ -509,3 +509,28 @@ TEST(Batch, DryRunListsFramesAndWritesNothing) {
   EXPECT_EQ(out.find("low_0000.exr"), std::string::npos);
   EXPECT_FALSE(fs::exists(dir + "/out"));
 }
+
+TEST(Batch, SigintFinishesTheFrameInFlightAndLeavesOnlyCompleteFiles) {
+  const std::string dir = scratchDir();
+  json j = baseJob();
+  j["cameras"][0] = {{"name", "t"}, {"orbit", {{"radius", 5}}}, {"frames", 3000}};
+  const std::string jobPath = writeJob(dir, j);
+  std::string out;
+  const int rc = runCommand("sh -c '" + apertureBinary() + " batch --quiet " + jobPath +
+                                " & pid=$!; sleep 1; kill -INT $pid; wait $pid'",
+                            &out);
+  EXPECT_EQ(rc, 130) << out;
+  const json summary = readJson(dir + "/out/summary.json");
+  const int ok = summary["frames_ok"], interrupted = summary["frames_interrupted"];
+  EXPECT_GT(interrupted, 0);
+  EXPECT_EQ(ok + interrupted, 3000);
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(dir + "/out")) {
+    const std::string name = e.path().filename();
+    if (name == "summary.json") continue;
+    EXPECT_EQ(e.path().extension(), ".exr") << name;  // no temporary left behind
+    EXPECT_TRUE(isCompleteExr(e.path().string())) << name;
+    ++files;
+  }
+  EXPECT_EQ(files, ok);
+}
