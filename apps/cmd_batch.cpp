@@ -396,6 +396,7 @@ int runBatch(const BatchArgs& a) {
     if (r.status == Status::Failed) failed.push_back(frameLabel(*r.frame));
     if (r.status == Status::Skipped) skipped.push_back(r.frame->output);
     if (r.status == Status::Interrupted) interrupted.push_back(frameLabel(*r.frame));
+    const glm::dvec3& eye = r.frame->params.eye;
     nlohmann::json f = {{"index", r.frame->index},
                         {"camera", r.frame->camera},
                         {"frame", r.frame->frame},
@@ -405,7 +406,7 @@ int runBatch(const BatchArgs& a) {
                         {"write_seconds", r.writeSeconds},
                         {"rays", r.rays},
                         {"mrays_per_s", r.mrays()},
-                        {"eye", {r.frame->params.eye.x, r.frame->params.eye.y, r.frame->params.eye.z}}};
+                        {"eye", {eye.x, eye.y, eye.z}}};
     if (!r.frame->preview.empty()) f["preview"] = r.frame->preview;
     if (!r.error.empty()) f["error"] = r.error;
     frames.push_back(f);

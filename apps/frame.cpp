@@ -37,7 +37,8 @@ void ensureParentDirectory(const std::string& path, const std::string& what) {
   if (parent.empty()) return;
   std::error_code ec;
   std::filesystem::create_directories(parent, ec);
-  if (ec) throw Error(cat(what, ": cannot create directory '", parent.string(), "': ", ec.message()));
+  if (ec)
+    throw Error(cat(what, ": cannot create directory '", parent.string(), "': ", ec.message()));
 }
 
 }  // namespace aperture::app

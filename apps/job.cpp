@@ -168,7 +168,8 @@ glm::dmat4 parseTransform(const Object& parent, const char* key) {
           rotationDeg({1, 0, 0}, e.x);
     } else {
       if (!r.has("axis") || !r.has("angle"))
-        r.fail(r.path(), "expected {\"axis\": [x, y, z], \"angle\": degrees} or {\"euler\": [x, y, z]}");
+        r.fail(r.path(),
+               "expected {\"axis\": [x, y, z], \"angle\": degrees} or {\"euler\": [x, y, z]}");
       const glm::dvec3 axis = *r.vec3("axis");
       if (glm::length(axis) < 1e-12) r.fail(r.keyPath("axis"), "axis has zero length");
       m = m * rotationDeg(axis, *r.number("angle"));
@@ -237,7 +238,8 @@ void readCameraFields(const Object& c, CameraParams& p) {
   if (auto v = c.vec2("lon")) p.longitudeRangeDeg = *v;
   if (auto v = c.vec2("lat")) p.latitudeRangeDeg = *v;
   p.fisheyeFovDeg = c.number("fisheye_fov", 180.0);
-  if (p.d && !p.viewport) c.fail(c.keyPath("d"), "d needs viewport (the viewport at that distance)");
+  if (p.d && !p.viewport)
+    c.fail(c.keyPath("d"), "d needs viewport (the viewport at that distance)");
 }
 
 /// The image-plane defaults of `aperture render`: viewport without d means d = 1, and with
@@ -375,7 +377,8 @@ std::string expandOutputPattern(const std::string& pattern, const std::string& c
                                        [](char d) { return d >= '0' && d <= '9'; });
       const int width = numeric ? std::stoi(digits) : 0;
       if (width < 1 || width > 20)
-        throw Error(cat("'", pattern, "': '{", field, "}' needs a width in 1..20, e.g. {frame:04d}"));
+        throw Error(
+            cat("'", pattern, "': '{", field, "}' needs a width in 1..20, e.g. {frame:04d}"));
       std::string n = std::to_string(frame);
       if (int(n.size()) < width) n.insert(0, size_t(width) - n.size(), '0');
       out += n;
@@ -536,8 +539,10 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
           c.fail(c.keyPath(k), cat("not allowed with ", orbit ? "orbit" : "keyframes",
                                    " (the path sets the eye and the look-at point)"));
     } else {
-      if (c.has("frames")) c.fail(c.keyPath("frames"), "only a camera with orbit or keyframes has frames");
-      if (!c.has("eye")) c.fail(c.keyPath("eye"), "required key is missing (or give orbit or keyframes)");
+      if (c.has("frames"))
+        c.fail(c.keyPath("frames"), "only a camera with orbit or keyframes has frames");
+      if (!c.has("eye"))
+        c.fail(c.keyPath("eye"), "required key is missing (or give orbit or keyframes)");
       if (c.has("at") == c.has("dir")) c.fail(c.path(), "give exactly one of at and dir");
     }
 
@@ -635,7 +640,8 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
   const size_t brace = job.outputPattern.find('{');
   const std::string fixed = job.outputPattern.substr(0, brace);
   const size_t slash = fixed.rfind('/');
-  job.outputDirectory = resolve(baseDir, slash == std::string::npos ? "." : fixed.substr(0, slash + 1));
+  job.outputDirectory =
+      resolve(baseDir, slash == std::string::npos ? "." : fixed.substr(0, slash + 1));
   if (job.outputDirectory.empty()) job.outputDirectory = ".";
   return job;
 }

@@ -186,7 +186,8 @@ void logLoadedMesh(const Mesh& m) {
   std::fprintf(stderr, "aperture: loaded %s: %zu triangles, %zu vertices in %.3f s",
                m.name.c_str(), m.triangleCount(), m.vertexCount, m.stats.loadSeconds);
   if (m.stats.fileBytes)
-    std::fprintf(stderr, " (%.1f MB/s)", m.stats.fileBytes / 1e6 / std::max(m.stats.loadSeconds, 1e-9));
+    std::fprintf(stderr, " (%.1f MB/s)",
+                 m.stats.fileBytes / 1e6 / std::max(m.stats.loadSeconds, 1e-9));
   std::fprintf(stderr, "\n");
   if (m.stats.nonFiniteVertices || m.stats.droppedTriangles)
     std::fprintf(stderr, "aperture: %s: %zu non-finite vertices, %zu triangles dropped\n",

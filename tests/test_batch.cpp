@@ -258,7 +258,8 @@ TEST(JobPaths, OrbitEyesMatchHandComputedPositions) {
   json j = baseJob();
   // Up +Y: frame k sits at azimuth start + sweep * k / frames, measured from +Z towards +X.
   j["cameras"][0] = {{"name", "o"},
-                     {"orbit", {{"centre", {1, 2, 3}}, {"radius", 4}, {"height", 0.5}, {"start", 90}}},
+                     {"orbit",
+                      {{"centre", {1, 2, 3}}, {"radius", 4}, {"height", 0.5}, {"start", 90}}},
                      {"frames", 4}};
   // Elevation 30 degrees at distance 2, up +Z: the reference direction becomes +X.
   j["cameras"].push_back({{"name", "e"},
