@@ -10,6 +10,7 @@ namespace aperture::app {
 using Command = std::function<int()>;
 Command addRenderCommand(CLI::App& app);
 Command addBenchCommand(CLI::App& app);
+Command addCameraCommand(CLI::App& app);
 Command addBatchCommand(CLI::App& app);
 
 }  // namespace aperture::app

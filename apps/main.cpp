@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   add(addRenderCommand);
   add(addBenchCommand);
   add(addBatchCommand);
+  add(addCameraCommand);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

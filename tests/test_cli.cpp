@@ -187,3 +187,16 @@ TEST(Cli, BenchReportsRenderAndBaselineInJson) {
     EXPECT_NE(text.str().find(key), std::string::npos) << key;
   EXPECT_NE(out.find("render / baseline"), std::string::npos) << out;
 }
+
+TEST(Cli, CameraDescribePrintsFrameConventionsAndVolume) {
+  std::string out;
+  // Horizontal fov 47° on a 1000x1400 image: vertical fov 2·atan(tan(23.5°)·1.4) = 62.6609°.
+  ASSERT_EQ(runCommand(apertureBinary() + " camera --describe --eye 0,5.5,24 --at 0,11,-10 "
+                           "--fov 47 --fov-axis x --size 1000,1400 --near 1 --far 100", &out), 0)
+      << out;
+  for (const char* text : {"e = (0, 5.5, 24)", "fov horizontal 47 deg", "vertical 62.6608",
+                           "frustum", "far top-left"})
+    EXPECT_NE(out.find(text), std::string::npos) << text << "\n" << out;
+  EXPECT_NE(runCommand(apertureBinary() + " camera --describe --eye 0,0,1 --at 0,0,0 --up 0,0,1", &out), 0);
+  EXPECT_NE(out.find("parallel"), std::string::npos) << out;
+}

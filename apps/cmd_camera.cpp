@@ -1,0 +1,44 @@
+// `aperture camera --describe`: the frame, the parameters in every convention and the view
+// volume of a camera given with the same flags as render, without loading any mesh.
+#include <cstdio>
+
+#include "apps/commands.h"
+#include "apps/options.h"
+#include "cameras/describe.h"
+#include "cameras/registry.h"
+#include "core/error.h"
+
+namespace aperture::app {
+
+namespace {
+
+struct CameraArgs {
+  CameraOptions camera;
+  bool describe = false;
+  double nearDist = -1, farDist = -1;
+};
+
+int runCamera(const CameraArgs& a) {
+  if (a.camera.eye.empty())
+    throw Error("camera: --eye is required (there is no scene to frame automatically)");
+  if (!a.describe) throw Error("camera: nothing to do (use --describe)");
+  const CameraParams params = a.camera.toParams(glm::dvec3(0.0), glm::dvec3(0.0));
+  makeCamera(params);  // validates the parameters with the renderer's own errors
+  std::fputs(describeCamera(params, a.nearDist, a.farDist).c_str(), stdout);
+  return 0;
+}
+
+}  // namespace
+
+Command addCameraCommand(CLI::App& app) {
+  auto args = std::make_shared<CameraArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "camera", "Describe a camera: frame, parameters in every convention, view volume");
+  addCameraOptions(*sub, args->camera);
+  sub->add_flag("--describe", args->describe, "Print the description");
+  sub->add_option("--near", args->nearDist, "Near distance of the printed view volume (scene units)");
+  sub->add_option("--far", args->farDist, "Far distance of the printed view volume (scene units)");
+  return [args] { return runCamera(*args); };
+}
+
+}  // namespace aperture::app
