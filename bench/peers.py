@@ -22,7 +22,11 @@ Camera conventions (checked by --check, which renders one frame of each and comp
             default --righthanded matches aperture (no mirroring). A horizontal fov (crown) is
             converted: fov_y = 2 atan(tan(fov_x / 2) * H / W). The viewer shoots rays through
             pixel corners, aperture through pixel centres: a half-pixel shift, visible only on
-            silhouettes (coverage differs on a fraction of a percent of the pixels).
+            silhouettes (coverage differs on a fraction of a percent of the pixels). Verified on
+            the dragon: the viewer at 2048x2048, odd rows and columns (= the 1024x1024 pixel
+            centres) against aperture at 1024x1024: identical coverage, |N.D| within 8-bit
+            rounding (p99 3.9e-3). Its eyelight shader writes |N.D| to green on front faces and
+            to red on back faces.
   Mitsuba:  perspective sensor, fov + fov_axis, look_at(eye, at, up); stratified sampler with
             jitter=false and 1 sample = pixel centres. Matches aperture to float precision.
 """

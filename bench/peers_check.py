@@ -3,7 +3,8 @@
 bench/install-peers.sh; called by bench/peers.py --check).
 
 Inputs: aperture's EXR (color AOV: R = eye-light |N.D|, A = coverage), the Embree viewer's PPM
-(--shader eyelight writes |N.D| to the green channel only, 8-bit) and the .npy of
+(--shader eyelight writes |N.D|, 8-bit, to the green channel on front faces and to the red
+one on back faces) and the .npy of
 peers_mitsuba.py image (eye-light, coverage). Prints, for each peer against aperture, the share of
 pixels whose coverage differs and the median / 99th percentile of |eye-light difference| over the
 pixels both hit; writes a side-by-side PNG (aperture | viewer | Mitsuba, sRGB-encoded grey).
@@ -27,7 +28,9 @@ def read_aperture(path):
 def read_viewer(path):
     from PIL import Image
     v = np.asarray(Image.open(path)).astype(np.float64) / 255.0
-    return v[..., 1], v[..., 1] > 0.0
+    # eyelight writes |N.D| to green where the ray hits a front face, to red on a back face.
+    e = v[..., 0] + v[..., 1]
+    return e, e > 0.0
 
 
 def compare(ref, ref_hit, img, hit):
