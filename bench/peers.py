@@ -112,7 +112,7 @@ def camera_args_mitsuba(s, mesh):
 def measure(name, s, mesh, args, tmp, log):
     out = {}
     j = os.path.join(tmp, f"{name}_aperture.json")
-    run([args.aperture, "bench", *camera_args_aperture(s, mesh), "--frames", str(args.frames),
+    run([args.aperture, "bench", *camera_args_aperture(s, mesh), "--threads", str(args.threads), "--frames", str(args.frames),
          "--warmup", "3", "--builds", "1", "--baseline", "--quiet", "--json", j], log)
     with open(j) as f:
         a = json.load(f)
@@ -121,7 +121,8 @@ def measure(name, s, mesh, args, tmp, log):
     out["isa"] = a["config"]["isa"]
     out["threads"] = a["config"]["threads"]
 
-    text = run([*camera_args_viewer(s, mesh), "--benchmark", "3", str(args.frames)], log)
+    vt = ["--threads", str(args.threads)] if args.threads > 0 else []
+    text = run([*camera_args_viewer(s, mesh), *vt, "--benchmark", "3", str(args.frames)], log)
     m = re.search(r"BENCHMARK_RENDER_MRAYPS_AVG\s+([0-9.eE+-]+)", text)
     if not m:
         sys.exit(f"peers: no BENCHMARK_RENDER_MRAYPS_AVG in the viewer's output:\n{text[-2000:]}")
@@ -129,7 +130,7 @@ def measure(name, s, mesh, args, tmp, log):
 
     j = os.path.join(tmp, f"{name}_mitsuba.json")
     run([args.python, os.path.join(HERE, "peers_mitsuba.py"), "time", *camera_args_mitsuba(s, mesh),
-         "--frames", str(args.frames), "--warmup", "2", "--json", j], log)
+         "--threads", str(args.threads), "--frames", str(args.frames), "--warmup", "2", "--json", j], log)
     with open(j) as f:
         out["mitsuba"] = json.load(f)["mrays_per_s_median"]
     return out
@@ -165,6 +166,7 @@ def main():
     ap.add_argument("--scenes", default="dragon,crown,bathroom", help="comma list of " + ",".join(SCENES))
     ap.add_argument("--repeat", type=int, default=2, help="side-by-side runs per scene (medians reported)")
     ap.add_argument("--frames", type=int, default=10, help="timed frames per peer and run")
+    ap.add_argument("--threads", type=int, default=0, help="worker threads for every peer (0 = all cores)")
     ap.add_argument("--check", metavar="DIR", help="also render one image per peer and compare them (PNGs here)")
     args = ap.parse_args()
     scenes = [x for x in args.scenes.split(",") if x]
@@ -221,7 +223,7 @@ def main():
     cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.processor())
     first = runs[scenes[0]][0]
     md = [f"## Peer comparison ({time.strftime('%Y-%m-%d %H:%M')})", "",
-          f"Machine: {cpu}, {os.cpu_count()} hardware threads (all used by every peer); Embree ISA "
+          f"Machine: {cpu}, {os.cpu_count()} hardware threads; {first['threads']} worker threads for every peer; Embree ISA "
           f"{first['isa']}; load average {load0[0]:.2f} at the start, {load1[0]:.2f} at the end. "
           f"Medians of {args.repeat} side-by-side runs per scene, {args.frames} timed frames each; "
           "1 spp primary rays, Mrays/s = W·H / seconds per frame.", "",

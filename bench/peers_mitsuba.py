@@ -50,6 +50,7 @@ def main():
     ap.add_argument("--size", type=size2, required=True, help="W,H")
     ap.add_argument("--frames", type=int, default=10)
     ap.add_argument("--warmup", type=int, default=2)
+    ap.add_argument("--threads", type=int, default=0, help="Dr.Jit worker threads (0 = all cores)")
     ap.add_argument("--json", help="time: write the figures here")
     ap.add_argument("--out", help="image: .npy to write")
     args = ap.parse_args()
@@ -57,6 +58,8 @@ def main():
     import drjit as dr
     import mitsuba as mi
     mi.set_variant("llvm_ad_rgb")
+    if args.threads > 0:
+        dr.set_thread_count(args.threads)
 
     at = args.at if args.at is not None else [e + d for e, d in zip(args.eye, args.dir)]
     w, h = args.size
@@ -118,7 +121,8 @@ def main():
         "load_and_build_seconds": load_s,
         "config": {"variant": "llvm_ad_rgb", "integrator": "aov " + aovs,
                    "sampler": "stratified, sample_count 1, jitter false", "rfilter": "box",
-                   "width": w, "height": h, "spp": 1, "mitsuba": mi.__version__},
+                   "width": w, "height": h, "spp": 1, "mitsuba": mi.__version__,
+                   "threads": dr.thread_count()},
     }
     print(f"mitsuba: median {med:.2f} Mrays/s (min {min(mrays):.2f}, max {max(mrays):.2f}, "
           f"cv {100 * cv:.1f}%, {args.frames} renders)", file=sys.stderr)
