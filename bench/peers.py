@@ -7,12 +7,13 @@ measured side by side in one run. Prints a table and writes it as Markdown to OU
     python3 bench/peers.py --aperture build/apps/aperture --repeat 2 --check out/peers out/peers.md
 
 Per scene and repetition, one after the other:
-  aperture  `aperture bench --aov color --spp 1 --baseline` (all cores, 16-wide packets):
+  aperture  `aperture bench --aov color --spp 1 --baseline` (16-wide packets, --threads):
             median Mrays/s of the render and of bare rtcIntersect16 on the same rays.
   viewer    `viewer --shader eyelight --benchmark WARMUP FRAMES` (legacy mode: FRAMES timed frames);
             it prints BENCHMARK_RENDER_MRAYPS_AVG = W*H*fps/1e6, the mean over the timed frames
             (the viewer reports no median). eyelight is its cheapest shader, the same |N.D| as
-            aperture's color AOV; the viewer traces one ray at a time (rtcIntersect1).
+            aperture's color AOV; the viewer traces one ray at a time (Debian's binary imports
+            rtcIntersect1 and rtcOccluded1 only: `nm -D /usr/bin/viewer`).
   mitsuba   bench/peers_mitsuba.py time: median Mrays/s of the render alone (see that file).
 Rays per frame are W*H (1 spp, primary rays only) for all three.
 
