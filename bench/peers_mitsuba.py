@@ -1,0 +1,136 @@
+#!/usr/bin/env python3
+"""Mitsuba 3 side of the peer comparison (run with the venv python of bench/install-peers.sh).
+
+  time:  renders the scene with variant llvm_ad_rgb, the `aov` integrator (AOV geo_normal, the
+         input of aperture's eye-light colour), 1 spp from the `stratified` sampler with
+         jitter=false (sample_count 1: the sample is the stratum centre, i.e. the pixel centre,
+         like aperture's spp 1) and a `box` reconstruction filter (each sample lands in its own
+         pixel only). Scene loading, BVH build and the first render (LLVM kernel compilation) are
+         not timed: after --warmup untimed renders, --frames renders are timed one by one
+         (render + evaluation + sync) and Mrays/s = W*H*spp / seconds per render.
+  image: renders AOVs geo_normal and position once and writes the eye-light |N.D| (D from the
+         eye to the hit point) and coverage as a .npy (H x W x 2) for bench/peers_check.py.
+
+Camera: `perspective` sensor, fov + fov_axis as given, to_world = look_at(eye, at, up) (with
+--dir, at = eye + dir). Verified against aperture by bench/peers_check.py: identical coverage and
+eye-light equal to ~1e-7 on the dragon, so there is no mirroring between the two.
+"""
+import argparse
+import json
+import statistics
+import sys
+import time
+
+
+def vec3(s):
+    v = [float(x) for x in s.split(",")]
+    if len(v) != 3:
+        raise argparse.ArgumentTypeError(f"expected X,Y,Z, got {s!r}")
+    return v
+
+
+def size2(s):
+    v = [int(x) for x in s.split(",")]
+    if len(v) != 2 or min(v) <= 0:
+        raise argparse.ArgumentTypeError(f"expected W,H, got {s!r}")
+    return v
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("mode", choices=["time", "image"])
+    ap.add_argument("--mesh", required=True, help="PLY file (Mitsuba's ply plugin)")
+    ap.add_argument("--eye", type=vec3, required=True)
+    g = ap.add_mutually_exclusive_group(required=True)
+    g.add_argument("--at", type=vec3)
+    g.add_argument("--dir", type=vec3)
+    ap.add_argument("--up", type=vec3, default=[0.0, 1.0, 0.0])
+    ap.add_argument("--fov", type=float, required=True, help="degrees")
+    ap.add_argument("--fov-axis", choices=["x", "y"], default="y")
+    ap.add_argument("--size", type=size2, required=True, help="W,H")
+    ap.add_argument("--frames", type=int, default=10)
+    ap.add_argument("--warmup", type=int, default=2)
+    ap.add_argument("--threads", type=int, default=0, help="Dr.Jit worker threads (0 = all cores)")
+    ap.add_argument("--json", help="time: write the figures here")
+    ap.add_argument("--out", help="image: .npy to write")
+    args = ap.parse_args()
+
+    import drjit as dr
+    import mitsuba as mi
+    mi.set_variant("llvm_ad_rgb")
+    if args.threads > 0:
+        dr.set_thread_count(args.threads)
+
+    at = args.at if args.at is not None else [e + d for e, d in zip(args.eye, args.dir)]
+    w, h = args.size
+    aovs = "nn:geo_normal" if args.mode == "time" else "nn:geo_normal,pp:position"
+    t0 = time.perf_counter()
+    scene = mi.load_dict({
+        "type": "scene",
+        "integrator": {"type": "aov", "aovs": aovs},
+        "sensor": {
+            "type": "perspective",
+            "fov": args.fov,
+            "fov_axis": args.fov_axis,
+            # aperture starts rays at t = 0; Mitsuba needs near > 0: keep it far below any hit.
+            "near_clip": 1e-4,
+            "far_clip": 1e7,
+            "to_world": mi.ScalarTransform4f().look_at(origin=args.eye, target=at, up=args.up),
+            "film": {"type": "hdrfilm", "width": w, "height": h, "rfilter": {"type": "box"}},
+            "sampler": {"type": "stratified", "sample_count": 1, "jitter": False},
+        },
+        # face_normals: skip Mitsuba's vertex-normal computation at load (not timed anyway).
+        "mesh": {"type": "ply", "filename": args.mesh, "face_normals": True},
+    })
+    load_s = time.perf_counter() - t0
+
+    def render():
+        img = mi.render(scene, spp=1)
+        dr.eval(img)
+        dr.sync_thread()
+        return img
+
+    if args.mode == "image":
+        import numpy as np
+        a = np.array(render())
+        n, p = a[..., 0:3], a[..., 3:6]
+        d = p - np.array(args.eye, dtype=np.float64)
+        length = np.linalg.norm(d, axis=-1)
+        hit = np.linalg.norm(n, axis=-1) > 0.5
+        eyelight = np.where(hit, np.abs((n * d).sum(-1)) / np.maximum(length, 1e-30), 0.0)
+        np.save(args.out, np.stack([eyelight, hit.astype(np.float64)], axis=-1).astype(np.float32))
+        return 0
+
+    for _ in range(args.warmup):
+        render()
+    secs = []
+    for _ in range(args.frames):
+        t = time.perf_counter()
+        render()
+        secs.append(time.perf_counter() - t)
+    mrays = [w * h / s / 1e6 for s in secs]
+    med = statistics.median(mrays)
+    cv = statistics.pstdev(mrays) / statistics.mean(mrays)
+    res = {
+        "mrays_per_s_median": med,
+        "mrays_per_s_min": min(mrays),
+        "mrays_per_s_max": max(mrays),
+        "mrays_per_s_cv": cv,
+        "frames": args.frames,
+        "warmup": args.warmup,
+        "load_and_build_seconds": load_s,
+        "config": {"variant": "llvm_ad_rgb", "integrator": "aov " + aovs,
+                   "sampler": "stratified, sample_count 1, jitter false", "rfilter": "box",
+                   "width": w, "height": h, "spp": 1, "mitsuba": mi.__version__,
+                   "threads": dr.thread_count()},
+    }
+    print(f"mitsuba: median {med:.2f} Mrays/s (min {min(mrays):.2f}, max {max(mrays):.2f}, "
+          f"cv {100 * cv:.1f}%, {args.frames} renders)", file=sys.stderr)
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(res, f, indent=2)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
