@@ -35,38 +35,44 @@ PerspectiveCamera::PerspectiveCamera(const CameraParams& p, const glm::dvec3& re
 }
 
 void PerspectiveCamera::generate(const PacketRequest& req, RayLanes& out, int* valid) const {
-  if (uCol_.empty())
-    PacketCamera::generate(req, out, valid);
-  else
-    generatePinholeCentres(req, out, valid);
+  if (!uCol_.empty()) {
+    // The frame loop's block shapes get loops with constant trip counts.
+    if (req.blockW == 4 && req.blockH == 4) return generatePinholeCentres<4, 4>(req, out, valid);
+    if (req.blockW == 4 && req.blockH == 2) return generatePinholeCentres<4, 2>(req, out, valid);
+    if (req.blockW == 2 && req.blockH == 2) return generatePinholeCentres<2, 2>(req, out, valid);
+    if (req.blockW == 1 && req.blockH == 1) return generatePinholeCentres<1, 1>(req, out, valid);
+  }
+  PacketCamera::generate(req, out, valid);
 }
 
+template <int kBW, int kBH>
 void PerspectiveCamera::generatePinholeCentres(const PacketRequest& req, RayLanes& out,
                                                int* valid) const {
-  const int lanes = req.blockW * req.blockH;
-  alignas(64) double uLane[16], vLane[16];
-  for (int k = 0; k < lanes; ++k) {
-    const int i = req.y0 + k / req.blockW, j = req.x0 + k % req.blockW;
-    valid[k] = i < height_ && j < width_ ? -1 : 0;
-    uLane[k] = uCol_[size_t(std::min(j, width_ + 2))];
-    vLane[k] = vRow_[size_t(std::min(i, height_ + 2))];
-  }
+  constexpr int kLanes = kBW * kBH;
+  // Blocks start inside the image and the tables run 3 entries past it, so no lane reads
+  // outside them; lanes past the edge get their (masked) rays from the same formula.
+  const double* uCol = uCol_.data() + req.x0;
+  const double* vRow = vRow_.data() + req.y0;
   // rayAt's pinhole branch term by term: (u·U + v·V) − d·W, times 1 / its length.
   // Computed into local arrays (no aliasing, so the loop vectorises), then stored.
   const glm::dvec3 U = frame_.u, V = frame_.v, dW = d_ * frame_.w;
-  alignas(64) float dx[16], dy[16], dz[16];
-  for (int k = 0; k < lanes; ++k) {
-    const double px = (uLane[k] * U.x + vLane[k] * V.x) - dW.x;
-    const double py = (uLane[k] * U.y + vLane[k] * V.y) - dW.y;
-    const double pz = (uLane[k] * U.z + vLane[k] * V.z) - dW.z;
-    const double invLen = 1.0 / std::sqrt((px * px + py * py) + pz * pz);
-    dx[k] = float(px * invLen);
-    dy[k] = float(py * invLen);
-    dz[k] = float(pz * invLen);
-  }
+  alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
+  for (int r = 0; r < kBH; ++r)
+    for (int c = 0; c < kBW; ++c) {
+      const int k = r * kBW + c;
+      const double u = uCol[c], v = vRow[r];
+      const double px = (u * U.x + v * V.x) - dW.x;
+      const double py = (u * U.y + v * V.y) - dW.y;
+      const double pz = (u * U.z + v * V.z) - dW.z;
+      const double invLen = 1.0 / std::sqrt((px * px + py * py) + pz * pz);
+      dx[k] = float(px * invLen);
+      dy[k] = float(py * invLen);
+      dz[k] = float(pz * invLen);
+      valid[k] = req.y0 + r < height_ && req.x0 + c < width_ ? -1 : 0;
+    }
   const float ox = float(renderEyeD_.x), oy = float(renderEyeD_.y), oz = float(renderEyeD_.z);
   const float inf = std::numeric_limits<float>::infinity();
-  for (int k = 0; k < lanes; ++k) {
+  for (int k = 0; k < kLanes; ++k) {
     out.dirX[k] = dx[k];
     out.dirY[k] = dy[k];
     out.dirZ[k] = dz[k];

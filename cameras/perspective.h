@@ -56,6 +56,7 @@ class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
   void describeExtra(CameraDescription& c) const override;
 
  private:
+  template <int kBW, int kBH>
   void generatePinholeCentres(const PacketRequest& req, RayLanes& out, int* valid) const;
 
   double lensRadius_ = 0, focusDistance_ = 1, focusOverD_ = 1;
