@@ -21,6 +21,7 @@
 #include "apps/frame.h"
 #include "apps/job.h"
 #include "apps/options.h"
+#include "cameras/culling.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/exr.h"
@@ -234,12 +235,15 @@ class FrameWriter {
 /// The job's meshes, each file loaded once, and the Embree scene over their placements.
 struct BatchScene {
   std::deque<Mesh> meshes;
+  std::deque<TriangleSubset> subsets;  ///< with performance.cull
   std::vector<std::string> names;  ///< one per job mesh entry
   std::unique_ptr<Scene> scene;
   double loadSeconds = 0;
 };
 
-BatchScene buildScene(const Device& device, const Job& job, bool quiet) {
+/// `cameras`: the frames this run renders (culling keeps what they may see).
+BatchScene buildScene(const Device& device, const Job& job, bool quiet,
+                      const std::vector<CameraParams>& cameras) {
   BatchScene s;
   std::map<std::string, size_t> uses;
   for (const JobMesh& m : job.meshes) ++uses[m.spec];
@@ -250,6 +254,7 @@ BatchScene buildScene(const Device& device, const Job& job, bool quiet) {
   for (const JobMesh& m : job.meshes) {
     if (bySpec.count(m.spec)) continue;
     LoadOptions lo;
+    lo.placement = job.placement;
     if (uses[m.spec] == 1) lo.transform = m.worldFromMesh;
     s.meshes.push_back(loadMesh(m.spec, lo));
     if (!quiet) logLoadedMesh(s.meshes.back());
@@ -269,6 +274,16 @@ BatchScene buildScene(const Device& device, const Job& job, bool quiet) {
   const glm::dvec3 origin(objects[0].worldFromMesh * glm::dvec4(objects[0].mesh->anchor, 1.0));
   for (auto& [spec, mesh] : bySpec)
     if (uses[spec] == 1) moveAnchor(*mesh, origin);
+  if (job.cull && !cameras.empty()) {
+    const CameraCuller culler = cullerFor(cameras, origin);
+    if (culler.seesEverything) {
+      if (!quiet)
+        std::fprintf(stderr, "aperture: cull: a panorama camera sees all space; nothing culled\n");
+    } else {
+      const CullStats c = cullObjects(objects, culler.test(), s.subsets);
+      if (!quiet) logCullStats(c, cameras.size());
+    }
+  }
   s.scene = std::make_unique<Scene>(device, objects, job.build);
   if (!quiet) {
     const BuildStats& b = s.scene->stats();
@@ -329,7 +344,10 @@ int runBatch(const BatchArgs& a) {
   const std::string summaryPath = a.summary.empty() ? defaultSummaryPath(job, shard) : a.summary;
   ThreadLimit threads(job.threads);
   Device device;
-  const BatchScene scene = buildScene(device, job, a.quiet);
+  std::vector<CameraParams> cameras;
+  for (const FrameResult& r : results)
+    if (r.status != Status::Skipped) cameras.push_back(r.frame->params);
+  const BatchScene scene = buildScene(device, job, a.quiet, cameras);
   const BuildStats& build = scene.scene->stats();
 
   Progress progress(toRender, a.quiet);
@@ -343,7 +361,7 @@ int runBatch(const BatchArgs& a) {
     const auto t0 = Clock::now();
     try {
       const ExrMetadata meta = viewMetadata(task.view, scene.names, job.aovs, job.build.quality,
-                                            Placement::CameraRelative);
+                                            job.placement);
       writeExr(r.frame->output, task.view.fb, meta, job.exr);
       if (!r.frame->preview.empty()) {
         ensureParentDirectory(r.frame->preview, "preview");

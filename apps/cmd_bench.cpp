@@ -90,18 +90,19 @@ int runBench(const BenchArgs& a) {
 
   ThreadLimit threads(a.render.threads);
   Device device;
-  LoadedScene loaded = loadScene(device, a.scene, a.quiet);
+  LoadedScene loaded = loadSceneMeshes(a.scene, a.quiet);
   const CameraParams params = a.camera.toParams(loaded.worldLo, loaded.worldHi);
+  buildLoadedScene(device, loaded, a.scene, a.quiet, {params});
   const auto camera = makeCamera(params, loaded.scene->renderOrigin());
   const BuildOptions build = a.scene.buildOptions();
-  std::vector<const Mesh*> meshPtrs;
-  for (const Mesh& m : loaded.meshes) meshPtrs.push_back(&m);
 
   nlohmann::json j;
   std::string meshNames;
   for (const Mesh& m : loaded.meshes) meshNames += (meshNames.empty() ? "" : ";") + m.name;
   j["config"] = {{"meshes", meshNames},
                  {"triangles", loaded.scene->stats().triangles},
+                 {"cull", a.scene.cull},
+                 {"culled_triangles", loaded.scene->stats().culledTriangles},
                  {"threads", threads.threads()},
                  {"hardware_threads", std::thread::hardware_concurrency()},
                  {"isa", device.isaName()},
@@ -132,7 +133,7 @@ int runBench(const BenchArgs& a) {
   j["load_mb_per_s"] = loaded.fileBytes ? loadMBps : 0.0;
   j["file_bytes"] = loaded.fileBytes;
   std::vector<double> buildTimes{loaded.scene->stats().buildSeconds};
-  for (int b = 1; b < a.builds; ++b) buildTimes.push_back(Scene(device, meshPtrs, build).stats().buildSeconds);
+  for (int b = 1; b < a.builds; ++b) buildTimes.push_back(Scene(device, loaded.objects, build).stats().buildSeconds);
   const Summary buildSummary = summarize(buildTimes);
   const double tris = double(loaded.scene->stats().triangles);
   const double bytes = double(loaded.scene->stats().embreeBytes);
@@ -140,6 +141,12 @@ int runBench(const BenchArgs& a) {
   j["build_seconds_median"] = buildSummary.median;
   j["embree_bytes"] = bytes;
   j["embree_bytes_per_triangle"] = tris > 0 ? bytes / tris : 0.0;
+  if (loaded.cull) {
+    j["cull_seconds"] = loaded.cull->seconds;
+    j["cull_triangles_before"] = loaded.cull->trianglesBefore;
+    j["cull_triangles_kept"] = loaded.cull->trianglesKept;
+    j["cull_subset_bytes"] = loaded.cull->subsetBytes;
+  }
   std::printf("load: %.1f MB in %.3f s (%.1f MB/s)\n", loaded.fileBytes / 1e6, loaded.loadSeconds,
               loaded.fileBytes ? loadMBps : 0.0);
   std::printf("build: median %.3f s over %d builds (min %.3f, max %.3f); Embree memory %.1f MB "
@@ -196,7 +203,7 @@ int runBench(const BenchArgs& a) {
         BuildOptions bo = build;
         bo.quality = q;
         bo.robust = robust;
-        Scene scene(device, meshPtrs, bo);
+        Scene scene(device, loaded.objects, bo);
         const Summary r = summarize(timeFrames(scene, *camera, settings, aovs, params.width,
                                                params.height, a.warmup, a.frames));
         printSummary(cat("sweep ", bvhQualityName(q), robust ? " robust:" : ":").c_str(), r, a.frames);

@@ -35,8 +35,9 @@ int runRender(const RenderArgs& a) {
 
   ThreadLimit threads(a.render.threads);
   Device device;
-  LoadedScene loaded = loadScene(device, a.scene, a.quiet);
+  LoadedScene loaded = loadSceneMeshes(a.scene, a.quiet);
   const CameraParams params = a.camera.toParams(loaded.worldLo, loaded.worldHi);
+  buildLoadedScene(device, loaded, a.scene, a.quiet, {params});
 
   const RenderedView view = renderView(*loaded.scene, params, settings, aovs);
   const Framebuffer& fb = view.fb;

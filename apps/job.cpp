@@ -463,7 +463,7 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
   // Performance.
   if (top.has("performance")) {
     const Object p(name, "performance", top.required("performance"),
-                   {"packet", "tile", "threads", "bvh_quality", "robust", "compact"});
+                   {"packet", "tile", "threads", "bvh_quality", "robust", "compact", "cull"});
     job.render.packetWidth = p.integer("packet", 16);
     const int w = job.render.packetWidth;
     if (w != 1 && w != 4 && w != 8 && w != 16)
@@ -481,6 +481,7 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
     }
     job.build.robust = p.boolean("robust", false);
     job.build.compact = p.boolean("compact", false);
+    job.cull = p.boolean("cull", false);
   }
   try {
     validateRenderSettings(job.render);
@@ -490,7 +491,13 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
 
   // Scene: every file must exist before anything is loaded.
   if (!top.has("scene")) top.fail("scene", "required key is missing");
-  const Object scene(name, "scene", top.required("scene"), {"meshes"});
+  const Object scene(name, "scene", top.required("scene"), {"meshes", "placement"});
+  const std::string placement = scene.string("placement").value_or("camera-relative");
+  if (placement == "world-space")
+    job.placement = Placement::WorldSpace;
+  else if (placement != "camera-relative")
+    scene.fail(scene.keyPath("placement"),
+               cat("'", placement, "': must be camera-relative or world-space"));
   const json& meshes = scene.array("meshes");
   if (meshes.empty()) scene.fail("scene.meshes", "needs at least one mesh");
   for (size_t k = 0; k < meshes.size(); ++k) {

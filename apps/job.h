@@ -41,6 +41,8 @@ struct Job {
   RenderSettings render;          ///< packet, tile, spp
   int threads = 0;                ///< 0 = all cores
   BuildOptions build;
+  bool cull = false;  ///< performance.cull: BVH over the triangles the frames may see
+  Placement placement = Placement::CameraRelative;  ///< scene.placement
   ExrOptions exr;
   std::string outputPattern;      ///< as written in the job file
   std::string previewPattern;     ///< as written; "" for none

@@ -8,6 +8,7 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include "cameras/culling.h"
 #include "core/error.h"
 
 namespace aperture::app {
@@ -72,6 +73,9 @@ void addSceneOptions(CLI::App& app, SceneOptions& o) {
       ->capture_default_str();
   app.add_flag("--robust", o.robust, "Embree robust (watertight) traversal");
   app.add_flag("--compact", o.compact, "Embree compact BVH (less memory, slower)");
+  app.add_flag("--cull", o.cull,
+               "Build the BVH over only the triangles the camera's view volume may reach "
+               "(conservative: the image is bit-identical; panoramas keep all)");
   app.add_flag("--world-space", o.worldSpace,
                "Store vertices as float32 world coordinates instead of relative to the mesh's "
                "bounding-box centre (camera-relative, the default); for measuring the difference");
@@ -215,15 +219,14 @@ void moveAnchor(Mesh& m, const glm::dvec3& anchor) {
   m.anchor = anchor;
 }
 
-LoadedScene loadScene(const Device& device, const SceneOptions& o, bool quiet) {
+LoadedScene loadSceneMeshes(const SceneOptions& o, bool quiet) {
   LoadedScene s;
   const auto start = std::chrono::steady_clock::now();
   s.meshes = loadMeshes(o, quiet);
   s.loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::vector<const Mesh*> ptrs;
   glm::vec3 lo(INFINITY), hi(-INFINITY);
   for (const Mesh& m : s.meshes) {
-    ptrs.push_back(&m);
+    s.objects.push_back({&m, glm::dmat4(1.0), nullptr});
     s.fileBytes += m.stats.fileBytes;
     glm::vec3 a, b;
     m.bounds(a, b);
@@ -233,7 +236,35 @@ LoadedScene loadScene(const Device& device, const SceneOptions& o, bool quiet) {
   if (!(lo.x <= hi.x)) lo = hi = glm::vec3(0.0f);
   s.worldLo = s.meshes[0].anchor + glm::dvec3(lo);
   s.worldHi = s.meshes[0].anchor + glm::dvec3(hi);
-  s.scene = std::make_unique<Scene>(device, ptrs, o.buildOptions());
+  return s;
+}
+
+void logCullStats(const CullStats& c, size_t cameras) {
+  std::fprintf(stderr,
+               "aperture: culled to the view volume%s of %zu camera%s: kept %zu of %zu "
+               "triangles (%.2f%%) in %.3f s\n",
+               cameras == 1 ? "" : "s", cameras, cameras == 1 ? "" : "s", c.trianglesKept,
+               c.trianglesBefore,
+               c.trianglesBefore ? 100.0 * double(c.trianglesKept) / double(c.trianglesBefore)
+                                 : 100.0,
+               c.seconds);
+}
+
+void buildLoadedScene(const Device& device, LoadedScene& s, const SceneOptions& o, bool quiet,
+                      const std::vector<CameraParams>& cameras) {
+  if (o.cull) {
+    if (cameras.empty()) throw Error("--cull: no camera is known to cull for");
+    // Untransformed meshes sharing the first anchor: the render origin is that anchor.
+    const CameraCuller culler = cullerFor(cameras, s.meshes[0].anchor);
+    if (culler.seesEverything) {
+      if (!quiet)
+        std::fprintf(stderr, "aperture: --cull: a panorama camera sees all space; nothing culled\n");
+    } else {
+      s.cull = cullObjects(s.objects, culler.test(), s.subsets);
+      if (!quiet) logCullStats(*s.cull, cameras.size());
+    }
+  }
+  s.scene = std::make_unique<Scene>(device, s.objects, o.buildOptions());
   if (!quiet) {
     const BuildStats& b = s.scene->stats();
     std::fprintf(stderr,
@@ -243,6 +274,11 @@ LoadedScene loadScene(const Device& device, const SceneOptions& o, bool quiet) {
                  o.compact ? ", compact" : "", b.triangles, b.buildSeconds, b.embreeBytes / 1e6,
                  b.triangles ? double(b.embreeBytes) / double(b.triangles) : 0.0);
   }
+}
+
+LoadedScene loadScene(const Device& device, const SceneOptions& o, bool quiet) {
+  LoadedScene s = loadSceneMeshes(o, quiet);
+  buildLoadedScene(device, s, o, quiet);
   return s;
 }
 

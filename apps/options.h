@@ -1,12 +1,15 @@
 #pragma once
 // Option groups shared by the subcommands (render, bench, camera), with their validation.
+#include <deque>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 
 #include "cameras/params.h"
+#include "core/cull.h"
 #include "core/framebuffer.h"
 #include "core/mesh.h"
 #include "core/render.h"
@@ -18,6 +21,8 @@ struct SceneOptions {
   std::vector<std::string> meshes;  ///< empty: the default procedural scene
   std::string quality = "high";
   bool robust = false, compact = false, worldSpace = false;
+  /// Leave triangles outside the cameras' view volumes out of the BVH (off by default).
+  bool cull = false;
   LoadOptions loadOptions() const;
   BuildOptions buildOptions() const;
 };
@@ -51,6 +56,9 @@ glm::dvec2 parseVec2(const std::string& flag, const std::string& text);
 /// Loaded meshes + Embree scene, logged as they are made.
 struct LoadedScene {
   std::vector<Mesh> meshes;
+  std::vector<SceneObject> objects;     ///< what the scene is built from (subsets when culled)
+  std::deque<TriangleSubset> subsets;   ///< the culled triangles, when culling
+  std::optional<CullStats> cull;        ///< set when the scene was culled
   std::unique_ptr<Scene> scene;
   glm::dvec3 worldLo{0.0}, worldHi{0.0};
   double loadSeconds = 0;
@@ -62,6 +70,15 @@ std::vector<Mesh> loadMeshes(const SceneOptions& o, bool quiet);
 void moveAnchor(Mesh& m, const glm::dvec3& anchor);
 /// Logs a loaded mesh (triangles, vertices, load time and speed, dropped vertices) to stderr.
 void logLoadedMesh(const Mesh& m);
+/// Loads the meshes and their world bounds (no BVH yet: scene stays null).
+LoadedScene loadSceneMeshes(const SceneOptions& o, bool quiet);
+/// Builds the BVH of loaded meshes. With o.cull, only the triangles the `cameras` may see go
+/// in (Error when o.cull is set and `cameras` is empty); panoramas keep everything.
+void buildLoadedScene(const Device& device, LoadedScene& s, const SceneOptions& o, bool quiet,
+                      const std::vector<CameraParams>& cameras = {});
+/// Logs what culling kept (stderr).
+void logCullStats(const CullStats& c, size_t cameras);
+/// loadSceneMeshes then buildLoadedScene without culling.
 LoadedScene loadScene(const Device& device, const SceneOptions& o, bool quiet);
 
 /// Limits TBB (and so Embree's builder) to n threads while alive; n = 0 keeps all cores.

@@ -34,8 +34,12 @@ CameraFrame CameraFrame::fromDirection(const glm::dvec3& eye, const glm::dvec3& 
                     ") is parallel to the view direction (", view.x, ",", view.y, ",", view.z,
                     ")"));
   f.u = cross / s;
+  // With up nearly parallel to W the cross product cancels: its rounding, relative to its
+  // length s, leaves U off-perpendicular to W by ~1e-16 / s (2e-12 at 0.0001°). One
+  // Gram-Schmidt pass against W restores it; then V = W × U, and a pass removes V's rounding,
+  // so the frame is orthonormal to ~1 ulp at any angle the parallel test accepts.
+  f.u = glm::normalize(f.u - glm::dot(f.u, f.w) * f.w);
   f.v = glm::cross(f.w, f.u);
-  // One Gram-Schmidt pass removes the rounding left in V so the frame is orthonormal to ~1 ulp.
   f.v = glm::normalize(f.v - glm::dot(f.v, f.u) * f.u);
   return f;
 }

@@ -36,6 +36,7 @@ struct FramePlan {
   bool color, depth, distance, normal, position, primId, geomId;
   bool anyGeometry;     // any AOV filled from sample 0 only
   bool instanced;       // normals of instanced hits need the instance's normal matrix
+  bool remapPrimIds;    // the scene was culled: primID goes through Scene::originalPrimId
 };
 
 struct TileCounters {
@@ -149,7 +150,13 @@ void renderTile(const FramePlan& plan, int x0, int y0, int x1, int y1, TileCount
             fb.position[3 * px + 1] = float(p.y);
             fb.position[3 * px + 2] = float(p.z);
           }
-          if (plan.primId) fb.primId[px] = h.primID[k];
+          if (plan.primId)
+            fb.primId[px] = plan.remapPrimIds
+                                ? plan.scene.originalPrimId(
+                                      h.instID[k] == RTC_INVALID_GEOMETRY_ID ? h.geomID[k]
+                                                                             : h.instID[k],
+                                      h.primID[k])
+                                : h.primID[k];
           if (plan.geomId)
             fb.geomId[px] = h.instID[k] == RTC_INVALID_GEOMETRY_ID ? h.geomID[k] : h.instID[k];
         }
@@ -184,7 +191,8 @@ RenderStats renderFrame(const Scene& scene, const Camera& camera, const RenderSe
   FramePlan plan{scene, camera, fb, settings, camera.renderEye(), camera.viewAxis(),
                  scene.renderOrigin(), fb.has(kAovColor), fb.has(kAovDepth),
                  fb.has(kAovDistance), fb.has(kAovNormal), fb.has(kAovPosition),
-                 fb.has(kAovPrimId), fb.has(kAovGeomId), false, scene.instanceCount() > 0};
+                 fb.has(kAovPrimId), fb.has(kAovGeomId), false, scene.instanceCount() > 0,
+                 scene.remapsPrimIds()};
   plan.anyGeometry = plan.depth || plan.distance || plan.normal || plan.position ||
                      plan.primId || plan.geomId;
 

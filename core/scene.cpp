@@ -117,15 +117,17 @@ std::vector<SceneObject> untransformed(const std::vector<const Mesh*>& meshes) {
   return objects;
 }
 
-RTCGeometry triangleGeometry(const Device& device, const Mesh& m, RTCBuildQuality quality) {
+RTCGeometry triangleGeometry(const Device& device, const Mesh& m, const TriangleSubset* subset,
+                             RTCBuildQuality quality) {
   // Embree may read 16 bytes at the last vertex: the loader pads positions for that.
   APERTURE_CHECK_OP(m.positions.size(), >=, 3 * m.vertexCount + kVertexPaddingFloats - 1);
   RTCGeometry geom = rtcNewGeometry(device.handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
   rtcSetGeometryBuildQuality(geom, quality);
   rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                              m.positions.data(), 0, 3 * sizeof(float), m.vertexCount);
-  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, m.indices.data(),
-                             0, 3 * sizeof(uint32_t), m.triangleCount());
+  const std::vector<uint32_t>& indices = subset ? subset->indices : m.indices;
+  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices.data(), 0,
+                             3 * sizeof(uint32_t), indices.size() / 3);
   rtcCommitGeometry(geom);
   device.check(cat("adding mesh '", m.name, "'").c_str());
   return geom;
@@ -161,29 +163,40 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
   scene_ = newScene();
   std::map<const Mesh*, RTCScene> built;  // sub-scene of each instanced mesh
   normalFromMesh_.assign(objects.size(), glm::mat3(1.0f));
+  for (const SceneObject& o : objects)
+    if (o.subset) primIdMaps_.assign(objects.size(), nullptr);
   for (size_t k = 0; k < objects.size(); ++k) {
     const Mesh& m = *objects[k].mesh;
-    stats_.triangles += m.triangleCount();
+    const TriangleSubset* subset = objects[k].subset;
+    const size_t placed = subset ? subset->triangleCount() : m.triangleCount();
+    stats_.triangles += placed;
+    stats_.culledTriangles += m.triangleCount() - placed;
+    if (subset) {
+      APERTURE_CHECK_OP(subset->indices.size(), ==, 3 * subset->primIds.size());
+      primIdMaps_[k] = subset->primIds.data();
+      // Nothing of this object is kept: leave its geomID unused.
+      if (placed == 0) continue;
+    }
     const bool direct = uses[&m] == 1 && objects[k].worldFromMesh == glm::dmat4(1.0) &&
                         m.anchor == renderOrigin_;
     if (direct) {
-      RTCGeometry geom = triangleGeometry(device, m, quality);
+      RTCGeometry geom = triangleGeometry(device, m, subset, quality);
       rtcAttachGeometryByID(scene_, geom, unsigned(k));
       rtcReleaseGeometry(geom);
-      stats_.uniqueTriangles += m.triangleCount();
+      stats_.uniqueTriangles += placed;
       continue;
     }
     auto it = built.find(&m);
     if (it == built.end()) {
       RTCScene sub = newScene();
-      RTCGeometry geom = triangleGeometry(device, m, quality);
+      RTCGeometry geom = triangleGeometry(device, m, subset, quality);
       rtcAttachGeometryByID(sub, geom, 0);
       rtcReleaseGeometry(geom);
       rtcCommitScene(sub);
       device.check(cat("building the BVH of mesh '", m.name, "'").c_str());
       it = built.emplace(&m, sub).first;
       subScenes_.push_back(sub);
-      stats_.uniqueTriangles += m.triangleCount();
+      stats_.uniqueTriangles += placed;
     }
     // Render space from mesh-local space, composed in double: T(−origin) · M · T(anchor).
     const glm::dmat4 renderFromLocal = glm::translate(glm::dmat4(1.0), -renderOrigin_) *

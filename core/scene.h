@@ -50,15 +50,27 @@ struct BuildOptions {
 
 struct BuildStats {
   size_t triangles = 0;        ///< triangles as placed (an instanced mesh counts each time)
+  size_t culledTriangles = 0;  ///< triangles as placed that a TriangleSubset left out
   size_t uniqueTriangles = 0;  ///< triangles stored (each mesh once)
   double buildSeconds = 0;     ///< rtcCommitScene wall time
   long long embreeBytes = 0;   ///< Embree's memory after the build
+};
+
+/// Some of a mesh's triangles (for view-volume culling, core/cull.h): the kept triangles'
+/// vertex indices in their original order, and the original index of each kept triangle.
+struct TriangleSubset {
+  std::vector<uint32_t> indices;  ///< 3 per kept triangle, into the mesh's vertex buffer
+  std::vector<uint32_t> primIds;  ///< primIds[k] = the mesh's index of kept triangle k
+  size_t triangleCount() const { return primIds.size(); }
 };
 
 /// One placement of a mesh: world = worldFromMesh · (mesh.anchor + position).
 struct SceneObject {
   const Mesh* mesh = nullptr;
   glm::dmat4 worldFromMesh{1.0};
+  /// Optional: only these triangles go into the BVH (they share the mesh's vertex buffer;
+  /// must outlive the Scene). Objects placing the same mesh must give the same subset.
+  const TriangleSubset* subset = nullptr;
 };
 
 /// An Embree scene over meshes that outlive it (their vertex and index buffers are shared
@@ -87,6 +99,15 @@ class Scene {
   /// World-space normal of an instanced hit: Embree reports Ng in the mesh's space.
   /// Indexed by the top-level geomID (hit.instID[0]).
   const glm::mat3& normalFromMesh(unsigned object) const { return normalFromMesh_[object]; }
+  /// True when some object was built from a TriangleSubset, so Embree's primID is an index
+  /// into the subset and must go through originalPrimId().
+  bool remapsPrimIds() const { return !primIdMaps_.empty(); }
+  /// The mesh's triangle index of Embree's primID `prim` on object `object` (the top-level
+  /// geomID, or the instance's).
+  uint32_t originalPrimId(unsigned object, uint32_t prim) const {
+    const uint32_t* map = primIdMaps_.empty() ? nullptr : primIdMaps_[object];
+    return map ? map[prim] : prim;
+  }
 
  private:
   const Device& device_;
@@ -96,6 +117,7 @@ class Scene {
   glm::dvec3 renderOrigin_{0.0};
   size_t instanced_ = 0;
   std::vector<glm::mat3> normalFromMesh_;
+  std::vector<const uint32_t*> primIdMaps_;  ///< per object; empty when nothing is culled
   std::vector<RTCScene> subScenes_;
 };
 
