@@ -21,21 +21,11 @@ PerspectiveCamera::PerspectiveCamera(const CameraParams& p, const glm::dvec3& re
       lensRadius_(lensRadius),
       focusDistance_(focusDistance),
       focusOverD_(focusDistance / d_) {
-  if (spp_ == 1 && lensRadius_ == 0) {
-    // x = j + ½ is exactly what samplePosition gives at 1 spp, so the tables hold the very
-    // values rayAt computes.
-    // Three more entries each way: tail lanes of a 4-wide block past the edge get their
-    // (masked) rays from the same formula too.
-    double v;
-    uCol_.resize(size_t(width_) + 3);
-    vRow_.resize(size_t(height_) + 3);
-    for (int j = 0; j < width_ + 3; ++j) rasterToPlane(j + 0.5, 0.5, uCol_[size_t(j)], v);
-    for (int i = 0; i < height_ + 3; ++i) rasterToPlane(0.5, i + 0.5, v, vRow_[size_t(i)]);
-  }
+  pinholeCentres_ = spp_ == 1 && lensRadius_ == 0;
 }
 
 void PerspectiveCamera::generate(const PacketRequest& req, RayLanes& out, int* valid) const {
-  if (!uCol_.empty()) {
+  if (pinholeCentres_) {
     // The frame loop's block shapes get loops with constant trip counts.
     if (req.blockW == 4 && req.blockH == 4) return generatePinholeCentres<4, 4>(req, out, valid);
     if (req.blockW == 4 && req.blockH == 2) return generatePinholeCentres<4, 2>(req, out, valid);
@@ -49,43 +39,57 @@ template <int kBW, int kBH>
 void PerspectiveCamera::generatePinholeCentres(const PacketRequest& req, RayLanes& out,
                                                int* valid) const {
   constexpr int kLanes = kBW * kBH;
-  // Blocks start inside the image and the tables run 3 entries past it, so no lane reads
-  // outside them; lanes past the edge get their (masked) rays from the same formula.
-  const double* uCol = uCol_.data() + req.x0;
-  const double* vRow = vRow_.data() + req.y0;
+  // Lane k is column x0 + k % kBW, row y0 + k / kBW. The raster centre j + ½ is exact in
+  // double, so u and v below are rasterToPlane's values bit for bit; computing them per lane
+  // (rather than gathering from a table) keeps the whole loop in vector registers.
+  const double x0 = req.x0, y0 = req.y0, w = width_, h = height_;
+  const double sx = shift_.x, sy = shift_.y, vw = vw_, vh = vh_;
   // rayAt's pinhole branch term by term: (u·U + v·V) − d·W, times 1 / its length.
-  // Computed into local arrays (no aliasing, so the loop vectorises), then stored.
   const glm::dvec3 U = frame_.u, V = frame_.v, dW = d_ * frame_.w;
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
-  for (int r = 0; r < kBH; ++r)
-    for (int c = 0; c < kBW; ++c) {
-      const int k = r * kBW + c;
-      const double u = uCol[c], v = vRow[r];
-      const double px = (u * U.x + v * V.x) - dW.x;
-      const double py = (u * U.y + v * V.y) - dW.y;
-      const double pz = (u * U.z + v * V.z) - dW.z;
-      const double invLen = 1.0 / std::sqrt((px * px + py * py) + pz * pz);
-      dx[k] = float(px * invLen);
-      dy[k] = float(py * invLen);
-      dz[k] = float(pz * invLen);
-      valid[k] = req.y0 + r < height_ && req.x0 + c < width_ ? -1 : 0;
-    }
-  const float ox = float(renderEyeD_.x), oy = float(renderEyeD_.y), oz = float(renderEyeD_.z);
+  for (int k = 0; k < kLanes; ++k) {
+    const double x = (x0 + double(k % kBW)) + 0.5, y = (y0 + double(k / kBW)) + 0.5;
+    const double u = (x / w - 0.5 + sx) * vw;
+    const double v = (-(y / h - 0.5) + sy) * vh;
+    const double px = (u * U.x + v * V.x) - dW.x;
+    const double py = (u * U.y + v * V.y) - dW.y;
+    const double pz = (u * U.z + v * V.z) - dW.z;
+    const double invLen = 1.0 / std::sqrt((px * px + py * py) + pz * pz);
+    dx[k] = float(px * invLen);
+    dy[k] = float(py * invLen);
+    dz[k] = float(pz * invLen);
+  }
+  // Local restrict pointers: stores through one lane array cannot change the others.
+  float* __restrict ox = out.orgX;
+  float* __restrict oy = out.orgY;
+  float* __restrict oz = out.orgZ;
+  float* __restrict ddx = out.dirX;
+  float* __restrict ddy = out.dirY;
+  float* __restrict ddz = out.dirZ;
+  float* __restrict tnear = out.tnear;
+  float* __restrict tfar = out.tfar;
+  float* __restrict time = out.time;
+  unsigned* __restrict mask = out.mask;
+  unsigned* __restrict id = out.id;
+  unsigned* __restrict flags = out.flags;
+  const float ex = float(renderEyeD_.x), ey = float(renderEyeD_.y), ez = float(renderEyeD_.z);
   const float inf = std::numeric_limits<float>::infinity();
   for (int k = 0; k < kLanes; ++k) {
-    out.dirX[k] = dx[k];
-    out.dirY[k] = dy[k];
-    out.dirZ[k] = dz[k];
-    out.orgX[k] = ox;
-    out.orgY[k] = oy;
-    out.orgZ[k] = oz;
-    out.tnear[k] = 0.0f;
-    out.tfar[k] = inf;
-    out.time[k] = 0.0f;
-    out.mask[k] = 0xFFFFFFFFu;
-    out.id[k] = unsigned(k);
-    out.flags[k] = 0;
+    ddx[k] = dx[k];
+    ddy[k] = dy[k];
+    ddz[k] = dz[k];
+    ox[k] = ex;
+    oy[k] = ey;
+    oz[k] = ez;
+    tnear[k] = 0.0f;
+    tfar[k] = inf;
+    time[k] = 0.0f;
+    mask[k] = 0xFFFFFFFFu;
+    id[k] = unsigned(k);
+    flags[k] = 0;
   }
+  for (int k = 0; k < kLanes; ++k)
+    valid[k] = req.y0 + k / kBW < height_ && req.x0 + k % kBW < width_ ? -1 : 0;
 }
 
 std::optional<glm::dvec2> PerspectiveCamera::project(const glm::dvec3& worldPoint) const {

@@ -1,8 +1,6 @@
 #pragma once
 // The perspective camera of the lecture, with shift, the architectural mode and an optional
 // thin lens (the thin-lens camera is this class with a lens radius; see thinlens.cpp).
-#include <vector>
-
 #include "cameras/base.h"
 #include "cameras/thinlens.h"
 
@@ -60,9 +58,8 @@ class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
   void generatePinholeCentres(const PacketRequest& req, RayLanes& out, int* valid) const;
 
   double lensRadius_ = 0, focusDistance_ = 1, focusOverD_ = 1;
-  /// Image-plane u of each column's centre and v of each row's centre (rasterToPlane of
-  /// j + ½ and i + ½), for the 1-spp pinhole path.
-  std::vector<double> uCol_, vRow_;
+  /// 1 spp without a lens: rays through pixel centres, the vectorised path.
+  bool pinholeCentres_ = false;
 };
 
 }  // namespace aperture
