@@ -1,8 +1,10 @@
 // `aperture render`: one frame of a mesh from one camera into a multi-channel EXR.
 #include <cstdio>
 #include <filesystem>
+#include <vector>
 
 #include "apps/commands.h"
+#include "apps/frame.h"
 #include "apps/options.h"
 #include "cameras/registry.h"
 #include "core/error.h"
@@ -21,14 +23,6 @@ struct RenderArgs {
   bool half = false, quiet = false;
 };
 
-void ensureParentDirectory(const std::string& path, const char* flag) {
-  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
-  if (parent.empty()) return;
-  std::error_code ec;
-  std::filesystem::create_directories(parent, ec);
-  if (ec) throw Error(cat(flag, ": cannot create directory '", parent.string(), "': ", ec.message()));
-}
-
 int runRender(const RenderArgs& a) {
   // Everything that can be checked is checked before loading the mesh.
   const AovMask aovs = parseAovList(a.render.aovs);
@@ -45,24 +39,18 @@ int runRender(const RenderArgs& a) {
   Device device;
   LoadedScene loaded = loadScene(device, a.scene, a.quiet);
   const CameraParams params = a.camera.toParams(loaded.worldLo, loaded.worldHi);
-  const auto camera = makeCamera(params, loaded.scene->renderOrigin());
 
-  Framebuffer fb(params.width, params.height, aovs);
-  const RenderStats stats = renderFrame(*loaded.scene, *camera, settings, fb);
+  const RenderedView view = renderView(*loaded.scene, params, settings, aovs);
+  const Framebuffer& fb = view.fb;
   if (!a.quiet)
     std::fprintf(stderr, "aperture: rendered %dx%d, %d spp, AOVs %s: %.3f s, %.1f Mrays/s (%d threads)\n",
-                 fb.width, fb.height, settings.spp, aovListString(aovs).c_str(), stats.seconds,
-                 stats.mraysPerSecond(), threads.threads());
+                 fb.width, fb.height, settings.spp, aovListString(aovs).c_str(), view.stats.seconds,
+                 view.stats.mraysPerSecond(), threads.threads());
 
-  ExrMetadata meta;
-  meta.camera = camera->describe();
-  meta.renderSeconds = stats.seconds;
-  std::string meshes;
-  for (const Mesh& m : loaded.meshes) meshes += (meshes.empty() ? "" : ";") + m.name;
-  meta.strings = {{"aperture.meshes", meshes},
-                  {"aperture.aovs", aovListString(aovs)},
-                  {"aperture.bvhQuality", a.scene.quality},
-                  {"aperture.placement", a.scene.worldSpace ? "world-space" : "camera-relative"}};
+  std::vector<std::string> meshNames;
+  for (const Mesh& m : loaded.meshes) meshNames.push_back(m.name);
+  const ExrMetadata meta = viewMetadata(view, meshNames, aovs, a.scene.buildOptions().quality,
+                                        a.scene.loadOptions().placement);
   ensureParentDirectory(a.out, "--out");
   writeExr(a.out, fb, meta, exr);
   if (!a.quiet) std::fprintf(stderr, "aperture: wrote %s\n", a.out.c_str());

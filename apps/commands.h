@@ -10,5 +10,6 @@ namespace aperture::app {
 using Command = std::function<int()>;
 Command addRenderCommand(CLI::App& app);
 Command addBenchCommand(CLI::App& app);
+Command addBatchCommand(CLI::App& app);
 
 }  // namespace aperture::app

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   };
   add(addRenderCommand);
   add(addBenchCommand);
+  add(addBatchCommand);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

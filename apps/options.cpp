@@ -204,35 +204,37 @@ CameraParams CameraOptions::toParams(const glm::dvec3& worldLo, const glm::dvec3
   return p;
 }
 
+void logLoadedMesh(const Mesh& m) {
+  std::fprintf(stderr, "aperture: loaded %s: %zu triangles, %zu vertices in %.3f s",
+               m.name.c_str(), m.triangleCount(), m.vertexCount, m.stats.loadSeconds);
+  if (m.stats.fileBytes)
+    std::fprintf(stderr, " (%.1f MB/s)",
+                 m.stats.fileBytes / 1e6 / std::max(m.stats.loadSeconds, 1e-9));
+  std::fprintf(stderr, "\n");
+  if (m.stats.nonFiniteVertices || m.stats.droppedTriangles)
+    std::fprintf(stderr, "aperture: %s: %zu non-finite vertices, %zu triangles dropped\n",
+                 m.name.c_str(), m.stats.nonFiniteVertices, m.stats.droppedTriangles);
+}
+
 std::vector<Mesh> loadMeshes(const SceneOptions& o, bool quiet) {
   std::vector<std::string> specs = o.meshes;
   if (specs.empty()) specs.push_back("procedural:default");
   std::vector<Mesh> meshes;
   for (const std::string& spec : specs) {
     meshes.push_back(loadMesh(spec, o.loadOptions()));
-    const Mesh& m = meshes.back();
-    if (!quiet) {
-      std::fprintf(stderr, "aperture: loaded %s: %zu triangles, %zu vertices in %.3f s",
-                   m.name.c_str(), m.triangleCount(), m.vertexCount, m.stats.loadSeconds);
-      if (m.stats.fileBytes)
-        std::fprintf(stderr, " (%.1f MB/s)",
-                     m.stats.fileBytes / 1e6 / std::max(m.stats.loadSeconds, 1e-9));
-      std::fprintf(stderr, "\n");
-      if (m.stats.nonFiniteVertices || m.stats.droppedTriangles)
-        std::fprintf(stderr, "aperture: %s: %zu non-finite vertices, %zu triangles dropped\n",
-                     m.name.c_str(), m.stats.nonFiniteVertices, m.stats.droppedTriangles);
-    }
+    if (!quiet) logLoadedMesh(meshes.back());
   }
   // Meshes share the first one's anchor (moved in double) so they share one render space.
-  for (size_t k = 1; k < meshes.size(); ++k) {
-    Mesh& m = meshes[k];
-    const glm::dvec3 delta = m.anchor - meshes[0].anchor;
-    for (size_t v = 0; v < m.vertexCount; ++v)
-      for (int c = 0; c < 3; ++c)
-        m.positions[3 * v + c] = float(double(m.positions[3 * v + c]) + delta[c]);
-    m.anchor = meshes[0].anchor;
-  }
+  for (size_t k = 1; k < meshes.size(); ++k) moveAnchor(meshes[k], meshes[0].anchor);
   return meshes;
+}
+
+void moveAnchor(Mesh& m, const glm::dvec3& anchor) {
+  const glm::dvec3 delta = m.anchor - anchor;
+  for (size_t v = 0; v < m.vertexCount; ++v)
+    for (int c = 0; c < 3; ++c)
+      m.positions[3 * v + c] = float(double(m.positions[3 * v + c]) + delta[c]);
+  m.anchor = anchor;
 }
 
 LoadedScene loadScene(const Device& device, const SceneOptions& o, bool quiet) {

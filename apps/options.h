@@ -66,6 +66,11 @@ struct LoadedScene {
   size_t fileBytes = 0;
 };
 std::vector<Mesh> loadMeshes(const SceneOptions& o, bool quiet);
+/// Re-expresses the mesh's positions relative to `anchor` (offset added in double, rounded to
+/// float once), so meshes loaded apart share one render space.
+void moveAnchor(Mesh& m, const glm::dvec3& anchor);
+/// Logs a loaded mesh (triangles, vertices, load time and speed, dropped vertices) to stderr.
+void logLoadedMesh(const Mesh& m);
 LoadedScene loadScene(const Device& device, const SceneOptions& o, bool quiet);
 
 /// Limits TBB (and so Embree's builder) to n threads while alive; n = 0 keeps all cores.

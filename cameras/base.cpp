@@ -28,8 +28,14 @@ void resolveImagePlane(const CameraParams& p, double& d, double& vw, double& vh)
     if (!(f > 0)) throw Error(cat("camera: focal length ", f, " mm must be > 0"));
     if (!(p.sensorMm.x > 0 && p.sensorMm.y > 0))
       throw Error(cat("camera: sensor ", p.sensorMm.x, "x", p.sensorMm.y, " mm must be > 0"));
-    vw = d * p.sensorMm.x / f;
-    vh = d * p.sensorMm.y / f;
+    // Crop the sensor to the image's aspect ratio (largest centred window that fits).
+    double cropW = p.sensorMm.x, cropH = p.sensorMm.y;
+    if (cropW / cropH > aspect)
+      cropW = cropH * aspect;
+    else
+      cropH = cropW / aspect;
+    vw = d * cropW / f;
+    vh = d * cropH / f;
   } else {
     const double fov = p.fovDeg.value_or(45.0);
     requireFinite(fov, "fov");
@@ -76,8 +82,67 @@ FrameCamera::FrameCamera(const CameraParams& p, const glm::dvec3& renderOrigin,
   width_ = p.width;
   height_ = p.height;
   spp_ = p.spp;
-  renderEye_ = glm::vec3(frame_.e - renderOrigin_);
+  if (!std::isfinite(p.shift.x) || !std::isfinite(p.shift.y))
+    throw Error(cat("camera: shift (", p.shift.x, ",", p.shift.y, ") is not finite"));
+  shift_ = p.shift;
+  if (p.architectural) {
+    // Keep the image plane parallel to up. With Y = normalize(up) and the requested view
+    // direction D = −W0 = cos(t)·H + sin(t)·Y (H horizontal, t the tilt above the horizon),
+    // the new frame looks along H (W = −H, U unchanged, V = Y). D's image-plane point
+    // u·U + v·V − d·W ∝ D gives u = 0, v = d·tan(t): the tilt becomes the vertical shift
+    //   sy += d·tan(t) / vh,
+    // so the scene point on the requested axis stays at the image centre.
+    const glm::dvec3 upUnit = glm::normalize(p.up);
+    const glm::dvec3 view = -frame_.w;
+    const double sinT = glm::dot(view, upUnit);
+    const glm::dvec3 horizontal = view - sinT * upUnit;
+    const double cosT = glm::length(horizontal);
+    tiltRad_ = std::atan2(sinT, cosT);
+    if (!(std::abs(tiltRad_) < radians(89.0)))
+      throw Error(cat("camera: --architectural needs a view direction less than 89 degrees "
+                      "from the horizon (tilt is ",
+                      tiltRad_ * 180.0 / kPi, " degrees)"));
+    frame_ = CameraFrame::fromDirection(frame_.e, horizontal, p.up);
+    shift_.y += d_ * (sinT / cosT) / vh_;
+  }
+  renderEyeD_ = frame_.e - renderOrigin_;
+  renderEye_ = glm::vec3(renderEyeD_);
   viewAxis_ = glm::vec3(-frame_.w);
+}
+
+void FrameCamera::rejectShift() const {
+  if (params_.shift != glm::dvec2(0.0) || params_.architectural)
+    throw Error(cat("camera: --shift and --architectural apply to perspective and thinlens "
+                    "cameras, not to '",
+                    type_, "'"));
+}
+
+namespace {
+// A pseudo-random permutation of [0, n), chosen by `seed`: bijective steps on the next power
+// of two (xor, odd multiply, xorshift, add), repeated until the value falls below n.
+uint32_t permuteIndex(uint32_t index, uint32_t n, uint32_t seed) {
+  uint32_t mask = n - 1;
+  mask |= mask >> 1;
+  mask |= mask >> 2;
+  mask |= mask >> 4;
+  mask |= mask >> 8;
+  mask |= mask >> 16;
+  const uint32_t salt = hash32(seed), mul = (hash32(seed + 1) | 1u);
+  do {
+    index = (index ^ salt) & mask;
+    index = (index * mul) & mask;
+    index ^= index >> 3;
+    index = (index + (salt >> 16)) & mask;
+    index ^= (index >> 1) & (salt >> 8) & mask;
+  } while (index >= n);
+  return index;
+}
+}  // namespace
+
+void FrameCamera::lensSample(int i, int j, int s, double& lensX, double& lensY) const {
+  const uint32_t seed = hash32(uint32_t(j) ^ hash32(uint32_t(i) ^ 0x5bd1e995u));
+  const int stratum = spp_ > 1 ? int(permuteIndex(uint32_t(s), uint32_t(spp_), seed)) : s;
+  stratified2D(uint32_t(j), uint32_t(i), stratum, spp_, 1, lensX, lensY);
 }
 
 void FrameCamera::samplePosition(int i, int j, int s, double& x, double& y) const {
@@ -102,6 +167,12 @@ CameraDescription FrameCamera::describe() const {
   c.spp = spp_;
   c.cameraFromWorld = frame_.cameraFromWorld();
   c.ndcFromWorld = ndcFromCamera() * c.cameraFromWorld;
+  c.extra.emplace_back("shift", cat(shift_.x, ",", shift_.y));
+  if (params_.architectural) {
+    c.extra.emplace_back("architectural", "1");
+    c.extra.emplace_back("tilt_deg", cat(tiltRad_ * 180.0 / kPi));
+  }
+  describeExtra(c);
   return c;
 }
 

@@ -1,25 +1,30 @@
 #pragma once
-// Shared state of the frame-based cameras: frame, image plane, render origin, pixel mapping.
+// Shared state of the frame-based cameras: frame, image plane, render origin, pixel mapping,
+// and the packet loop every model uses (PacketCamera).
 #include <limits>
+#include <optional>
 #include <string>
 
 #include "cameras/frame.h"
 #include "cameras/params.h"
+#include "cameras/view_volume.h"
 #include "core/camera.h"
 
 namespace aperture {
 
 /// Image-plane distance and viewport from whichever convention the parameters use:
-/// explicit d + viewport, else focal length + sensor (d = focal length in mm scaled to 1),
-/// else fov on fovAxis at d (default d = 1, default fov 45° vertical). Throws Error for
+/// explicit d + viewport, else focal length + sensor, else fov on fovAxis at d (default d = 1,
+/// default fov 45° vertical). Focal length + sensor: the image is the largest centred window
+/// of the image's aspect ratio inside the sensor (as a camera crops its sensor), so
+/// vw = d·cropW/f and vh = d·cropH/f with cropW/cropH = width/height. Throws Error for
 /// d <= 0, viewport <= 0, non-finite values or fov outside (0°, 180°).
 void resolveImagePlane(const CameraParams& p, double& d, double& vw, double& vh);
 
 /// Builds the frame from eye + at / dir + up (errors as CameraFrame).
 CameraFrame frameFromParams(const CameraParams& p);
 
-/// Base for cameras defined by a frame and an image plane. Precomputes the render-space eye
-/// and axes; subclasses implement generate().
+/// Base for cameras defined by a frame and an image plane. Precomputes the render-space eye,
+/// the axes and the effective shift (user shift plus the architectural tilt shift).
 class FrameCamera : public Camera {
  public:
   FrameCamera(const CameraParams& p, const glm::dvec3& renderOrigin, const char* typeName);
@@ -29,28 +34,70 @@ class FrameCamera : public Camera {
   bool stochastic() const override { return spp_ > 1; }
   CameraDescription describe() const override;
 
-  /// Image-plane coordinates (u, v) of a raster position (column x, row y, continuous; pixel
-  /// (i, j) centre at (j + 0.5, i + 0.5)): u = (x / W − ½)·vw, v = −(y / H − ½)·vh.
+  /// The ray through raster position (x, y) (column, row, continuous; pixel (i, j) centre at
+  /// (j + ½, i + ½)) with lens sample (lensX, lensY) in [0, 1)² (ignored by pinhole and
+  /// parallel models). Writes the origin in render space and the unit direction, both in
+  /// double before the one rounding to float that generate() applies. Returns false where
+  /// the position has no ray (outside a fisheye's circle); the outputs are then still finite.
+  virtual bool ray(double x, double y, double lensX, double lensY, glm::dvec3& renderOrg,
+                   glm::dvec3& dir) const = 0;
+
+  /// Raster position (x, y) (same convention as ray()) of a world point, or nothing when the
+  /// point has no image position (behind a pinhole, behind a parallel camera's image plane,
+  /// outside a fisheye's field). The position may lie outside [0, W] x [0, H]. Thin lens:
+  /// the centre of the circle of confusion (the pinhole projection).
+  virtual std::optional<glm::dvec2> project(const glm::dvec3& worldPoint) const = 0;
+
+  /// The view volume between nearDist and farDist (see view_volume.h for their meaning).
+  virtual ViewVolume viewVolume(double nearDist, double farDist) const = 0;
+
+  /// Image-plane coordinates (u, v) of a raster position, shift included:
+  /// u = (x / W − ½ + sx)·vw, v = (−(y / H − ½) + sy)·vh.
   void rasterToPlane(double x, double y, double& u, double& v) const {
-    u = (x / width_ - 0.5) * vw_;
-    v = -(y / height_ - 0.5) * vh_;
+    u = (x / width_ - 0.5 + shift_.x) * vw_;
+    v = (-(y / height_ - 0.5) + shift_.y) * vh_;
   }
   /// Raster position of pixel (row i, column j), sample s: centre for spp 1, else stratified.
   void samplePosition(int i, int j, int s, double& x, double& y) const;
+  /// Lens sample in [0, 1)² of pixel (i, j), sample s: stratified over the spp samples like
+  /// the pixel positions, with the strata paired through a per-pixel permutation so lens and
+  /// pixel positions are not correlated. (½, ½) for spp 1. Depends on (i, j, s) only.
+  void lensSample(int i, int j, int s, double& lensX, double& lensY) const;
 
   const CameraFrame& frame() const { return frame_; }
+  const CameraParams& params() const { return params_; }
   double d() const { return d_; }
   double vw() const { return vw_; }
   double vh() const { return vh_; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  /// Effective shift in viewport units (params.shift plus the architectural tilt shift).
+  const glm::dvec2& shift() const { return shift_; }
+  /// The image window on the plane at distance d: u in [uLo, uHi], v in [vLo, vHi].
+  double uLo() const { return (shift_.x - 0.5) * vw_; }
+  double uHi() const { return (shift_.x + 0.5) * vw_; }
+  double vLo() const { return (shift_.y - 0.5) * vh_; }
+  double vHi() const { return (shift_.y + 0.5) * vh_; }
+  /// Raster position of image-plane coordinates (inverse of rasterToPlane).
+  glm::dvec2 planeToRaster(double u, double v) const {
+    return {(u / vw_ - shift_.x + 0.5) * width_, (0.5 - (v / vh_ - shift_.y)) * height_};
+  }
 
  protected:
   /// ndcFromCamera for describe(); identity for non-linear projections.
   virtual glm::dmat4 ndcFromCamera() const { return glm::dmat4(1.0); }
+  /// Model-specific (name, value) pairs for CameraDescription::extra.
+  virtual void describeExtra(CameraDescription&) const {}
+  /// Throws Error naming the model if a shift or the architectural flag was given.
+  void rejectShift() const;
 
   CameraParams params_;
   CameraFrame frame_;
   glm::dvec3 renderOrigin_;
+  glm::dvec3 renderEyeD_;  ///< e − renderOrigin, double
   double d_ = 1, vw_ = 1, vh_ = 1;
+  glm::dvec2 shift_{0.0};
+  double tiltRad_ = 0;  ///< architectural: the view direction's angle above the horizon
   int width_ = 1, height_ = 1, spp_ = 1;
   glm::vec3 renderEye_, viewAxis_;
   std::string type_;
@@ -71,5 +118,35 @@ inline void setLane(RayLanes& out, int k, const glm::dvec3& org, const glm::dvec
   out.id[k] = unsigned(k);
   out.flags[k] = 0;
 }
+
+/// The packet loop, shared by every model: Derived provides an inline
+/// `bool rayAt(x, y, lensX, lensY, org, dir) const` and `bool usesLens() const`. generate()
+/// and the scalar ray() both call rayAt, so packets equal the scalar path exactly.
+template <class Derived>
+class PacketCamera : public FrameCamera {
+ public:
+  using FrameCamera::FrameCamera;
+
+  void generate(const PacketRequest& req, RayLanes& out, int* valid) const override {
+    const Derived& self = static_cast<const Derived&>(*this);
+    const bool lens = self.usesLens();
+    const int lanes = req.blockW * req.blockH;
+    for (int k = 0; k < lanes; ++k) {
+      const int i = req.y0 + k / req.blockW, j = req.x0 + k % req.blockW;
+      double x, y, lensX = 0.5, lensY = 0.5;
+      samplePosition(i, j, req.sample, x, y);
+      if (lens) lensSample(i, j, req.sample, lensX, lensY);
+      glm::dvec3 org, dir;
+      const bool hasRay = self.rayAt(x, y, lensX, lensY, org, dir);
+      valid[k] = (hasRay && i < height_ && j < width_) ? -1 : 0;
+      setLane(out, k, org, dir);
+    }
+  }
+
+  bool ray(double x, double y, double lensX, double lensY, glm::dvec3& renderOrg,
+           glm::dvec3& dir) const override {
+    return static_cast<const Derived&>(*this).rayAt(x, y, lensX, lensY, renderOrg, dir);
+  }
+};
 
 }  // namespace aperture

@@ -6,7 +6,21 @@
 
 namespace aperture {
 
-std::unique_ptr<Camera> makePerspectiveCamera(const CameraParams& p,
-                                              const glm::dvec3& renderOrigin);
+std::unique_ptr<FrameCamera> makePerspectiveCamera(const CameraParams& p,
+                                                   const glm::dvec3& renderOrigin);
+std::unique_ptr<FrameCamera> makeOrthographicCamera(const CameraParams& p,
+                                                    const glm::dvec3& renderOrigin);
+std::unique_ptr<FrameCamera> makeObliqueCamera(const CameraParams& p,
+                                               const glm::dvec3& renderOrigin);
+std::unique_ptr<FrameCamera> makeThinLensCamera(const CameraParams& p,
+                                                const glm::dvec3& renderOrigin);
+std::unique_ptr<FrameCamera> makeEquirectCamera(const CameraParams& p,
+                                                const glm::dvec3& renderOrigin);
+std::unique_ptr<FrameCamera> makeFisheyeCamera(const CameraParams& p,
+                                               const glm::dvec3& renderOrigin);
+
+/// The common unit direction of an oblique camera (errors for a missing, zero, backwards or
+/// too-steep direction: 89° or more from −W).
+glm::dvec3 obliqueDirection(const CameraParams& p, const CameraFrame& frame);
 
 }  // namespace aperture

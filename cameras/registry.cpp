@@ -6,14 +6,16 @@
 namespace aperture {
 
 namespace {
-using Factory = std::unique_ptr<Camera> (*)(const CameraParams&, const glm::dvec3&);
+using Factory = std::unique_ptr<FrameCamera> (*)(const CameraParams&, const glm::dvec3&);
 struct Entry {
   const char* name;
   Factory make;
 };
 // Explicit registration: every model is listed here.
 const Entry kCameras[] = {
-    {"perspective", makePerspectiveCamera},
+    {"perspective", makePerspectiveCamera}, {"orthographic", makeOrthographicCamera},
+    {"oblique", makeObliqueCamera},         {"thinlens", makeThinLensCamera},
+    {"equirect", makeEquirectCamera},       {"fisheye", makeFisheyeCamera},
 };
 }  // namespace
 
@@ -24,6 +26,11 @@ std::vector<std::string> cameraTypeNames() {
 }
 
 std::unique_ptr<Camera> makeCamera(const CameraParams& params, const glm::dvec3& renderOrigin) {
+  return makeFrameCamera(params, renderOrigin);
+}
+
+std::unique_ptr<FrameCamera> makeFrameCamera(const CameraParams& params,
+                                             const glm::dvec3& renderOrigin) {
   for (const auto& e : kCameras)
     if (params.type == e.name) return e.make(params, renderOrigin);
   std::string known;

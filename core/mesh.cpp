@@ -85,8 +85,10 @@ void finishMesh(Mesh& mesh, const LoadOptions& options) {
 
   // Transform in double, mark non-finite vertices and take the bounding box of the rest.
   auto world = [&](size_t k) {
-    return options.scale * glm::dvec3(coord(3 * k), coord(3 * k + 1), coord(3 * k + 2)) +
-           options.translate;
+    const glm::dvec3 v =
+        options.scale * glm::dvec3(coord(3 * k), coord(3 * k + 1), coord(3 * k + 2)) +
+        options.translate;
+    return options.transform ? glm::dvec3(*options.transform * glm::dvec4(v, 1.0)) : v;
   };
   std::vector<uint8_t> bad(n, 0);
   glm::dvec3 lo(std::numeric_limits<double>::max());

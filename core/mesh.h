@@ -2,6 +2,7 @@
 // Triangle meshes as loaded from PLY, OBJ or a procedural generator.
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -56,6 +57,9 @@ struct LoadOptions {
   /// Applied in double to every vertex before anchoring (x' = scale * x + translate).
   glm::dvec3 translate{0.0};
   double scale = 1.0;
+  /// Optional placement applied in double after scale and translate:
+  /// x' = transform · (scale * x + translate, 1). Must be affine (last row 0 0 0 1).
+  std::optional<glm::dmat4> transform;
 };
 
 /// Loads `spec`: a path ending in .ply or .obj (case-insensitive), or "procedural:NAME?k=v&k=v"

@@ -46,24 +46,21 @@ RayLanes rayLanes(typename PacketOf<N>::type& p) {
   return l;
 }
 
-/// Per-lane hit fields of an RTCRayHitN after intersection.
-template <int N>
-struct HitView {
-  typename PacketOf<N>::type& p;
-  float t(int k) const { if constexpr (N == 1) return p.ray.tfar; else return p.ray.tfar[k]; }
-  unsigned geomID(int k) const {
-    if constexpr (N == 1) return p.hit.geomID; else return p.hit.geomID[k];
-  }
-  unsigned primID(int k) const {
-    if constexpr (N == 1) return p.hit.primID; else return p.hit.primID[k];
-  }
-  unsigned instID(int k) const {
-    if constexpr (N == 1) return p.hit.instID[0]; else return p.hit.instID[0][k];
-  }
-  float ngX(int k) const { if constexpr (N == 1) return p.hit.Ng_x; else return p.hit.Ng_x[k]; }
-  float ngY(int k) const { if constexpr (N == 1) return p.hit.Ng_y; else return p.hit.Ng_y[k]; }
-  float ngZ(int k) const { if constexpr (N == 1) return p.hit.Ng_z; else return p.hit.Ng_z[k]; }
+/// Per-lane hit fields of an RTCRayHitN after intersection, as SoA pointers.
+struct HitLanes {
+  const float *tfar, *ngX, *ngY, *ngZ;
+  const unsigned *geomID, *primID, *instID;
 };
+
+template <int N>
+HitLanes hitLanes(const typename PacketOf<N>::type& p) {
+  if constexpr (N == 1)
+    return {&p.ray.tfar, &p.hit.Ng_x, &p.hit.Ng_y, &p.hit.Ng_z,
+            &p.hit.geomID, &p.hit.primID, &p.hit.instID[0]};
+  else
+    return {p.ray.tfar, p.hit.Ng_x, p.hit.Ng_y, p.hit.Ng_z, p.hit.geomID, p.hit.primID,
+            p.hit.instID[0]};
+}
 
 /// Sets hit.geomID of every lane to RTC_INVALID_GEOMETRY_ID (required before rtcIntersect).
 template <int N>

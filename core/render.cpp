@@ -35,6 +35,7 @@ struct FramePlan {
   glm::dvec3 origin;    // world position of the render-space origin
   bool color, depth, distance, normal, position, primId, geomId;
   bool anyGeometry;     // any AOV filled from sample 0 only
+  bool instanced;       // normals of instanced hits need the instance's normal matrix
 };
 
 struct TileCounters {
@@ -56,7 +57,7 @@ void renderTile(const FramePlan& plan, int x0, int y0, int x1, int y1, TileCount
   alignas(64) typename PacketOf<N>::type packet;
   alignas(64) int valid[N];
   RayLanes lanes = rayLanes<N>(packet);
-  const HitView<N> hit{packet};
+  const HitLanes h = hitLanes<N>(packet);
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -69,49 +70,75 @@ void renderTile(const FramePlan& plan, int x0, int y0, int x1, int y1, TileCount
       float shade[N] = {}, cover[N] = {};
       for (int s = 0; s < spp; ++s) {
         plan.camera.generate(PacketRequest{bx, by, kBW, kBH, s}, lanes, valid);
-        int active = 0;
+        // Lanes outside the image, or whose ray is not finite, are never traced.
+        int active = 0, nonFinite = 0;
         for (int k = 0; k < N; ++k) {
-          if (by + k / kBW >= fb.height || bx + k % kBW >= fb.width) valid[k] = 0;
-          if (valid[k] && !finiteLane(lanes, k)) {
-            valid[k] = 0;
-            ++count.skipped;
-          }
-          active += valid[k] != 0;
+          const bool inside = by + k / kBW < fb.height && bx + k % kBW < fb.width;
+          const bool live = valid[k] != 0 && inside;
+          const bool finite = finiteLane(lanes, k);
+          nonFinite += live && !finite;
+          valid[k] = live && finite ? -1 : 0;
+          active += live && finite;
         }
+        count.skipped += uint64_t(nonFinite);
         if (active == 0) continue;
         clearHits<N>(packet);
         intersect<N>(plan.scene.handle(), &ctx, valid, packet);
         count.traced += uint64_t(active);
 
+        // Per-lane values in SoA passes (vectorisable), then stores for hit lanes only.
+        alignas(64) float nx[N] = {}, ny[N] = {}, nz[N] = {};
+        alignas(64) int hitLane[N];
+        int hitCount = 0;
         for (int k = 0; k < N; ++k) {
-          if (!valid[k] || hit.geomID(k) == RTC_INVALID_GEOMETRY_ID) continue;
-          ++count.hits;
+          hitLane[k] = valid[k] != 0 && h.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+          hitCount += hitLane[k];
+        }
+        if (hitCount == 0) continue;
+        count.hits += uint64_t(hitCount);
+        if (needNormal) {
+          for (int k = 0; k < N; ++k) {
+            nx[k] = h.ngX[k], ny[k] = h.ngY[k], nz[k] = h.ngZ[k];
+          }
+          if (plan.instanced)
+            for (int k = 0; k < N; ++k)
+              if (hitLane[k] && h.instID[k] != RTC_INVALID_GEOMETRY_ID) {
+                const glm::vec3 n = plan.scene.normalFromMesh(h.instID[k]) *
+                                    glm::vec3(nx[k], ny[k], nz[k]);
+                nx[k] = n.x, ny[k] = n.y, nz[k] = n.z;
+              }
+          for (int k = 0; k < N; ++k) {
+            const float len2 = nx[k] * nx[k] + ny[k] * ny[k] + nz[k] * nz[k];
+            const float inv = len2 > 0.0f ? 1.0f / std::sqrt(len2) : 0.0f;
+            nx[k] *= inv, ny[k] *= inv, nz[k] *= inv;
+          }
+        }
+        if (plan.color)
+          for (int k = 0; k < N; ++k) {
+            const float c = std::fabs(nx[k] * lanes.dirX[k] + ny[k] * lanes.dirY[k] +
+                                      nz[k] * lanes.dirZ[k]);
+            shade[k] += hitLane[k] ? c : 0.0f;
+            cover[k] += hitLane[k] ? 1.0f : 0.0f;
+          }
+        if (s != 0 || !plan.anyGeometry) continue;
+        alignas(64) float z[N];
+        if (plan.depth)
+          for (int k = 0; k < N; ++k)
+            z[k] = (lanes.orgX[k] - plan.eye.x) * plan.axis.x +
+                   (lanes.orgY[k] - plan.eye.y) * plan.axis.y +
+                   (lanes.orgZ[k] - plan.eye.z) * plan.axis.z +
+                   h.tfar[k] * (lanes.dirX[k] * plan.axis.x + lanes.dirY[k] * plan.axis.y +
+                                lanes.dirZ[k] * plan.axis.z);
+        for (int k = 0; k < N; ++k) {
+          if (!hitLane[k]) continue;
           const size_t px = size_t(by + k / kBW) * size_t(fb.width) + size_t(bx + k % kBW);
-          const float t = hit.t(k);
-          glm::vec3 n(0.0f);
-          const unsigned inst = hit.instID(k);
-          const unsigned object = inst == RTC_INVALID_GEOMETRY_ID ? hit.geomID(k) : inst;
-          if (needNormal) {
-            glm::vec3 ng(hit.ngX(k), hit.ngY(k), hit.ngZ(k));
-            if (inst != RTC_INVALID_GEOMETRY_ID) ng = plan.scene.normalFromMesh(inst) * ng;
-            n = glm::normalize(ng);
-          }
-          if (plan.color) {
-            const glm::vec3 dir(lanes.dirX[k], lanes.dirY[k], lanes.dirZ[k]);
-            shade[k] += std::fabs(glm::dot(n, dir));
-            cover[k] += 1.0f;
-          }
-          if (s != 0 || !plan.anyGeometry) continue;
-          if (plan.depth) {
-            const glm::vec3 org(lanes.orgX[k], lanes.orgY[k], lanes.orgZ[k]);
-            const glm::vec3 dir(lanes.dirX[k], lanes.dirY[k], lanes.dirZ[k]);
-            fb.depth[px] = glm::dot(org - plan.eye, plan.axis) + t * glm::dot(dir, plan.axis);
-          }
+          const float t = h.tfar[k];
+          if (plan.depth) fb.depth[px] = z[k];
           if (plan.distance) fb.distance[px] = t;
           if (plan.normal) {
-            fb.normal[3 * px] = n.x;
-            fb.normal[3 * px + 1] = n.y;
-            fb.normal[3 * px + 2] = n.z;
+            fb.normal[3 * px] = nx[k];
+            fb.normal[3 * px + 1] = ny[k];
+            fb.normal[3 * px + 2] = nz[k];
           }
           if (plan.position) {
             // Hit point in double: render-space origin + org + t·dir, then rounded once.
@@ -122,8 +149,9 @@ void renderTile(const FramePlan& plan, int x0, int y0, int x1, int y1, TileCount
             fb.position[3 * px + 1] = float(p.y);
             fb.position[3 * px + 2] = float(p.z);
           }
-          if (plan.primId) fb.primId[px] = hit.primID(k);
-          if (plan.geomId) fb.geomId[px] = object;
+          if (plan.primId) fb.primId[px] = h.primID[k];
+          if (plan.geomId)
+            fb.geomId[px] = h.instID[k] == RTC_INVALID_GEOMETRY_ID ? h.geomID[k] : h.instID[k];
         }
       }
       if (!plan.color) continue;
@@ -156,7 +184,7 @@ RenderStats renderFrame(const Scene& scene, const Camera& camera, const RenderSe
   FramePlan plan{scene, camera, fb, settings, camera.renderEye(), camera.viewAxis(),
                  scene.renderOrigin(), fb.has(kAovColor), fb.has(kAovDepth),
                  fb.has(kAovDistance), fb.has(kAovNormal), fb.has(kAovPosition),
-                 fb.has(kAovPrimId), fb.has(kAovGeomId), false};
+                 fb.has(kAovPrimId), fb.has(kAovGeomId), false, scene.instanceCount() > 0};
   plan.anyGeometry = plan.depth || plan.distance || plan.normal || plan.position ||
                      plan.primId || plan.geomId;
 

@@ -1,0 +1,44 @@
+#include "apps/frame.h"
+
+#include <filesystem>
+
+#include "cameras/registry.h"
+#include "core/error.h"
+
+namespace aperture::app {
+
+RenderedView renderView(const Scene& scene, const CameraParams& params,
+                        const RenderSettings& settings, AovMask aovs) {
+  const auto camera = makeCamera(params, scene.renderOrigin());
+  RenderedView view;
+  view.fb = Framebuffer(params.width, params.height, aovs);
+  view.stats = renderFrame(scene, *camera, settings, view.fb);
+  view.camera = camera->describe();
+  return view;
+}
+
+ExrMetadata viewMetadata(const RenderedView& view, const std::vector<std::string>& meshNames,
+                         AovMask aovs, BvhQuality quality, Placement placement) {
+  ExrMetadata meta;
+  meta.camera = view.camera;
+  meta.renderSeconds = view.stats.seconds;
+  std::string meshes;
+  for (const std::string& m : meshNames) meshes += (meshes.empty() ? "" : ";") + m;
+  meta.strings = {{"aperture.meshes", meshes},
+                  {"aperture.aovs", aovListString(aovs)},
+                  {"aperture.bvhQuality", bvhQualityName(quality)},
+                  {"aperture.placement", placement == Placement::WorldSpace ? "world-space"
+                                                                            : "camera-relative"}};
+  return meta;
+}
+
+void ensureParentDirectory(const std::string& path, const std::string& what) {
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  if (parent.empty()) return;
+  std::error_code ec;
+  std::filesystem::create_directories(parent, ec);
+  if (ec)
+    throw Error(cat(what, ": cannot create directory '", parent.string(), "': ", ec.message()));
+}
+
+}  // namespace aperture::app

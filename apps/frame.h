@@ -1,0 +1,35 @@
+#pragma once
+// The one-view path shared by `aperture render` and `aperture batch`, so that a batch frame
+// equals a render with the same camera, bit for bit.
+#include <string>
+#include <vector>
+
+#include "cameras/params.h"
+#include "core/exr.h"
+#include "core/framebuffer.h"
+#include "core/mesh.h"
+#include "core/render.h"
+#include "core/scene.h"
+
+namespace aperture::app {
+
+/// A rendered view with what its file header records.
+struct RenderedView {
+  Framebuffer fb;
+  RenderStats stats;
+  CameraDescription camera;
+};
+
+/// Builds the camera of `params` in the scene's render space and renders it into a fresh
+/// framebuffer of the requested AOVs. Throws Error for a bad camera or settings.
+RenderedView renderView(const Scene& scene, const CameraParams& params,
+                        const RenderSettings& settings, AovMask aovs);
+
+/// The header of a rendered view: camera, render time, meshes, AOVs, BVH quality, placement.
+ExrMetadata viewMetadata(const RenderedView& view, const std::vector<std::string>& meshNames,
+                         AovMask aovs, BvhQuality quality, Placement placement);
+
+/// Creates the parent directory of `path`; throws Error("<what>: cannot create directory ...").
+void ensureParentDirectory(const std::string& path, const std::string& what);
+
+}  // namespace aperture::app

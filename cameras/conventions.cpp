@@ -1,0 +1,159 @@
+#include "cameras/conventions.h"
+
+#include <cctype>
+#include <cmath>
+
+#include "core/error.h"
+
+namespace aperture {
+
+namespace {
+
+constexpr double kRadPerDeg = 0.017453292519943295769;
+
+void checkImage(int width, int height, double d) {
+  if (width <= 0 || height <= 0)
+    throw Error(cat("conventions: image size ", width, "x", height, " must be positive"));
+  if (!(d > 0 && std::isfinite(d))) throw Error(cat("conventions: d = ", d, " must be > 0"));
+}
+
+/// Extent on the image plane at distance d spanned by a full angle fovDeg in (0, 180).
+double extentOfFov(double fovDeg, double d) {
+  if (!(fovDeg > 0 && fovDeg < 180))
+    throw Error(cat("conventions: fov ", fovDeg, " degrees must be in (0, 180)"));
+  return 2.0 * d * std::tan(0.5 * fovDeg * kRadPerDeg);
+}
+
+double fullAngleDeg(double extent, double d) { return 2.0 * std::atan(0.5 * extent / d) / kRadPerDeg; }
+
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+}  // namespace
+
+ImagePlane fromPbrt(double fovDeg, int width, int height, double d) {
+  checkImage(width, height, d);
+  const double extent = extentOfFov(fovDeg, d), aspect = double(width) / height;
+  ImagePlane p;
+  p.d = d;
+  if (width >= height) {
+    p.vh = extent;
+    p.vw = extent * aspect;
+  } else {
+    p.vw = extent;
+    p.vh = extent / aspect;
+  }
+  return p;
+}
+
+MitsubaFovAxis parseMitsubaFovAxis(const std::string& name) {
+  const std::string n = lower(name);
+  if (n == "x") return MitsubaFovAxis::X;
+  if (n == "y") return MitsubaFovAxis::Y;
+  if (n == "diagonal") return MitsubaFovAxis::Diagonal;
+  if (n == "smaller") return MitsubaFovAxis::Smaller;
+  if (n == "larger") return MitsubaFovAxis::Larger;
+  throw Error(cat("unknown Mitsuba fov_axis '", name, "' (known: x, y, diagonal, smaller, larger)"));
+}
+
+ImagePlane fromMitsuba(double fovDeg, MitsubaFovAxis axis, int width, int height, double d) {
+  checkImage(width, height, d);
+  const double extent = extentOfFov(fovDeg, d), aspect = double(width) / height;
+  if (axis == MitsubaFovAxis::Smaller)
+    axis = width <= height ? MitsubaFovAxis::X : MitsubaFovAxis::Y;
+  if (axis == MitsubaFovAxis::Larger)
+    axis = width >= height ? MitsubaFovAxis::X : MitsubaFovAxis::Y;
+  ImagePlane p;
+  p.d = d;
+  switch (axis) {
+    case MitsubaFovAxis::X:
+      p.vw = extent;
+      p.vh = extent / aspect;
+      break;
+    case MitsubaFovAxis::Y:
+      p.vh = extent;
+      p.vw = extent * aspect;
+      break;
+    default: {
+      const double diag = std::hypot(double(width), double(height));
+      p.vw = extent * width / diag;
+      p.vh = extent * height / diag;
+    }
+  }
+  return p;
+}
+
+BlenderSensorFit parseBlenderSensorFit(const std::string& name) {
+  const std::string n = lower(name);
+  if (n == "auto") return BlenderSensorFit::Auto;
+  if (n == "horizontal") return BlenderSensorFit::Horizontal;
+  if (n == "vertical") return BlenderSensorFit::Vertical;
+  throw Error(cat("unknown Blender sensor_fit '", name, "' (known: AUTO, HORIZONTAL, VERTICAL)"));
+}
+
+ImagePlane fromBlender(double focalMm, double sensorWidthMm, double sensorHeightMm,
+                       BlenderSensorFit fit, int width, int height, double d) {
+  checkImage(width, height, d);
+  if (!(focalMm > 0 && sensorWidthMm > 0 && sensorHeightMm > 0 && std::isfinite(focalMm) &&
+        std::isfinite(sensorWidthMm) && std::isfinite(sensorHeightMm)))
+    throw Error(cat("conventions: focal length ", focalMm, " mm and sensor ", sensorWidthMm,
+                    "x", sensorHeightMm, " mm must be positive"));
+  const double aspect = double(width) / height;
+  ImagePlane p;
+  p.d = d;
+  const bool horizontal = fit == BlenderSensorFit::Horizontal ||
+                          (fit == BlenderSensorFit::Auto && width >= height);
+  if (horizontal) {
+    p.vw = d * sensorWidthMm / focalMm;
+    p.vh = p.vw / aspect;
+  } else {
+    p.vh = d * (fit == BlenderSensorFit::Vertical ? sensorHeightMm : sensorWidthMm) / focalMm;
+    p.vw = p.vh * aspect;
+  }
+  return p;
+}
+
+ImagePlane fromOpenCV(double fx, double fy, double cx, double cy, int width, int height,
+                      double d) {
+  checkImage(width, height, d);
+  if (!(fx > 0 && fy > 0 && std::isfinite(fx) && std::isfinite(fy) && std::isfinite(cx) &&
+        std::isfinite(cy)))
+    throw Error(cat("conventions: OpenCV intrinsics fx ", fx, ", fy ", fy, ", cx ", cx, ", cy ",
+                    cy, " must be finite with fx, fy > 0"));
+  ImagePlane p;
+  p.d = d;
+  p.vw = d * width / fx;
+  p.vh = d * height / fy;
+  p.shift = {0.5 - (cx + 0.5) / width, (cy + 0.5) / height - 0.5};
+  return p;
+}
+
+void applyImagePlane(const ImagePlane& plane, CameraParams& p) {
+  p.d = plane.d;
+  p.viewport = glm::dvec2(plane.vw, plane.vh);
+  p.shift = plane.shift;
+  p.fovDeg.reset();
+  p.focalLengthMm.reset();
+}
+
+ConventionSummary toConventions(const ImagePlane& plane, int width, int height) {
+  checkImage(width, height, plane.d);
+  ConventionSummary s;
+  const double d = plane.d;
+  s.fovXDeg = fullAngleDeg(plane.vw, d);
+  s.fovYDeg = fullAngleDeg(plane.vh, d);
+  s.fovDiagonalDeg = fullAngleDeg(std::hypot(plane.vw, plane.vh), d);
+  s.pbrtFovDeg = width >= height ? s.fovYDeg : s.fovXDeg;
+  s.mitsubaFovXDeg = s.fovXDeg;
+  s.focal35DiagonalMm = std::hypot(36.0, 24.0) * d / std::hypot(plane.vw, plane.vh);
+  s.focal35HorizontalMm = 36.0 * d / plane.vw;
+  s.fx = d * width / plane.vw;
+  s.fy = d * height / plane.vh;
+  s.cx = (0.5 - plane.shift.x) * width - 0.5;
+  s.cy = (0.5 + plane.shift.y) * height - 0.5;
+  return s;
+}
+
+}  // namespace aperture

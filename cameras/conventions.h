@@ -1,0 +1,57 @@
+#pragma once
+// Converters from other renderers' camera conventions to aperture's own parameters
+// (d, vw, vh, shift), and back to every convention for --describe. The table with the
+// formulas is in docs/cameras.md.
+#include <string>
+
+#include <glm/glm.hpp>
+
+#include "cameras/params.h"
+
+namespace aperture {
+
+/// aperture's image plane: distance d and viewport vw x vh (scene units), shift in viewport
+/// units.
+struct ImagePlane {
+  double d = 1, vw = 1, vh = 1;
+  glm::dvec2 shift{0.0};
+};
+
+/// pbrt-v4 `perspective`: "fov" (degrees) spans the shorter image axis.
+ImagePlane fromPbrt(double fovDeg, int width, int height, double d = 1);
+
+/// Mitsuba 3 `perspective`: "fov" (degrees) on "fov_axis" (default x).
+enum class MitsubaFovAxis { X, Y, Diagonal, Smaller, Larger };
+MitsubaFovAxis parseMitsubaFovAxis(const std::string& name);  ///< x|y|diagonal|smaller|larger
+ImagePlane fromMitsuba(double fovDeg, MitsubaFovAxis axis, int width, int height, double d = 1);
+
+/// Blender: focal length and sensor size (mm) with sensor_fit. AUTO fits sensor_width to the
+/// larger image dimension; HORIZONTAL fits sensor_width to the width; VERTICAL fits
+/// sensor_height to the height. Square pixels; Blender's lens shift is not converted.
+enum class BlenderSensorFit { Auto, Horizontal, Vertical };
+BlenderSensorFit parseBlenderSensorFit(const std::string& name);  ///< AUTO|HORIZONTAL|VERTICAL
+ImagePlane fromBlender(double focalMm, double sensorWidthMm, double sensorHeightMm,
+                       BlenderSensorFit fit, int width, int height, double d = 1);
+
+/// OpenCV pinhole intrinsics (pixels): x = fx·X/Z + cx, y = fy·Y/Z + cy in a camera with
+/// x right, y down, z forward, pixel centres at integer coordinates. aperture's raster
+/// position is (x + ½, y + ½) and its V points up, so vw = d·W/fx, vh = d·H/fy,
+/// sx = ½ − (cx + ½)/W, sy = (cy + ½)/H − ½. Skew and distortion are not supported.
+ImagePlane fromOpenCV(double fx, double fy, double cx, double cy, int width, int height,
+                      double d = 1);
+
+/// Sets d, viewport and shift of `p` from `plane` (overriding fov and focal length).
+void applyImagePlane(const ImagePlane& plane, CameraParams& p);
+
+/// One perspective image plane expressed in every convention.
+struct ConventionSummary {
+  double fovXDeg = 0, fovYDeg = 0, fovDiagonalDeg = 0;  ///< full angles of the centred window
+  double pbrtFovDeg = 0;           ///< pbrt-v4 fov (shorter axis)
+  double mitsubaFovXDeg = 0;       ///< Mitsuba fov with fov_axis x (the default)
+  double focal35DiagonalMm = 0;    ///< 35 mm equivalent: same diagonal angle as 36 x 24 mm
+  double focal35HorizontalMm = 0;  ///< 35 mm equivalent: same horizontal angle as 36 mm
+  double fx = 0, fy = 0, cx = 0, cy = 0;  ///< OpenCV intrinsics, pixels
+};
+ConventionSummary toConventions(const ImagePlane& plane, int width, int height);
+
+}  // namespace aperture

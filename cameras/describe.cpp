@@ -1,0 +1,75 @@
+#include "cameras/describe.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <sstream>
+
+#include "cameras/base.h"
+#include "cameras/conventions.h"
+#include "cameras/registry.h"
+
+namespace aperture {
+
+namespace {
+std::string vec(const glm::dvec3& v) {
+  char buf[128];
+  // Adding 0 turns −0 into +0 for printing.
+  std::snprintf(buf, sizeof buf, "(%.9g, %.9g, %.9g)", v.x + 0.0, v.y + 0.0, v.z + 0.0);
+  return buf;
+}
+}  // namespace
+
+std::string describeCamera(const CameraParams& params, double nearDist, double farDist) {
+  const auto cam = makeFrameCamera(params);
+  const CameraDescription desc = cam->describe();
+  const bool planarPerspective = params.type == "perspective" || params.type == "thinlens";
+  const bool parallel = params.type == "orthographic" || params.type == "oblique";
+  if (nearDist < 0) nearDist = planarPerspective ? cam->d() : 0.0;
+  if (farDist < 0) {
+    farDist = params.at ? 2.0 * glm::length(*params.at - params.eye)
+                        : 10.0 * (parallel ? std::max(cam->vw(), cam->vh()) : cam->d());
+    farDist = std::max(farDist, 10.0 * nearDist);
+  }
+  std::ostringstream s;
+  s.precision(9);
+  s << "camera " << desc.type << ", " << desc.width << "x" << desc.height << " pixels, spp "
+    << desc.spp << "\n";
+  s << "frame (world):\n  e = " << vec(desc.eye) << "\n  U = " << vec(desc.u)
+    << "\n  V = " << vec(desc.v) << "\n  W = " << vec(desc.w) << "  (W points backwards)\n";
+  if (planarPerspective || parallel) {
+    s << "image plane: d = " << desc.d << ", viewport vw x vh = " << desc.vw << " x " << desc.vh
+      << (parallel ? " (world units; d unused)" : "") << ", shift = (" << cam->shift().x << ", "
+      << cam->shift().y << ") viewports\n";
+  }
+  if (planarPerspective) {
+    const ConventionSummary c =
+        toConventions({desc.d, desc.vw, desc.vh, cam->shift()}, desc.width, desc.height);
+    s << "conventions:\n"
+      << "  fov horizontal " << c.fovXDeg << " deg, vertical " << c.fovYDeg
+      << " deg, diagonal " << c.fovDiagonalDeg << " deg (centred window)\n"
+      << "  pbrt-v4 fov (shorter axis) " << c.pbrtFovDeg << " deg\n"
+      << "  Mitsuba 3 fov " << c.mitsubaFovXDeg << " deg (fov_axis x)\n"
+      << "  35 mm equivalent focal length " << c.focal35DiagonalMm
+      << " mm (by the diagonal of 36 x 24 mm), " << c.focal35HorizontalMm
+      << " mm (by the 36 mm width)\n"
+      << "  OpenCV fx " << c.fx << ", fy " << c.fy << ", cx " << c.cx << ", cy " << c.cy
+      << " (pixels, y down, pixel centres at integers)\n";
+  }
+  for (const auto& [k, v] : desc.extra) s << "  " << k << " = " << v << "\n";
+  const ViewVolume vv = cam->viewVolume(nearDist, farDist);
+  s << "view volume: " << vv.kindName() << ", "
+    << (vv.kind == ViewVolume::Kind::AllSpace ? "distance" : "depth along -W") << " from "
+    << nearDist << " to " << farDist << "\n";
+  const char* names[8] = {"near bottom-left", "near bottom-right", "near top-right",
+                          "near top-left",    "far bottom-left",   "far bottom-right",
+                          "far top-right",    "far top-left"};
+  if (vv.kind == ViewVolume::Kind::AllSpace)
+    s << "  corners of the cube around the far sphere:\n";
+  for (int c = 0; c < 8; ++c)
+    s << "  " << (vv.kind == ViewVolume::Kind::AllSpace ? "corner" : names[c])
+      << (vv.kind == ViewVolume::Kind::AllSpace ? " " + std::to_string(c) : std::string())
+      << " " << vec(vv.corners[c]) << "\n";
+  return s.str();
+}
+
+}  // namespace aperture

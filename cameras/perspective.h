@@ -1,0 +1,67 @@
+#pragma once
+// The perspective camera of the lecture, with shift, the architectural mode and an optional
+// thin lens (the thin-lens camera is this class with a lens radius; see thinlens.cpp).
+#include <vector>
+
+#include "cameras/base.h"
+#include "cameras/thinlens.h"
+
+namespace aperture {
+
+/// Pinhole: origin e, direction normalize(u·U + v·V − d·W).
+/// Thin lens (lensRadius > 0): lens point L = r·(a·U + b·V) with (a, b) the concentric map
+/// of the lens sample; origin e + L, direction normalize((f / d)·(u·U + v·V − d·W) − L), i.e.
+/// through the point the pinhole ray reaches at depth f (the in-focus plane). With
+/// lensRadius 0 the pinhole branch runs, so aperture 0 equals the pinhole bit for bit.
+class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
+ public:
+  /// lensRadius and focusDistance in scene units (lensRadius 0: pinhole).
+  PerspectiveCamera(const CameraParams& p, const glm::dvec3& renderOrigin, const char* typeName,
+                    double lensRadius, double focusDistance);
+
+  bool usesLens() const { return lensRadius_ > 0; }
+  bool rayAt(double x, double y, double lensX, double lensY, glm::dvec3& org,
+             glm::dvec3& dir) const {
+    double u, v;
+    rasterToPlane(x, y, u, v);
+    const glm::dvec3 pinhole = u * frame_.u + v * frame_.v - d_ * frame_.w;
+    if (lensRadius_ > 0) {
+      double a, b;
+      concentricDisk(lensX, lensY, a, b);
+      const glm::dvec3 lens = lensRadius_ * (a * frame_.u + b * frame_.v);
+      const glm::dvec3 toFocus = pinhole * focusOverD_ - lens;
+      org = renderEyeD_ + lens;
+      dir = toFocus / glm::length(toFocus);
+    } else {
+      org = renderEyeD_;
+      // One reciprocal, three products (as generatePinholeCentres, which must match it).
+      dir = pinhole * (1.0 / std::sqrt((pinhole.x * pinhole.x + pinhole.y * pinhole.y) +
+                                       pinhole.z * pinhole.z));
+    }
+    return true;
+  }
+
+  /// Pinhole at 1 spp (every frame of a batch or benchmark) takes a table-driven SoA path
+  /// that computes exactly rayAt()'s expressions; everything else the shared packet loop.
+  void generate(const PacketRequest& req, RayLanes& out, int* valid) const override;
+
+  bool stochastic() const override { return spp_ > 1 || lensRadius_ > 0; }
+  std::optional<glm::dvec2> project(const glm::dvec3& worldPoint) const override;
+  ViewVolume viewVolume(double nearDist, double farDist) const override;
+  double lensRadius() const { return lensRadius_; }
+  double focusDistance() const { return focusDistance_; }
+
+ protected:
+  glm::dmat4 ndcFromCamera() const override;
+  void describeExtra(CameraDescription& c) const override;
+
+ private:
+  void generatePinholeCentres(const PacketRequest& req, RayLanes& out, int* valid) const;
+
+  double lensRadius_ = 0, focusDistance_ = 1, focusOverD_ = 1;
+  /// Image-plane u of each column's centre and v of each row's centre (rasterToPlane of
+  /// j + ½ and i + ½), for the 1-spp pinhole path.
+  std::vector<double> uCol_, vRow_;
+};
+
+}  // namespace aperture

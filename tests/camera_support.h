@@ -1,0 +1,127 @@
+#pragma once
+// Helpers for the camera tests: Embree-shaped packet buffers and camera parameter sets.
+#include <embree3/rtcore_ray.h>
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <vector>
+
+#include "cameras/base.h"
+#include "cameras/registry.h"
+
+namespace aperture::test {
+
+/// One aligned RTCRayHitN of width 1, 4, 8 or 16 with RayLanes pointing into it.
+class PacketBuffer {
+ public:
+  explicit PacketBuffer(int width) : width_(width) {
+    switch (width) {
+      case 1: lanes_ = bind(one_, 1); break;
+      case 4: lanes_ = bind(four_, 4); break;
+      case 8: lanes_ = bind(eight_, 8); break;
+      case 16: lanes_ = bind(sixteen_, 16); break;
+      default: ADD_FAILURE() << "bad packet width " << width;
+    }
+  }
+  RayLanes& lanes() { return lanes_; }
+  int width() const { return width_; }
+
+ private:
+  template <class R>
+  static RayLanes bindArrays(R& ray, int width) {
+    RayLanes l;
+    l.width = width;
+    l.orgX = ray.org_x;
+    l.orgY = ray.org_y;
+    l.orgZ = ray.org_z;
+    l.tnear = ray.tnear;
+    l.dirX = ray.dir_x;
+    l.dirY = ray.dir_y;
+    l.dirZ = ray.dir_z;
+    l.time = ray.time;
+    l.tfar = ray.tfar;
+    l.mask = ray.mask;
+    l.id = ray.id;
+    l.flags = ray.flags;
+    return l;
+  }
+  static RayLanes bind(RTCRayHit& h, int) {
+    RayLanes l;
+    l.width = 1;
+    l.orgX = &h.ray.org_x;
+    l.orgY = &h.ray.org_y;
+    l.orgZ = &h.ray.org_z;
+    l.tnear = &h.ray.tnear;
+    l.dirX = &h.ray.dir_x;
+    l.dirY = &h.ray.dir_y;
+    l.dirZ = &h.ray.dir_z;
+    l.time = &h.ray.time;
+    l.tfar = &h.ray.tfar;
+    l.mask = &h.ray.mask;
+    l.id = &h.ray.id;
+    l.flags = &h.ray.flags;
+    return l;
+  }
+  template <class H>
+  static RayLanes bind(H& h, int width) {
+    return bindArrays(h.ray, width);
+  }
+
+  int width_;
+  RayLanes lanes_{};
+  RTCRayHit one_{};
+  RTCRayHit4 four_{};
+  RTCRayHit8 eight_{};
+  RTCRayHit16 sixteen_{};
+};
+
+/// Block shape of a packet width, as the frame loop uses them.
+inline void blockShape(int width, int& blockW, int& blockH) {
+  blockW = width == 1 ? 1 : width == 4 ? 2 : 4;
+  blockH = width / blockW;
+}
+
+/// A generic, non-axis-aligned frame used by many tests.
+inline CameraParams tiltedParams(const char* type) {
+  CameraParams p;
+  p.type = type;
+  p.eye = {1.25, -0.5, 3.0};
+  p.at = glm::dvec3(-0.75, 0.25, -2.0);
+  p.up = {0.1, 1.0, 0.2};
+  return p;
+}
+
+/// Parameters of every model in a usable configuration (shifted and lens cases included).
+inline std::vector<CameraParams> everyCamera() {
+  std::vector<CameraParams> all;
+  CameraParams p = tiltedParams("perspective");
+  p.fovDeg = 50;
+  all.push_back(p);
+  p.shift = {0.2, -0.35};
+  all.push_back(p);
+  p.shift = {0.0, 0.0};
+  p.architectural = true;
+  all.push_back(p);
+  CameraParams o = tiltedParams("orthographic");
+  o.viewport = glm::dvec2(3.0, 2.0);
+  all.push_back(o);
+  o.type = "oblique";
+  o.obliqueAnglesDeg = glm::dvec2(30.0, -20.0);
+  all.push_back(o);
+  CameraParams t = tiltedParams("thinlens");
+  t.fovDeg = 40;
+  t.apertureRadius = 0.2;
+  t.focusDistance = 4.0;
+  all.push_back(t);
+  CameraParams e = tiltedParams("equirect");
+  all.push_back(e);
+  e.longitudeRangeDeg = {-60.0, 100.0};
+  e.latitudeRangeDeg = {-30.0, 45.0};
+  all.push_back(e);
+  CameraParams f = tiltedParams("fisheye");
+  f.fisheyeFovDeg = 200;
+  all.push_back(f);
+  return all;
+}
+
+}  // namespace aperture::test
