@@ -1,5 +1,6 @@
 // Wavefront OBJ loader: `v x y z [w]` and `f` with i, i/t, i//n and i/t/n corners, negative
 // (relative) indices and polygons (triangulated as fans). Every other statement is ignored.
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <vector>
@@ -90,9 +91,14 @@ Mesh loadObjFromMemory(const char* data, size_t size, const std::string& path) {
         const char* slash = b;
         while (slash < e && *slash != '/') ++slash;
         int64_t v;
-        if (!parseIntToken(b, slash, v))
+        if (!parseIntToken(b, slash, v)) {
+          double d;
+          if (parseDoubleToken(b, slash, d) && d == std::floor(d))
+            throw Error(cat(path, ":", line, ": face vertex index ", printableToken(b, slash),
+                            " is out of range (line ", line, ")"));
           throw Error(cat(path, ":", line, ": face vertex index is not a number: '",
                           printableToken(b, e), "' (line ", line, ")"));
+        }
         if (v == 0)
           throw Error(cat(path, ":", line, ": face vertex index 0 (OBJ indices start at 1, line ",
                           line, ")"));
