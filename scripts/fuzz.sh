@@ -2,7 +2,8 @@
 # Builds the libFuzzer targets (clang, ASan + UBSan, -DAPERTURE_FUZZ=ON) in build-fuzz/ and
 # runs each for SECONDS (default 300), then replays the committed seed corpus
 # (tests/fuzz/corpus/<target>/), the regressions (tests/fuzz/regressions/<target>/) and, for
-# the mesh targets, the malformed corpus (tests/data/bad/) as a regression suite.
+# the mesh and job targets, the malformed corpora (tests/data/bad/, tests/data/bad_jobs/) as a
+# regression suite. Targets: ply, obj (mesh loaders), job (batch job parser).
 #   scripts/fuzz.sh [SECONDS] [TARGET...]      e.g. scripts/fuzz.sh 600 ply
 # New inputs go to build-fuzz/corpus/<target>/, crashes to build-fuzz/crashes/<target>/; a
 # crash makes the script fail (turn it into a file under tests/fuzz/regressions/<target>/).
@@ -56,6 +57,7 @@ for t in "${targets[@]}"; do
   case $t in
     ply) for f in tests/data/bad/*.ply; do inputs+=("$f"); done ;;
     obj) for f in tests/data/bad/*.obj; do inputs+=("$f"); done ;;
+    job) for f in tests/data/bad_jobs/*.json; do inputs+=("$f"); done ;;
   esac
   if "$bin" "${flags[@]}" "${inputs[@]}" >"$build/regress-$t.log" 2>&1; then
     echo "fuzz: $t regression suite: ${#inputs[@]} inputs clean"
