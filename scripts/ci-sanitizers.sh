@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # CI: the whole test suite under AddressSanitizer + UndefinedBehaviorSanitizer (no recovery:
 # the first report fails the test), then the frame-loop and batch tests under ThreadSanitizer.
-# Build trees: build-asan/ and build-tsan/ (Release with the instrumentation; gcc).
+# Build trees: build-asan/ (Release) and build-tsan/ (RelWithDebInfo: TSan needs the debug
+# info to report inlined frames, see tests/tsan.supp), gcc.
 #   scripts/ci-sanitizers.sh [asan|tsan]...   (default: both)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -23,7 +24,7 @@ for part in "${parts[@]}"; do
         ctest --test-dir build-asan --output-on-failure -j"$jobs"
       ;;
     tsan)
-      cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=Release -DAPERTURE_WERROR=ON \
+      cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DAPERTURE_WERROR=ON \
         -DAPERTURE_SANITIZE=thread -DAPERTURE_BUILD_BENCH=OFF >/dev/null
       cmake --build build-tsan -j"$jobs" --target aperture aperture_tests
       # The frame loop (tiles over TBB workers) and batch (render thread + writer thread).
