@@ -26,6 +26,7 @@
 #include "core/error.h"
 #include "core/exr.h"
 #include "core/image.h"
+#include "core/limits.h"
 
 namespace aperture::app {
 
@@ -41,6 +42,7 @@ double secondsSince(Clock::time_point t) {
 struct BatchArgs {
   std::string job, shard, summary;
   bool resume = false, quiet = false, dryRun = false, noOverlap = false;
+  std::string maxMemory;
 };
 
 struct Shard {
@@ -316,6 +318,19 @@ int runBatch(const BatchArgs& a) {
   // Everything is validated (job file, cameras, mesh files) before anything is loaded.
   const Shard shard = parseShard(a.shard);
   const Job job = parseJob(a.job);
+  if (const uint64_t limit = parseMemoryLimit("--max-memory", a.maxMemory)) {
+    std::vector<std::string> specs;
+    for (const JobMesh& m : job.meshes)
+      if (std::find(specs.begin(), specs.end(), m.spec) == specs.end()) specs.push_back(m.spec);
+    uint64_t pixels = 0;
+    for (const JobFrame& f : job.frames)
+      pixels = std::max(pixels, uint64_t(f.params.width) * uint64_t(f.params.height));
+    // Two framebuffers live at once: the frame being rendered and the one being written.
+    const uint64_t perPixel = framebufferBytesPerPixel(job.aovs) * 2 +
+                              (job.previewPattern.empty() ? 0 : 4);
+    checkMemoryLimit(estimateMemory(specs, pixels, 1, 0, perPixel), limit, "--max-memory",
+                     a.maxMemory);
+  }
 
   std::vector<FrameResult> results;
   for (const JobFrame& f : job.frames)
@@ -514,6 +529,9 @@ Command addBatchCommand(CLI::App& app) {
                   "summary.json path (default: the output directory, summary.json or "
                   "summary.shard-K-of-N.json)");
   sub->add_flag("--quiet", args->quiet, "No progress, log lines or summary table");
+  sub->add_option("--max-memory", args->maxMemory,
+                  "Refuse the job before loading when its estimated memory (meshes, BVH, two "
+                  "framebuffers) exceeds BYTES (suffix K, M, G, T) or, with 'auto', MemAvailable");
   sub->add_flag("--dry-run", args->dryRun, "Validate the job and list the frames; render nothing");
   sub->add_flag("--no-overlap", args->noOverlap,
                 "Write each frame before rendering the next (to measure what overlap gains)");

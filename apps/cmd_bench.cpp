@@ -82,11 +82,12 @@ void printSummary(const char* label, const Summary& s, int frames) {
 int runBench(const BenchArgs& a) {
   const AovMask aovs = parseAovList(a.render.aovs);
   const RenderSettings settings = a.render.settings(a.camera.spp);
-  if (a.frames < 1 || a.frames > 100000) throw Error(cat("--frames ", a.frames, " must be >= 1"));
+  if (a.frames < 1 || a.frames > 100000) throw Error(cat("--frames ", a.frames, " must be in [1, 100000]"));
   if (a.warmup < 0) throw Error(cat("--warmup ", a.warmup, " must be >= 0"));
   if (a.builds < 1) throw Error(cat("--builds ", a.builds, " must be >= 1"));
   if (!a.sweep.empty() && a.sweep != "packet" && a.sweep != "threads" && a.sweep != "quality")
     throw Error(cat("--sweep: '", a.sweep, "' is not one of packet, threads, quality"));
+  checkMemoryBudget(a.scene, parseImageSize(a.camera.size), aovs);
 
   ThreadLimit threads(a.render.threads);
   Device device;

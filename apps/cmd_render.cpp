@@ -30,6 +30,8 @@ int runRender(const RenderArgs& a) {
   exr.compression = parseExrCompression(a.compression);
   exr.halfColor = a.half;
   const RenderSettings settings = a.render.settings(a.camera.spp);
+  const glm::ivec2 size = parseImageSize(a.camera.size);
+  checkMemoryBudget(a.scene, size, aovs, a.preview.empty() ? 0 : 4);
   if (std::filesystem::is_directory(a.out)) throw Error(cat("--out: '", a.out, "' is a directory"));
   if (!a.camera.eye.empty()) makeCamera(a.camera.toParams(glm::dvec3(0.0), glm::dvec3(0.0)));
 

@@ -509,8 +509,12 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
     mesh.spec = isProcedural(given) ? given : resolve(baseDir, given);
     if (!isProcedural(given)) {
       std::error_code ec;
+      if (fs::is_directory(mesh.spec, ec))
+        m.fail(m.keyPath("path"), cat("'", mesh.spec, "': is a directory, not a mesh file"));
       if (!fs::is_regular_file(mesh.spec, ec))
-        m.fail(m.keyPath("path"), cat("'", mesh.spec, "': no such file"));
+        m.fail(m.keyPath("path"), cat("'", mesh.spec, "': ",
+                                      fs::exists(mesh.spec, ec) ? "not a regular file"
+                                                                : "no such file"));
     }
     if (m.has("transform") && m.has("matrix"))
       m.fail(m.path(), "give transform or matrix, not both");

@@ -1,4 +1,5 @@
 // aperture: render triangle meshes through Embree ray packets into multi-channel EXR files.
+#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <vector>
@@ -10,6 +11,9 @@
 
 int main(int argc, char** argv) {
   using namespace aperture::app;
+  // Past a file-size limit (ulimit -f), write() should fail with EFBIG, which the atomic
+  // writer reports and cleans up, instead of SIGXFSZ killing the process mid-write.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"aperture " APERTURE_VERSION
                ": batch-render and benchmark large triangle meshes with Embree ray packets"};
   app.set_version_flag("--version", "aperture " APERTURE_VERSION);
@@ -27,7 +31,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);  // --help/--version exit 0, usage errors exit 2 with a message
+    // --help/--version exit 0; every usage error (CLI11 uses codes such as 104 for a value
+    // that does not convert) exits 2 with its message.
+    return app.exit(e) == 0 ? 0 : 2;
   }
   try {
     for (auto& [sub, run] : commands)

@@ -10,6 +10,7 @@
 
 #include "cameras/culling.h"
 #include "core/error.h"
+#include "core/limits.h"
 
 namespace aperture::app {
 
@@ -51,6 +52,27 @@ glm::dvec2 parseVec2(const std::string& flag, const std::string& text) {
   return {v[0], v[1]};
 }
 
+glm::ivec2 parseImageSize(const std::string& size) {
+  const glm::dvec2 sz = parseVec2("--size", size);
+  constexpr double kMaxSide = 65536, kMaxPixels = 1 << 28;
+  if (sz.x < 1 || sz.y < 1 || sz.x != std::floor(sz.x) || sz.y != std::floor(sz.y) ||
+      sz.x > kMaxSide || sz.y > kMaxSide || sz.x * sz.y > kMaxPixels)
+    throw Error(cat("--size: '", size, "' must be two whole numbers in [1, 65536] with at most ",
+                    kMaxPixels, " pixels"));
+  return {int(sz.x), int(sz.y)};
+}
+
+void checkMemoryBudget(const SceneOptions& o, glm::ivec2 size, AovMask aovs,
+                       uint64_t extraBytesPerPixel) {
+  const uint64_t limit = parseMemoryLimit("--max-memory", o.maxMemory);
+  if (limit == 0) return;
+  std::vector<std::string> specs = o.meshes;
+  if (specs.empty()) specs.push_back("procedural:default");
+  const MemoryEstimate e =
+      estimateMemory(specs, uint64_t(size.x), uint64_t(size.y), aovs, extraBytesPerPixel);
+  checkMemoryLimit(e, limit, "--max-memory", o.maxMemory);
+}
+
 LoadOptions SceneOptions::loadOptions() const {
   LoadOptions o;
   o.placement = worldSpace ? Placement::WorldSpace : Placement::CameraRelative;
@@ -76,6 +98,10 @@ void addSceneOptions(CLI::App& app, SceneOptions& o) {
   app.add_flag("--cull", o.cull,
                "Build the BVH over only the triangles the camera's view volume may reach "
                "(conservative: the image is bit-identical; panoramas keep all)");
+  app.add_option("--max-memory", o.maxMemory,
+                 "Refuse the job before loading when its estimated memory (mesh buffers from "
+                 "the file headers, ~80 bytes/triangle of BVH, framebuffers) exceeds BYTES "
+                 "(suffix K, M, G, T) or, with 'auto', MemAvailable");
   app.add_flag("--world-space", o.worldSpace,
                "Store vertices as float32 world coordinates instead of relative to the mesh's "
                "bounding-box centre (camera-relative, the default); for measuring the difference");
@@ -106,8 +132,9 @@ void addCameraOptions(CLI::App& app, CameraOptions& o) {
   app.add_option("--lat", o.lat, "Equirect latitude range MIN,MAX, degrees (default -90,90)");
   app.add_option("--fisheye-fov", o.fisheyeFov, "Fisheye field of view, degrees, up to 360")
       ->capture_default_str();
-  app.add_option("--size", o.size, "Image size W,H in pixels")->capture_default_str();
-  app.add_option("--spp", o.spp, "Samples per pixel (stratified; 1 = pixel centres)")
+  app.add_option("--size", o.size, "Image size W,H in pixels: each side in [1, 65536], "
+                 "at most 2^28 pixels")->capture_default_str();
+  app.add_option("--spp", o.spp, "Samples per pixel in [1, 65536] (stratified; 1 = pixel centres)")
       ->capture_default_str();
 }
 
@@ -116,8 +143,8 @@ void addRenderOptions(CLI::App& app, RenderOptions& o) {
                  "AOVs to compute: color, depth, distance, normal, position, primid, geomid, all")
       ->capture_default_str();
   app.add_option("--packet", o.packet, "Rays per Embree call: 1, 4, 8 or 16")->capture_default_str();
-  app.add_option("--tile", o.tile, "Tile size in pixels (multiple of 4)")->capture_default_str();
-  app.add_option("--threads", o.threads, "Worker threads (0 = all cores)")->capture_default_str();
+  app.add_option("--tile", o.tile, "Tile size in pixels: a multiple of 4 in [4, 4096]")->capture_default_str();
+  app.add_option("--threads", o.threads, "Worker threads in [0, 4096] (0 = all cores)")->capture_default_str();
 }
 
 RenderSettings RenderOptions::settings(int spp) const {
@@ -133,14 +160,9 @@ RenderSettings RenderOptions::settings(int spp) const {
 CameraParams CameraOptions::toParams(const glm::dvec3& worldLo, const glm::dvec3& worldHi) const {
   CameraParams p;
   p.type = type;
-  const glm::dvec2 sz = parseVec2("--size", size);
-  constexpr double kMaxSide = 65536, kMaxPixels = 1 << 28;
-  if (sz.x < 1 || sz.y < 1 || sz.x != std::floor(sz.x) || sz.y != std::floor(sz.y) ||
-      sz.x > kMaxSide || sz.y > kMaxSide || sz.x * sz.y > kMaxPixels)
-    throw Error(cat("--size: '", size, "' must be two whole numbers in [1, 65536] with at most ",
-                    kMaxPixels, " pixels"));
-  p.width = int(sz.x);
-  p.height = int(sz.y);
+  const glm::ivec2 sz = parseImageSize(size);
+  p.width = sz.x;
+  p.height = sz.y;
   if (spp < 1 || spp > 65536) throw Error(cat("--spp ", spp, " must be in [1, 65536]"));
   p.spp = spp;
   p.up = parseVec3("--up", up);

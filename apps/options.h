@@ -23,6 +23,7 @@ struct SceneOptions {
   bool robust = false, compact = false, worldSpace = false;
   /// Leave triangles outside the cameras' view volumes out of the BVH (off by default).
   bool cull = false;
+  std::string maxMemory;  ///< --max-memory: BYTES[K|M|G|T], auto, or "" for no limit
   LoadOptions loadOptions() const;
   BuildOptions buildOptions() const;
 };
@@ -48,6 +49,14 @@ struct RenderOptions {
 void addSceneOptions(CLI::App& app, SceneOptions& o);
 void addCameraOptions(CLI::App& app, CameraOptions& o);
 void addRenderOptions(CLI::App& app, RenderOptions& o);
+
+/// Parses and bounds-checks --size: each side in [1, 65536], at most 2^28 pixels.
+glm::ivec2 parseImageSize(const std::string& size);
+
+/// Refuses, before anything is loaded, a job whose meshes, BVH and framebuffers (estimated
+/// from the files' headers and the image size) exceed --max-memory. No-op without the flag.
+void checkMemoryBudget(const SceneOptions& o, glm::ivec2 size, AovMask aovs,
+                       uint64_t extraBytesPerPixel = 0);
 
 /// Parses "X,Y,Z" / "A,B" for `flag`; throws Error("--eye: expected X,Y,Z ...").
 glm::dvec3 parseVec3(const std::string& flag, const std::string& text);

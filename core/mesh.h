@@ -71,6 +71,10 @@ Mesh loadMesh(const std::string& spec, const LoadOptions& options = {});
 /// (anchor 0, no padding); finishMesh() then validates, anchors and pads.
 Mesh loadPly(const std::string& path);
 Mesh loadObj(const std::string& path);
+/// The same on a file already in memory (`size` bytes at `data`, which need not be aligned or
+/// terminated); `name` stands for the file in messages. Used by the fuzz targets.
+Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& name);
+Mesh loadObjFromMemory(const char* data, size_t size, const std::string& name);
 Mesh makeProcedural(const std::string& spec);
 
 /// Counts and zeroes non-finite vertices, drops the triangles using them, counts degenerate

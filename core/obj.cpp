@@ -1,5 +1,6 @@
 // Wavefront OBJ loader: `v x y z [w]` and `f` with i, i/t, i//n and i/t/n corners, negative
 // (relative) indices and polygons (triangulated as fans). Every other statement is ignored.
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <vector>
@@ -40,22 +41,32 @@ struct ForwardRef {
 
 Mesh loadObj(const std::string& path) {
   MappedFile file(path);
-  if (file.size() == 0) throw Error(cat(path, ": file is empty"));
+  return loadObjFromMemory(file.data(), file.size(), path);
+}
+
+Mesh loadObjFromMemory(const char* data, size_t size, const std::string& path) {
+  if (size == 0) throw Error(cat(path, ": file is empty"));
   Mesh mesh;
   mesh.name = path;
-  mesh.stats.fileBytes = file.size();
+  mesh.stats.fileBytes = size;
   std::vector<double>& pos = mesh.positionsDouble;
   std::vector<uint32_t> poly;
   // Indices past the vertices read so far; valid only if the vertex appears later.
   std::vector<ForwardRef> forward;
 
-  const char* p = file.data();
-  const char* end = p + file.size();
+  const char* p = data;
+  const char* end = p + size;
+  if (size >= 4 && std::memcmp(p, "ply", 3) == 0 && (p[3] == '\n' || p[3] == '\r'))
+    throw Error(cat(path, ": this is a PLY file (it starts with 'ply'), not an OBJ file"));
   size_t line = 0;
   while (p < end) {
     ++line;
     const char* lineEnd = static_cast<const char*>(std::memchr(p, '\n', size_t(end - p)));
     if (!lineEnd) lineEnd = end;
+    if (const void* nul = std::memchr(p, '\0', size_t(lineEnd - p)))
+      throw Error(cat(path, ":", line, ": binary data (a NUL byte at byte offset ",
+                      static_cast<const char*>(nul) - data, "); an OBJ file is text (line ", line,
+                      ")"));
     LineTokens tok(p, lineEnd);
     p = lineEnd + 1;
     const char *b, *e;
@@ -80,14 +91,19 @@ Mesh loadObj(const std::string& path) {
         const char* slash = b;
         while (slash < e && *slash != '/') ++slash;
         int64_t v;
-        if (!parseIntToken(b, slash, v))
+        if (!parseIntToken(b, slash, v)) {
+          double d;
+          if (parseDoubleToken(b, slash, d) && d == std::floor(d))
+            throw Error(cat(path, ":", line, ": face vertex index ", printableToken(b, slash),
+                            " is out of range (line ", line, ")"));
           throw Error(cat(path, ":", line, ": face vertex index is not a number: '",
                           printableToken(b, e), "' (line ", line, ")"));
+        }
         if (v == 0)
           throw Error(cat(path, ":", line, ": face vertex index 0 (OBJ indices start at 1, line ",
                           line, ")"));
         if (v < 0) {
-          if (-v > have)
+          if (v < -have)
             throw Error(cat(path, ":", line, ": relative index ", v,
                             " points before the first vertex (", have,
                             " vertices so far, line ", line, ")"));

@@ -1,6 +1,7 @@
 // PLY loader: ASCII, binary little- and big-endian. Reads vertex x/y/z, `face` polygons
 // (triangulated as fans) and `tristrips` (-1 restarts a strip); skips everything else.
 // The header's counts are checked against the file size before anything is allocated.
+#include <algorithm>
 #include <cstring>
 #include <limits>
 #include <string_view>
@@ -34,6 +35,36 @@ size_t typeSize(PType t) {
 }
 
 bool isInteger(PType t) { return t != PType::Float32 && t != PType::Float64; }
+
+const char* typeName(PType t) {
+  switch (t) {
+    case PType::Int8: return "char";
+    case PType::UInt8: return "uchar";
+    case PType::Int16: return "short";
+    case PType::UInt16: return "ushort";
+    case PType::Int32: return "int";
+    case PType::UInt32: return "uint";
+    case PType::Float32: return "float";
+    case PType::Float64: return "double";
+  }
+  return "?";
+}
+
+/// Whether an ASCII integer value fits its declared type; -1 is let through for every type
+/// (the strip restart marker; a negative face index is reported as such later).
+bool fitsType(PType t, int64_t v) {
+  if (v == -1) return true;
+  switch (t) {
+    case PType::Int8: return v >= -128 && v <= 127;
+    case PType::UInt8: return v >= 0 && v <= 255;
+    case PType::Int16: return v >= -32768 && v <= 32767;
+    case PType::UInt16: return v >= 0 && v <= 65535;
+    case PType::Int32: return v >= std::numeric_limits<int32_t>::min() &&
+                              v <= std::numeric_limits<int32_t>::max();
+    case PType::UInt32: return v >= 0 && v <= int64_t(std::numeric_limits<uint32_t>::max());
+    default: return true;
+  }
+}
 
 bool parseType(std::string_view s, PType& t) {
   struct Name {
@@ -205,7 +236,7 @@ class TextReader {
                       "' (line ", line_, ")"));
     return v;
   }
-  int64_t readInteger(PType, const char* what) {
+  int64_t readInteger(PType t, const char* what) {
     const char *b, *e;
     token(b, e, what);
     int64_t v;
@@ -215,6 +246,9 @@ class TextReader {
       throw Error(cat(path_, ":", line_, ": ", what, " ", kind, ": '", printableToken(b, e),
                       "' (line ", line_, ")"));
     }
+    if (!fitsType(t, v))
+      throw Error(cat(path_, ":", line_, ": ", what, " ", v, " does not fit the declared type '",
+                      typeName(t), "' (line ", line_, ")"));
     return v;
   }
   void skipScalar(PType t, const char* what) { readReal(t, what); }
@@ -262,41 +296,70 @@ std::vector<std::string_view> splitWords(std::string_view line) {
   return words;
 }
 
+/// Longest header accepted; real headers are a few hundred bytes plus comments.
+constexpr size_t kMaxHeaderBytes = size_t(1) << 20;
+
+/// One header line at [pos, ...): the line without its newline (and '\r'), and the offset of
+/// the next line.
+std::string_view headerLine(std::string_view all, size_t pos, size_t& next) {
+  size_t nl = all.find('\n', pos);
+  size_t lineEnd = nl == std::string_view::npos ? all.size() : nl;
+  std::string_view line = all.substr(pos, lineEnd - pos);
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  next = nl == std::string_view::npos ? all.size() : nl + 1;
+  return line;
+}
+
+std::string printable(std::string_view s) { return printableToken(s.data(), s.data() + s.size()); }
+
 Header parseHeader(const std::string& path, const char* data, size_t size) {
   std::string_view all(data, size);
-  // Split the header into lines, stopping at end_header.
-  std::vector<std::string_view> lines;
-  size_t pos = 0;
-  bool terminated = false;
   Header h;
-  while (pos < size) {
-    size_t nl = all.find('\n', pos);
-    size_t lineEnd = nl == std::string_view::npos ? size : nl;
-    std::string_view line = all.substr(pos, lineEnd - pos);
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    pos = nl == std::string_view::npos ? size : nl + 1;
-    auto words = splitWords(line);
-    if (words.size() == 1 && words[0] == "end_header") {
+  size_t pos = 0;
+  {
+    auto first = splitWords(headerLine(all, 0, pos));
+    if (first.size() != 1 || first[0] != "ply")
+      throw Error(cat(path, ": not a PLY file (the first line is not 'ply')"));
+  }
+  // First pass: find end_header (within kMaxHeaderBytes) without storing the lines, so a
+  // file of millions of short lines costs no memory.
+  const size_t headerStart = pos;
+  const std::string_view window = all.substr(0, std::min(size, kMaxHeaderBytes));
+  size_t lineCount = 1;
+  bool terminated = false;
+  for (size_t p = pos; p < window.size();) {
+    size_t next;
+    auto words = splitWords(headerLine(window, p, next));
+    ++lineCount;
+    if (words.size() == 1 && words[0] == "end_header" && (next < window.size() ||
+                                                          window.size() == size)) {
       terminated = true;
-      h.dataOffset = pos;
-      h.dataLine = lines.size() + 2;
+      h.dataOffset = next;
+      h.dataLine = lineCount + 1;
       break;
     }
-    lines.push_back(line);
+    p = next;
   }
-  if (lines.empty() || splitWords(lines[0]).size() != 1 || splitWords(lines[0])[0] != "ply")
-    throw Error(cat(path, ": not a PLY file (the first line is not 'ply')"));
-  if (!terminated)
+  if (!terminated) {
+    if (size > kMaxHeaderBytes)
+      throw Error(cat(path, ": unterminated header: no end_header line in the first ",
+                      kMaxHeaderBytes, " bytes"));
     throw Error(cat(path, ": unterminated header: no end_header line"));
-
+  }
+  const std::string_view body = all.substr(0, h.dataOffset);
   bool haveFormat = false;
-  for (size_t i = 1; i < lines.size(); ++i) {
-    size_t lineNo = i + 1;
-    auto w = splitWords(lines[i]);
+  size_t lineNo = 1;
+  for (size_t at = headerStart; at < body.size();) {
+    ++lineNo;
+    size_t next;
+    const std::string_view line = headerLine(body, at, next);
+    at = next;
+    if (at >= body.size()) break;  // the end_header line
+    auto w = splitWords(line);
     if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
     if (w[0] == "format") {
       if (w.size() != 3)
-        throw Error(cat(path, ":", lineNo, ": bad format line '", lines[i], "'"));
+        throw Error(cat(path, ":", lineNo, ": bad format line '", printable(line), "'"));
       if (w[1] == "ascii") {
         h.format = Format::Ascii;
       } else if (w[1] == "binary_little_endian") {
@@ -304,26 +367,26 @@ Header parseHeader(const std::string& path, const char* data, size_t size) {
       } else if (w[1] == "binary_big_endian") {
         h.format = Format::BinaryBE;
       } else {
-        throw Error(cat(path, ":", lineNo, ": unknown format '", w[1],
+        throw Error(cat(path, ":", lineNo, ": unknown format '", printable(w[1]),
                         "' (expected ascii, binary_little_endian or binary_big_endian)"));
       }
       if (w[2] != "1.0")
-        throw Error(cat(path, ":", lineNo, ": unsupported PLY version '", w[2], "'"));
+        throw Error(cat(path, ":", lineNo, ": unsupported PLY version '", printable(w[2]), "'"));
       haveFormat = true;
     } else if (w[0] == "element") {
       if (w.size() != 3)
-        throw Error(cat(path, ":", lineNo, ": bad element line '", lines[i], "'"));
+        throw Error(cat(path, ":", lineNo, ": bad element line '", printable(line), "'"));
       Elem e;
       e.name = std::string(w[1]);
       e.line = lineNo;
       int64_t n;
       if (!parseIntToken(w[2].data(), w[2].data() + w[2].size(), n) || n < 0)
-        throw Error(cat(path, ":", lineNo, ": bad element count '", w[2], "' for element '",
-                        e.name, "'"));
+        throw Error(cat(path, ":", lineNo, ": bad element count '", printable(w[2]),
+                        "' for element '", printable(e.name), "'"));
       e.count = uint64_t(n);
       for (const Elem& other : h.elems)
         if (other.name == e.name)
-          throw Error(cat(path, ":", lineNo, ": duplicate element '", e.name, "'"));
+          throw Error(cat(path, ":", lineNo, ": duplicate element '", printable(e.name), "'"));
       h.elems.push_back(std::move(e));
     } else if (w[0] == "property") {
       if (h.elems.empty())
@@ -332,23 +395,23 @@ Header parseHeader(const std::string& path, const char* data, size_t size) {
       if (w.size() == 5 && w[1] == "list") {
         p.list = true;
         if (!parseType(w[2], p.countType))
-          throw Error(cat(path, ":", lineNo, ": unknown property type '", w[2], "'"));
+          throw Error(cat(path, ":", lineNo, ": unknown property type '", printable(w[2]), "'"));
         if (!isInteger(p.countType))
-          throw Error(cat(path, ":", lineNo, ": list count type '", w[2],
+          throw Error(cat(path, ":", lineNo, ": list count type '", printable(w[2]),
                           "' is not an integer type"));
         if (!parseType(w[3], p.type))
-          throw Error(cat(path, ":", lineNo, ": unknown property type '", w[3], "'"));
+          throw Error(cat(path, ":", lineNo, ": unknown property type '", printable(w[3]), "'"));
         p.name = std::string(w[4]);
       } else if (w.size() == 3 && w[1] != "list") {
         if (!parseType(w[1], p.type))
-          throw Error(cat(path, ":", lineNo, ": unknown property type '", w[1], "'"));
+          throw Error(cat(path, ":", lineNo, ": unknown property type '", printable(w[1]), "'"));
         p.name = std::string(w[2]);
       } else {
-        throw Error(cat(path, ":", lineNo, ": bad property line '", lines[i], "'"));
+        throw Error(cat(path, ":", lineNo, ": bad property line '", printable(line), "'"));
       }
       h.elems.back().props.push_back(std::move(p));
     } else {
-      throw Error(cat(path, ":", lineNo, ": unknown header line '", lines[i], "'"));
+      throw Error(cat(path, ":", lineNo, ": unknown header line '", printable(line), "'"));
     }
   }
   if (!haveFormat) throw Error(cat(path, ": missing 'format' line in the header"));
@@ -549,6 +612,8 @@ bool readVerticesFast(const Elem& e, BinaryReader& r, Mesh& mesh) {
 
 template <typename Reader>
 void skipElement(const Elem& e, Reader& r) {
+  // An element without properties takes no bytes, whatever its count.
+  if (e.props.empty()) return;
   for (uint64_t i = 0; i < e.count; ++i)
     for (const Prop& p : e.props) {
       if (p.list)
@@ -571,11 +636,15 @@ bool fixedSize(const Elem& e, size_t& bytes) {
 
 Mesh loadPly(const std::string& path) {
   MappedFile file(path);
-  if (file.size() == 0) throw Error(cat(path, ": file is empty"));
-  Header h = parseHeader(path, file.data(), file.size());
+  return loadPlyFromMemory(file.data(), file.size(), path);
+}
+
+Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& path) {
+  if (size == 0) throw Error(cat(path, ": file is empty"));
+  Header h = parseHeader(path, data, size);
   Mesh mesh;
   mesh.name = path;
-  mesh.stats.fileBytes = file.size();
+  mesh.stats.fileBytes = size;
 
   const Elem* vertexElem = nullptr;
   bool haveFaces = false;
@@ -586,8 +655,8 @@ Mesh loadPly(const std::string& path) {
   if (!vertexElem) throw Error(cat(path, ": no 'vertex' element in the header"));
   if (!haveFaces) throw Error(cat(path, ": no face or tristrips element in the header"));
 
-  const char* begin = file.data() + h.dataOffset;
-  const char* end = file.data() + file.size();
+  const char* begin = data + h.dataOffset;
+  const char* end = data + size;
   if (h.format == Format::Ascii) {
     TextReader r(path, begin, end, h.dataLine);
     for (const Elem& e : h.elems) {
@@ -600,7 +669,7 @@ Mesh loadPly(const std::string& path) {
     }
   } else {
     bool swap = (h.format == Format::BinaryBE) == kHostLittleEndian;
-    BinaryReader r(path, file.data(), begin, end, swap);
+    BinaryReader r(path, data, begin, end, swap);
     for (const Elem& e : h.elems) {
       size_t itemBytes;
       if (e.name == "vertex") {

@@ -17,6 +17,18 @@ std::string apertureBinary();
 /// Runs a shell command, returns its exit code (-1 if killed by a signal); stdout+stderr
 /// go to *output when given.
 int runCommand(const std::string& command, std::string* output = nullptr);
+/// What runMeasured saw of a child process.
+struct Measured {
+  int exitCode = -1;    ///< exit status, or -1 when a signal ended it
+  int signal = 0;       ///< the signal that ended it, or 0
+  double wallSeconds = 0;
+  double cpuSeconds = 0;  ///< user + system time of the child
+  long maxRssKb = 0;      ///< peak resident set of the child, KiB
+  std::string output;     ///< stdout and stderr
+};
+/// Runs `command` through /bin/sh with `exec`, so the resource figures are the command's own.
+Measured runMeasured(const std::string& command);
+
 /// Writes a file (binary-safe).
 void writeFile(const std::string& path, const std::string& bytes);
 bool fileExists(const std::string& path);

@@ -517,8 +517,13 @@ TEST(Batch, SigintFinishesTheFrameInFlightAndLeavesOnlyCompleteFiles) {
   j["cameras"][0] = {{"name", "t"}, {"orbit", {{"radius", 5}}}, {"frames", 3000}};
   const std::string jobPath = writeJob(dir, j);
   std::string out;
+  // SIGINT once the first frame is written, so the handler is installed (a fixed delay is
+  // too short on a loaded machine or under ThreadSanitizer, and a background job of sh starts
+  // with SIGINT ignored, so an early signal would be lost).
   const int rc = runCommand("sh -c '" + apertureBinary() + " batch --quiet " + jobPath +
-                                " & pid=$!; sleep 1; kill -INT $pid; wait $pid'",
+                                " & pid=$!; for i in $(seq 600); do ls " + dir +
+                                "/out/*.exr >/dev/null 2>&1 && break; sleep 0.1; done; "
+                                "kill -INT $pid; wait $pid'",
                             &out);
   EXPECT_EQ(rc, 130) << out;
   const json summary = readJson(dir + "/out/summary.json");
