@@ -5,8 +5,7 @@
 #include <limits>
 #include <map>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
+#include "core/parallel.h"
 
 namespace aperture {
 
@@ -54,24 +53,23 @@ TriangleSubset cullTriangles(const Mesh& mesh, const std::vector<glm::dmat4>& pl
     hi = glm::max(a, glm::max(b, c));
   };
   const size_t clusters = (tris + kCullClusterSize - 1) / kCullClusterSize;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, clusters, 16),
-                    [&](const tbb::blocked_range<size_t>& range) {
-                      for (size_t c = range.begin(); c != range.end(); ++c) {
-                        const size_t t0 = c * kCullClusterSize;
-                        const size_t t1 = std::min(t0 + kCullClusterSize, tris);
-                        glm::vec3 lo(std::numeric_limits<float>::max()), hi(-lo), a, b;
-                        for (size_t t = t0; t < t1; ++t) {
-                          triBox(t, a, b);
-                          lo = glm::min(lo, a);
-                          hi = glm::max(hi, b);
-                        }
-                        if (!mayBeSeen(lo, hi)) continue;
-                        for (size_t t = t0; t < t1; ++t) {
-                          triBox(t, a, b);
-                          keep[t] = mayBeSeen(a, b);
-                        }
-                      }
-                    });
+  parallelFor(clusters, 16, [&](size_t first, size_t last) {
+    for (size_t c = first; c != last; ++c) {
+      const size_t t0 = c * kCullClusterSize;
+      const size_t t1 = std::min(t0 + kCullClusterSize, tris);
+      glm::vec3 lo(std::numeric_limits<float>::max()), hi(-lo), a, b;
+      for (size_t t = t0; t < t1; ++t) {
+        triBox(t, a, b);
+        lo = glm::min(lo, a);
+        hi = glm::max(hi, b);
+      }
+      if (!mayBeSeen(lo, hi)) continue;
+      for (size_t t = t0; t < t1; ++t) {
+        triBox(t, a, b);
+        keep[t] = mayBeSeen(a, b);
+      }
+    }
+  });
   TriangleSubset s;
   const size_t kept = size_t(std::count(keep.begin(), keep.end(), uint8_t(1)));
   s.indices.reserve(3 * kept);

@@ -17,7 +17,7 @@
 //   cube     size=S (default 1): closed cube [-S/2, S/2]^3, 8 shared vertices, 12 triangles.
 //   city     no keys: about 20x20 units of ground (y=0) with rows of closed boxes of different
 //            heights and some tall 24-sided columns (closed cylinders).
-#include <tbb/parallel_for.h>
+#include "core/parallel.h"
 
 #include <cmath>
 #include <cstdlib>
@@ -206,14 +206,16 @@ Mesh makeSpheres(const std::string& spec, const Params& p) {
   const uint32_t groundIdx[6] = {0, 1, 2, 0, 2, 3};
   std::copy(groundIdx, groundIdx + 6, m.indices.begin());
   const double spacing = 10.0 / double(g);
-  tbb::parallel_for(0L, count, [&](long i) {
-    long row = i / g, col = i % g;
-    double r = spacing * 0.45 * (0.35 + 0.65 * hash01(uint32_t(i)));
-    glm::dvec3 c(-5.0 + spacing * (double(col) + 0.5), r, -5.0 + spacing * (double(row) + 0.5));
-    size_t k = size_t(i);
-    uint32_t* idx = m.indices.data() + 3 * tOff[k];
-    writeSphere(m.positionsDouble.data() + 3 * vOff[k], idx, uint32_t(vOff[k]), c, r, segs[k],
-                rings[k]);
+  parallelFor(size_t(count), 16, [&](size_t first, size_t last) {
+    for (long i = long(first); i != long(last); ++i) {
+      long row = i / g, col = i % g;
+      double r = spacing * 0.45 * (0.35 + 0.65 * hash01(uint32_t(i)));
+      glm::dvec3 c(-5.0 + spacing * (double(col) + 0.5), r, -5.0 + spacing * (double(row) + 0.5));
+      size_t k = size_t(i);
+      uint32_t* idx = m.indices.data() + 3 * tOff[k];
+      writeSphere(m.positionsDouble.data() + 3 * vOff[k], idx, uint32_t(vOff[k]), c, r, segs[k],
+                  rings[k]);
+    }
   });
   return m;
 }

@@ -7,11 +7,10 @@
 #include <chrono>
 #include <cmath>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include "core/error.h"
 #include "core/packet.h"
+#include "core/parallel.h"
 
 namespace aperture {
 
@@ -200,10 +199,8 @@ RenderStats renderFrame(const Scene& scene, const Camera& camera, const RenderSe
   const int tilesX = (fb.width + ts - 1) / ts, tilesY = (fb.height + ts - 1) / ts;
   std::atomic<uint64_t> traced{0}, skipped{0}, hits{0};
   const auto start = std::chrono::steady_clock::now();
-  tbb::parallel_for(
-      tbb::blocked_range<int>(0, tilesX * tilesY, 1),
-      [&](const tbb::blocked_range<int>& range) {
-        for (int tile = range.begin(); tile != range.end(); ++tile) {
+  parallelFor(size_t(tilesX) * size_t(tilesY), 1, [&](size_t first, size_t last) {
+        for (int tile = int(first); tile != int(last); ++tile) {
           const int x0 = (tile % tilesX) * ts, y0 = (tile / tilesX) * ts;
           const int x1 = std::min(x0 + ts, fb.width), y1 = std::min(y0 + ts, fb.height);
           TileCounters c;
@@ -217,8 +214,7 @@ RenderStats renderFrame(const Scene& scene, const Camera& camera, const RenderSe
           skipped += c.skipped;
           hits += c.hits;
         }
-      },
-      tbb::simple_partitioner());
+      });
   RenderStats stats;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   stats.raysTraced = traced;
