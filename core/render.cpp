@@ -200,21 +200,21 @@ RenderStats renderFrame(const Scene& scene, const Camera& camera, const RenderSe
   std::atomic<uint64_t> traced{0}, skipped{0}, hits{0};
   const auto start = std::chrono::steady_clock::now();
   parallelFor(size_t(tilesX) * size_t(tilesY), 1, [&](size_t first, size_t last) {
-        for (int tile = int(first); tile != int(last); ++tile) {
-          const int x0 = (tile % tilesX) * ts, y0 = (tile / tilesX) * ts;
-          const int x1 = std::min(x0 + ts, fb.width), y1 = std::min(y0 + ts, fb.height);
-          TileCounters c;
-          switch (settings.packetWidth) {
-            case 1: renderTile<1>(plan, x0, y0, x1, y1, c); break;
-            case 4: renderTile<4>(plan, x0, y0, x1, y1, c); break;
-            case 8: renderTile<8>(plan, x0, y0, x1, y1, c); break;
-            default: renderTile<16>(plan, x0, y0, x1, y1, c); break;
-          }
-          traced += c.traced;
-          skipped += c.skipped;
-          hits += c.hits;
-        }
-      });
+    for (int tile = int(first); tile != int(last); ++tile) {
+      const int x0 = (tile % tilesX) * ts, y0 = (tile / tilesX) * ts;
+      const int x1 = std::min(x0 + ts, fb.width), y1 = std::min(y0 + ts, fb.height);
+      TileCounters c;
+      switch (settings.packetWidth) {
+        case 1: renderTile<1>(plan, x0, y0, x1, y1, c); break;
+        case 4: renderTile<4>(plan, x0, y0, x1, y1, c); break;
+        case 8: renderTile<8>(plan, x0, y0, x1, y1, c); break;
+        default: renderTile<16>(plan, x0, y0, x1, y1, c); break;
+      }
+      traced += c.traced;
+      skipped += c.skipped;
+      hits += c.hits;
+    }
+  });
   RenderStats stats;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   stats.raysTraced = traced;
