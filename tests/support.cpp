@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <cstring>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -87,5 +88,46 @@ void writeFile(const std::string& path, const std::string& bytes) {
 }
 
 bool fileExists(const std::string& path) { return fs::exists(path); }
+
+namespace {
+template <typename T>
+bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+}  // namespace
+
+std::string differingAovs(const Framebuffer& a, const Framebuffer& b) {
+  if (a.width != b.width || a.height != b.height || a.aovs != b.aovs)
+    return "size or AOV set (" + std::to_string(a.width) + "x" + std::to_string(a.height) + " " +
+           aovListString(a.aovs) + " vs " + std::to_string(b.width) + "x" +
+           std::to_string(b.height) + " " + aovListString(b.aovs) + ")";
+  std::string diff;
+  auto check = [&](bool same, const char* name) {
+    if (!same) diff += std::string(diff.empty() ? "" : ",") + name;
+  };
+  check(sameBits(a.rgba, b.rgba), "color");
+  check(sameBits(a.depth, b.depth), "depth");
+  check(sameBits(a.distance, b.distance), "distance");
+  check(sameBits(a.normal, b.normal), "normal");
+  check(sameBits(a.position, b.position), "position");
+  check(sameBits(a.primId, b.primId), "primid");
+  check(sameBits(a.geomId, b.geomId), "geomid");
+  return diff;
+}
+
+void expectSameGeometry(const Framebuffer& a, const Framebuffer& b, int minHits) {
+  ASSERT_EQ(a.pixelCount(), b.pixelCount());
+  int hits = 0;
+  for (size_t px = 0; px < a.pixelCount(); ++px) {
+    ASSERT_EQ(a.geomId[px], b.geomId[px]) << "pixel " << px;
+    if (a.geomId[px] == kInvalidId) continue;
+    ++hits;
+    EXPECT_NEAR(a.depth[px], b.depth[px], 1e-4 * b.depth[px]) << "pixel " << px;
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(a.normal[3 * px + c], b.normal[3 * px + c], 1e-3) << "pixel " << px;
+  }
+  EXPECT_GE(hits, minHits);
+}
 
 }  // namespace aperture::test

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "core/framebuffer.h"
+
 namespace aperture::test {
 
 /// ../shared beside the project (absolute), as configured by CMake.
@@ -32,6 +34,16 @@ Measured runMeasured(const std::string& command);
 /// Writes a file (binary-safe).
 void writeFile(const std::string& path, const std::string& bytes);
 bool fileExists(const std::string& path);
+
+/// The AOVs (by name) whose size or pixel bits differ between a and b; "" when the two have the
+/// same size, the same AOVs and bit-identical pixels in every one.
+std::string differingAovs(const Framebuffer& a, const Framebuffer& b);
+inline bool samePixels(const Framebuffer& a, const Framebuffer& b) {
+  return differingAovs(a, b).empty();
+}
+/// Two renders of the same geometry by different paths (instances vs baked copies): the same
+/// object per pixel, depth within 1e-4 relative, normals within 1e-3; at least minHits hits.
+void expectSameGeometry(const Framebuffer& a, const Framebuffer& b, int minHits);
 
 }  // namespace aperture::test
 

@@ -35,19 +35,8 @@ Framebuffer render(const Scene& scene, const CameraParams& p) {
   return fb;
 }
 
-template <class T>
-bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
-}
-
 void expectIdentical(const Framebuffer& a, const Framebuffer& b, const std::string& what) {
-  EXPECT_TRUE(sameBits(a.rgba, b.rgba)) << what;
-  EXPECT_TRUE(sameBits(a.depth, b.depth)) << what;
-  EXPECT_TRUE(sameBits(a.distance, b.distance)) << what;
-  EXPECT_TRUE(sameBits(a.normal, b.normal)) << what;
-  EXPECT_TRUE(sameBits(a.position, b.position)) << what;
-  EXPECT_TRUE(sameBits(a.primId, b.primId)) << what;
-  EXPECT_TRUE(sameBits(a.geomId, b.geomId)) << what;
+  EXPECT_EQ(test::differingAovs(a, b), "") << what;
 }
 
 /// Culled and full scenes over the same objects, for `cameras`.

@@ -78,16 +78,6 @@ Framebuffer render(const Scene& scene, const CameraParams& p, AovMask aovs, int 
   return fb;
 }
 
-bool sameBits(const Framebuffer& a, const Framebuffer& b) {
-  auto eq = [](const auto& x, const auto& y) {
-    return x.size() == y.size() &&
-           (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) == 0);
-  };
-  return eq(a.rgba, b.rgba) && eq(a.depth, b.depth) && eq(a.distance, b.distance) &&
-         eq(a.normal, b.normal) && eq(a.position, b.position) && eq(a.primId, b.primId) &&
-         eq(a.geomId, b.geomId);
-}
-
 }  // namespace
 
 TEST(RenderAnalytic, PlaneFacingCameraMatchesClosedForm) {
@@ -186,7 +176,7 @@ TEST(RenderDeterminism, PacketWidthsTilesAndThreadsAreBitIdentical) {
     for (int tile : {4, 16, 64})
       for (int threads : {1, 2}) {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
-        EXPECT_TRUE(sameBits(render(scene, p, all, packet, tile), ref))
+        EXPECT_EQ(test::differingAovs(render(scene, p, all, packet, tile), ref), "")
             << "packet " << packet << " tile " << tile << " threads " << threads;
       }
 }
@@ -238,14 +228,5 @@ TEST(RenderInstances, RepeatedMeshMatchesCopiesAndReportsObjectIds) {
   EXPECT_EQ(copies.instanceCount(), 0u);
   CameraParams p = lookAt({0.2, 1.0, 5.0}, {0, 0, 0}, 64, 40, 50.0);
   const AovMask aovs = parseAovList("depth,normal,primid,geomid");
-  Framebuffer fi = render(instanced, p, aovs), fc = render(copies, p, aovs);
-  int hits = 0;
-  for (size_t px = 0; px < fi.pixelCount(); ++px) {
-    ASSERT_EQ(fi.geomId[px], fc.geomId[px]) << px;
-    if (fi.geomId[px] == kInvalidId) continue;
-    ++hits;
-    EXPECT_NEAR(fi.depth[px], fc.depth[px], 1e-4 * fc.depth[px]);
-    for (int c = 0; c < 3; ++c) EXPECT_NEAR(fi.normal[3 * px + c], fc.normal[3 * px + c], 1e-3);
-  }
-  EXPECT_GT(hits, 300);
+  test::expectSameGeometry(render(instanced, p, aovs), render(copies, p, aovs), 301);
 }
