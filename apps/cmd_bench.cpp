@@ -4,7 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -85,8 +88,9 @@ int runBench(const BenchArgs& a) {
   if (a.frames < 1 || a.frames > 100000) throw Error(cat("--frames ", a.frames, " must be in [1, 100000]"));
   if (a.warmup < 0) throw Error(cat("--warmup ", a.warmup, " must be >= 0"));
   if (a.builds < 1) throw Error(cat("--builds ", a.builds, " must be >= 1"));
-  if (!a.sweep.empty() && a.sweep != "packet" && a.sweep != "threads" && a.sweep != "quality")
-    throw Error(cat("--sweep: '", a.sweep, "' is not one of packet, threads, quality"));
+  if (!a.sweep.empty() && a.sweep != "packet" && a.sweep != "threads" && a.sweep != "quality" &&
+      a.sweep != "aovs")
+    throw Error(cat("--sweep: '", a.sweep, "' is not one of packet, threads, quality, aovs"));
   checkMemoryBudget(a.scene, parseImageSize(a.camera.size), aovs);
 
   ThreadLimit threads(a.render.threads);
@@ -216,6 +220,35 @@ int runBench(const BenchArgs& a) {
                         {"embree_bytes", scene.stats().embreeBytes}});
       }
     j["sweep_quality"] = rows;
+  } else if (a.sweep == "aovs") {
+    // Interleaved: each round renders one frame of every AOV set, so load from other processes
+    // falls on all sets alike.
+    const std::vector<std::pair<std::string, AovMask>> sets = {
+        {"depth", kAovDepth},
+        {"primid", kAovPrimId},
+        {"color", kAovColor},
+        {"color,depth", kAovColor | kAovDepth},
+        {"all", parseAovList("all")}};
+    std::vector<Framebuffer> fbs;
+    for (const auto& set : sets) fbs.emplace_back(params.width, params.height, set.second);
+    std::vector<std::vector<double>> mrays(sets.size());
+    for (int f = 0; f < a.warmup + a.frames; ++f)
+      for (size_t k = 0; k < sets.size(); ++k) {
+        const RenderStats st = renderFrame(*loaded.scene, *camera, settings, fbs[k]);
+        if (f >= a.warmup) mrays[k].push_back(st.mraysPerSecond());
+      }
+    nlohmann::json rows = nlohmann::json::object();
+    const double depthOnly = summarize(mrays[0]).median;
+    for (size_t k = 0; k < sets.size(); ++k) {
+      const Summary r = summarize(mrays[k]);
+      printSummary(cat("sweep aovs ", sets[k].first, ":").c_str(), r, a.frames);
+      std::printf("%-28s %.3f x depth alone\n", "", depthOnly > 0 ? r.median / depthOnly : 0.0);
+      rows[sets[k].first] = {{"aovs", aovListString(sets[k].second)},
+                             {"mrays_per_s", toJson(r)},
+                             {"mrays_per_s_median", r.median},
+                             {"relative_to_depth", depthOnly > 0 ? r.median / depthOnly : 0.0}};
+    }
+    j["sweep_aovs"] = rows;
   }
   if (!a.json.empty()) writeTextAtomically(a.json, j.dump(2) + "\n");
   return 0;
@@ -236,7 +269,8 @@ Command addBenchCommand(CLI::App& app) {
   sub->add_option("--builds", args->builds, "BVH builds to time (median)")->capture_default_str();
   sub->add_flag("--baseline", args->baseline,
                 "Also trace the same rays with bare rtcIntersect16 (no shading, no framebuffer)");
-  sub->add_option("--sweep", args->sweep, "Also sweep: packet, threads or quality");
+  sub->add_option("--sweep", args->sweep, "Also sweep: packet, threads, quality or aovs (depth alone .. all AOVs, "
+                  "interleaved frames)");
   sub->add_option("--json", args->json, "Write every figure to this JSON file");
   sub->add_flag("--quiet", args->quiet, "No log lines on stderr");
   return [args] { return runBench(*args); };

@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   add(addBenchCommand);
   add(addBatchCommand);
   add(addCameraCommand);
+  add(addTradeoffCommand);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
