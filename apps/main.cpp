@@ -2,6 +2,7 @@
 #include <csignal>
 #include <cstdio>
 #include <exception>
+#include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -29,6 +30,18 @@ int main(int argc, char** argv) {
   add(addBatchCommand);
   add(addCameraCommand);
   add(addTradeoffCommand);
+  // A first word that is no subcommand: say which word, and list the commands.
+  std::string known;
+  bool isCommand = false;
+  for (const auto& c : commands) {
+    known += (known.empty() ? "" : ", ") + c.first->get_name();
+    isCommand = isCommand || (argc > 1 && c.first->get_name() == argv[1]);
+  }
+  if (argc > 1 && argv[1][0] != '-' && !isCommand) {
+    std::fprintf(stderr, "aperture: unknown command '%s' (known: %s); see aperture --help\n",
+                 argv[1], known.c_str());
+    return 2;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -31,6 +31,8 @@ TEST(Cli, HelpAndVersionExitZero) {
   EXPECT_NE(out.find("render"), std::string::npos);
   EXPECT_EQ(runCommand(apertureBinary() + " render --help", &out), 0);
   EXPECT_NE(out.find("--bvh-quality"), std::string::npos);
+  EXPECT_EQ(runCommand(apertureBinary() + " frobnicate", &out), 2);
+  EXPECT_NE(out.find("unknown command 'frobnicate'"), std::string::npos) << out;
   EXPECT_EQ(runCommand(apertureBinary() + " --version", &out), 0);
   EXPECT_NE(out.find("aperture"), std::string::npos);
 }
