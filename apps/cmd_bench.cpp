@@ -28,7 +28,7 @@ struct BenchArgs {
   RenderOptions render;
   int frames = 10, warmup = 3, builds = 3;
   bool baseline = false, quiet = false;
-  std::string sweep, json;
+  std::string sweep, json, preset;
 };
 
 /// Median, min, max and coefficient of variation of a sample.
@@ -273,7 +273,11 @@ Command addBenchCommand(CLI::App& app) {
                   "interleaved frames)");
   sub->add_option("--json", args->json, "Write every figure to this JSON file");
   sub->add_flag("--quiet", args->quiet, "No log lines on stderr");
-  return [args] { return runBench(*args); };
+  addPresetOption(*sub, args->preset);
+  return [args, sub] {
+    applyPreset(args->preset, *sub, args->scene, args->camera, nullptr, nullptr);
+    return runBench(*args);
+  };
 }
 
 }  // namespace aperture::app

@@ -19,7 +19,7 @@ struct RenderArgs {
   SceneOptions scene;
   CameraOptions camera;
   RenderOptions render;
-  std::string out = "out/render.exr", preview, compression = "zip";
+  std::string out = "out/render.exr", preview, compression = "zip", preset;
   bool half = false, quiet = false;
 };
 
@@ -78,7 +78,11 @@ Command addRenderCommand(CLI::App& app) {
                   "EXR compression: none rle zips zip piz pxr24 b44 b44a dwaa dwab")
       ->capture_default_str();
   sub->add_flag("--quiet", args->quiet, "No log lines");
-  return [args] { return runRender(*args); };
+  addPresetOption(*sub, args->preset);
+  return [args, sub] {
+    applyPreset(args->preset, *sub, args->scene, args->camera, &args->half, &args->compression);
+    return runRender(*args);
+  };
 }
 
 }  // namespace aperture::app

@@ -90,6 +90,23 @@ void logCullStats(const CullStats& c, size_t cameras);
 /// loadSceneMeshes then buildLoadedScene without culling.
 LoadedScene loadScene(const Device& device, const SceneOptions& o, bool quiet);
 
+/// A --preset: settings picked from the measured speed/accuracy frontier (bench/TRADEOFF.md).
+struct Preset {
+  const char* name;
+  const char* bvhQuality;
+  bool robust;
+  int spp;
+  bool halfColor;
+  const char* compression;
+};
+/// fast, balanced or exact; throws Error listing the names for anything else.
+const Preset& findPreset(const std::string& name);
+void addPresetOption(CLI::App& app, std::string& preset);
+/// Sets every knob of the preset that the command line did not give explicitly (`sub` is the
+/// parsed subcommand); half/compression may be null where the command writes no EXR.
+void applyPreset(const std::string& name, const CLI::App& sub, SceneOptions& scene,
+                 CameraOptions& camera, bool* halfColor, std::string* compression);
+
 /// Limits TBB (and so Embree's builder) to n threads while alive; n = 0 keeps all cores.
 class ThreadLimit {
  public:
