@@ -15,6 +15,7 @@
 
 #include "cameras/registry.h"
 #include "core/error.h"
+#include "core/units.h"
 
 namespace aperture::app {
 
@@ -23,7 +24,6 @@ using nlohmann::json;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kMaxDepth = 32;
 constexpr std::uintmax_t kMaxJobBytes = 16u << 20;
 

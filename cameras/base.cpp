@@ -4,11 +4,11 @@
 
 #include "core/error.h"
 #include "core/sampling.h"
+#include "core/units.h"
 
 namespace aperture {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 double radians(double deg) { return deg * kPi / 180.0; }
 }  // namespace
 

@@ -4,12 +4,12 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/units.h"
 
 namespace aperture {
 
 namespace {
 
-constexpr double kRadPerDeg = 0.017453292519943295769;
 
 void checkImage(int width, int height, double d) {
   if (width <= 0 || height <= 0)

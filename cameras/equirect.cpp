@@ -10,12 +10,12 @@
 
 #include "cameras/models.h"
 #include "core/error.h"
+#include "core/units.h"
 
 namespace aperture {
 
 namespace {
 
-constexpr double kRadPerDeg = 0.017453292519943295769;
 
 class EquirectCamera final : public PacketCamera<EquirectCamera> {
  public:

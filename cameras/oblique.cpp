@@ -5,12 +5,9 @@
 #include "cameras/models.h"
 #include "cameras/parallel.h"
 #include "core/error.h"
+#include "core/units.h"
 
 namespace aperture {
-
-namespace {
-constexpr double kRadPerDeg = 0.017453292519943295769;
-}  // namespace
 
 glm::dvec3 obliqueDirection(const CameraParams& p, const CameraFrame& frame) {
   if (p.obliqueDir && p.obliqueAnglesDeg)

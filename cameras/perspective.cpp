@@ -7,12 +7,9 @@
 
 #include "cameras/models.h"
 #include "core/error.h"
+#include "core/units.h"
 
 namespace aperture {
-
-namespace {
-constexpr double kDegPerRad = 57.295779513082320877;
-}  // namespace
 
 PerspectiveCamera::PerspectiveCamera(const CameraParams& p, const glm::dvec3& renderOrigin,
                                      const char* typeName, double lensRadius,

@@ -26,11 +26,11 @@
 
 #include "core/error.h"
 #include "core/mesh.h"
+#include "core/units.h"
 
 namespace aperture {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 using Params = std::map<std::string, double>;
 
