@@ -13,6 +13,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
+#include "apps/options.h"
 #include "cameras/registry.h"
 #include "core/error.h"
 #include "core/units.h"
@@ -405,9 +406,21 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
 
   const Object top(name, "", root,
                    {"scene", "cameras", "aovs", "size", "spp", "output", "preview", "compression",
-                    "half", "performance"});
+                    "half", "performance", "preset"});
   Job job;
   job.path = name;
+  // A preset supplies the defaults of spp, compression, half, bvh_quality and robust; keys
+  // given explicitly win, as flags do on the command line.
+  const Preset* preset = nullptr;
+  if (const auto presetName = top.string("preset")) {
+    try {
+      preset = &findPreset(*presetName);
+    } catch (const Error& e) {
+      top.fail("preset", e.what());
+    }
+    job.build.quality = parseBvhQuality(preset->bvhQuality);
+    job.build.robust = preset->robust;
+  }
 
   // Image and output settings.
   if (const json* a = top.find("aovs")) {
@@ -447,18 +460,19 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
                            "]: width and height must be in [1, 65536] with at most ", kMaxPixels,
                            " pixels"));
   }
-  job.render.spp = top.integer("spp", 1);
+  job.render.spp = top.integer("spp", preset ? preset->spp : 1);
   if (job.render.spp < 1 || job.render.spp > 65536)
     top.fail("spp", cat(job.render.spp, ": must be in [1, 65536]"));
   if (!top.has("output")) top.fail("output", "required key is missing");
   job.outputPattern = *top.string("output");
   job.previewPattern = top.string("preview").value_or("");
   try {
-    job.exr.compression = parseExrCompression(top.string("compression").value_or("zip"));
+    job.exr.compression = parseExrCompression(
+        top.string("compression").value_or(preset ? preset->compression : "zip"));
   } catch (const Error& e) {
     top.fail("compression", e.what());
   }
-  job.exr.halfColor = top.boolean("half", false);
+  job.exr.halfColor = top.boolean("half", preset ? preset->halfColor : false);
 
   // Performance.
   if (top.has("performance")) {
@@ -475,11 +489,12 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
     if (job.threads < 0 || job.threads > 4096)
       p.fail(p.keyPath("threads"), cat(job.threads, ": must be in [0, 4096] (0 = all cores)"));
     try {
-      job.build.quality = parseBvhQuality(p.string("bvh_quality").value_or("high"));
+      job.build.quality = parseBvhQuality(
+          p.string("bvh_quality").value_or(bvhQualityName(job.build.quality)));
     } catch (const Error& e) {
       p.fail(p.keyPath("bvh_quality"), e.what());
     }
-    job.build.robust = p.boolean("robust", false);
+    job.build.robust = p.boolean("robust", job.build.robust);
     job.build.compact = p.boolean("compact", false);
     job.cull = p.boolean("cull", false);
   }

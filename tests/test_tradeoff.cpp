@@ -150,3 +150,29 @@ TEST(BenchSweep, AovsReportsDepthAloneAndAll) {
   EXPECT_GT(j["sweep_aovs"]["all"]["mrays_per_s_median"].get<double>(), 0.0);
   EXPECT_EQ(j["sweep_aovs"]["all"]["aovs"], "color,depth,distance,normal,position,primid,geomid");
 }
+
+TEST(Preset, JobFilesTakeThePresetAndExplicitKeysWin) {
+  const std::string dir = scratchDir();
+  auto job = [&](const std::string& extra) {
+    const std::string path = dir + "/job.json";
+    test::writeFile(path, R"({"scene": {"meshes": [{"path": "procedural:sphere"}]},
+      "cameras": [{"name": "v", "eye": [0, 0, 4], "at": [0, 0, 0], "fov": 40}],
+      "size": [16, 12], "output": "out/{camera}.exr")" + extra + "}");
+    return path;
+  };
+  std::string out;
+  ASSERT_EQ(runCommand(apertureBinary() + " batch --quiet " + job(R"(, "preset": "balanced")"), &out),
+            0) << out;
+  ExrMetadata meta;
+  readExr(dir + "/out/v.exr", &meta);
+  EXPECT_EQ(meta.camera.spp, 4);
+  ASSERT_EQ(runCommand(apertureBinary() + " batch --quiet " +
+                           job(R"(, "preset": "exact", "spp": 2, "half": true)"), &out), 0) << out;
+  readExr(dir + "/out/v.exr", &meta);
+  EXPECT_EQ(meta.camera.spp, 2);
+  Imf::InputFile file((dir + "/out/v.exr").c_str());
+  EXPECT_EQ(file.header().channels().findChannel("R")->type, Imf::HALF);
+  EXPECT_NE(runCommand(apertureBinary() + " batch --quiet " + job(R"(, "preset": "turbo")"), &out), 0);
+  EXPECT_NE(out.find("preset"), std::string::npos) << out;
+  EXPECT_NE(out.find("known: fast, balanced, exact"), std::string::npos) << out;
+}
