@@ -76,13 +76,30 @@ void clearHits(typename PacketOf<N>::type& p) {
   }
 }
 
-/// rtcIntersectN for the packet width; `valid` is Embree's −1/0 lane mask (unused for N = 1).
+/// rtcIntersectN for the packet width; `valid` is Embree's −1/0 lane mask (unused for N = 1,
+/// which traces its one ray as the single active lane of rtcIntersect4).
 template <int N>
 void intersect(RTCScene scene, RTCIntersectContext* ctx, const int* valid,
                typename PacketOf<N>::type& p) {
   if constexpr (N == 1) {
+    // One ray per call, but through the 4-wide kernel with one active lane: rtcIntersect1
+    // breaks ties between coincident triangles differently from the packet kernels (seen on
+    // the crown), and every packet width must give the same image.
     (void)valid;
-    rtcIntersect1(scene, ctx, &p);
+    alignas(16) RTCRayHit4 q;
+    alignas(16) const int one[4] = {-1, 0, 0, 0};
+    q.ray.org_x[0] = p.ray.org_x, q.ray.org_y[0] = p.ray.org_y, q.ray.org_z[0] = p.ray.org_z;
+    q.ray.dir_x[0] = p.ray.dir_x, q.ray.dir_y[0] = p.ray.dir_y, q.ray.dir_z[0] = p.ray.dir_z;
+    q.ray.tnear[0] = p.ray.tnear, q.ray.tfar[0] = p.ray.tfar, q.ray.time[0] = p.ray.time;
+    q.ray.mask[0] = p.ray.mask, q.ray.id[0] = p.ray.id, q.ray.flags[0] = p.ray.flags;
+    q.hit.geomID[0] = RTC_INVALID_GEOMETRY_ID;
+    q.hit.instID[0][0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect4(one, scene, ctx, &q);
+    p.ray.tfar = q.ray.tfar[0];
+    p.hit.Ng_x = q.hit.Ng_x[0], p.hit.Ng_y = q.hit.Ng_y[0], p.hit.Ng_z = q.hit.Ng_z[0];
+    p.hit.u = q.hit.u[0], p.hit.v = q.hit.v[0];
+    p.hit.primID = q.hit.primID[0], p.hit.geomID = q.hit.geomID[0];
+    p.hit.instID[0] = q.hit.instID[0][0];
   } else if constexpr (N == 4) {
     rtcIntersect4(valid, scene, ctx, &p);
   } else if constexpr (N == 8) {

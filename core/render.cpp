@@ -63,7 +63,9 @@ void renderTile(const FramePlan& plan, int x0, int y0, int x1, int y1, TileCount
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
 
   Framebuffer& fb = plan.fb;
-  const int spp = plan.settings.spp;
+  // Only color averages samples; the geometry AOVs come from sample 0, so without color the
+  // other samples are neither generated nor traced.
+  const int spp = plan.color ? plan.settings.spp : 1;
   const bool needNormal = plan.color || plan.normal;
   for (int by = y0; by < y1; by += kBH) {
     for (int bx = x0; bx < x1; bx += kBW) {

@@ -187,6 +187,26 @@ TEST(Cli, PacketWidthsAndThreadsGiveBitIdenticalExrOnBunny) {
     }
 }
 
+TEST(Cli, PacketWidthsGiveBitIdenticalPrimIdsOnTheCrown) {
+  // The crown has coincident triangles: every width must break their ties the same way.
+  APERTURE_REQUIRE_SHARED_MESH(crown, "scenes/crown_flat.ply");
+  const std::string dir = scratchDir();
+  Framebuffer ref;
+  for (int packet : {16, 1, 4, 8}) {
+    const std::string exr = dir + "/p" + std::to_string(packet) + ".exr";
+    std::string out;
+    ASSERT_EQ(runCommand(apertureBinary() + " render --quiet --mesh " + crown +
+                             " --eye 0,5.5,24 --at 0,11,-10 --fov 47 --fov-axis x --size 250,350"
+                             " --aov primid,depth,normal --packet " + std::to_string(packet) +
+                             " --out " + exr, &out), 0) << out;
+    const Framebuffer fb = readExr(exr);
+    if (packet == 16)
+      ref = fb;
+    else
+      EXPECT_EQ(test::differingAovs(fb, ref), "") << "packet " << packet;
+  }
+}
+
 TEST(Cli, HeaderMatricesReprojectPositionsToTheirPixels) {
   APERTURE_REQUIRE_SHARED_MESH(bunny, "stanford/bun_zipper.ply");
   const std::string exr = scratchDir() + "/b.exr";

@@ -230,3 +230,24 @@ TEST(RenderInstances, RepeatedMeshMatchesCopiesAndReportsObjectIds) {
   const AovMask aovs = parseAovList("depth,normal,primid,geomid");
   test::expectSameGeometry(render(instanced, p, aovs), render(copies, p, aovs), 301);
 }
+
+TEST(RenderSamples, WithoutColorOnlySampleZeroIsTracedAndGeometryIsUnchanged) {
+  Device device;
+  Mesh sphere = sphereMesh(1.0, {0, 0, 0}, 48, 24);
+  Scene scene(device, {&sphere});
+  CameraParams p = lookAt({0.3, 0.4, 3.0}, {0, 0, 0}, 40, 30, 45.0);
+  p.spp = 16;
+  auto cam = makeCamera(p, scene.renderOrigin());
+  RenderSettings rs;
+  rs.spp = 16;
+  Framebuffer depthOnly(40, 30, kAovDepth), withColor(40, 30, kAovDepth | kAovColor);
+  const RenderStats a = renderFrame(scene, *cam, rs, depthOnly);
+  const RenderStats b = renderFrame(scene, *cam, rs, withColor);
+  EXPECT_EQ(a.raysTraced, 40u * 30u);       // one ray a pixel: sample 0
+  EXPECT_EQ(b.raysTraced, 16u * 40u * 30u);  // color averages all 16
+  EXPECT_EQ(test::differingAovs(depthOnly, [&] {
+              Framebuffer d(40, 30, kAovDepth);
+              d.depth = withColor.depth;
+              return d;
+            }()), "");
+}
