@@ -1,5 +1,7 @@
 #include "core/scene.h"
 
+#include <cstdlib>
+
 #include <atomic>
 #include <chrono>
 #include <map>
@@ -57,7 +59,12 @@ RTCBuildQuality toEmbree(BvhQuality q) {
 
 }  // namespace
 
-Device::Device(const std::string& config) : state_(std::make_unique<State>()) {
+Device::Device(const std::string& givenConfig) : state_(std::make_unique<State>()) {
+  // APERTURE_EMBREE_CONFIG (e.g. "isa=sse4.2") applies when the caller gives none: it pins
+  // Embree's kernels so images are bit-comparable across CPUs.
+  const char* fromEnvironment = std::getenv("APERTURE_EMBREE_CONFIG");
+  const std::string config =
+      givenConfig.empty() && fromEnvironment ? std::string(fromEnvironment) : givenConfig;
   device_ = rtcNewDevice(config.empty() ? nullptr : config.c_str());
   if (!device_)
     throw Error(cat("Embree: cannot create a device (config '", config, "'): ",

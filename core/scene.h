@@ -17,7 +17,8 @@ namespace aperture {
 /// exceptions (thrown from the next checked call), and a memory monitor tracks Embree's bytes.
 class Device {
  public:
-  /// `config` is passed to rtcNewDevice (e.g. "threads=2"); empty for Embree's defaults.
+  /// `config` is passed to rtcNewDevice (e.g. "threads=2"); when empty, the environment
+  /// variable APERTURE_EMBREE_CONFIG if set, else Embree's defaults.
   explicit Device(const std::string& config = "");
   ~Device();
   Device(const Device&) = delete;

@@ -1,5 +1,9 @@
 #include "tests/support.h"
 
+#include <cstdio>
+
+#include "apps/options.h"
+
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -128,6 +132,20 @@ void expectSameGeometry(const Framebuffer& a, const Framebuffer& b, int minHits)
       EXPECT_NEAR(a.normal[3 * px + c], b.normal[3 * px + c], 1e-3) << "pixel " << px;
   }
   EXPECT_GE(hits, minHits);
+}
+
+std::string Fnv1a::hex() const {
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", h_);
+  return buf;
+}
+
+CameraParams cameraParamsFromFlags(const std::string& flags) {
+  CLI::App app;
+  app::CameraOptions options;
+  app::addCameraOptions(app, options);
+  app.parse(flags, false);
+  return options.toParams(glm::dvec3(0.0), glm::dvec3(0.0));
 }
 
 }  // namespace aperture::test

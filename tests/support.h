@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "cameras/params.h"
 #include "core/framebuffer.h"
 
 namespace aperture::test {
@@ -44,6 +45,23 @@ inline bool samePixels(const Framebuffer& a, const Framebuffer& b) {
 /// Two renders of the same geometry by different paths (instances vs baked copies): the same
 /// object per pixel, depth within 1e-4 relative, normals within 1e-3; at least minHits hits.
 void expectSameGeometry(const Framebuffer& a, const Framebuffer& b, int minHits);
+
+/// 64-bit FNV-1a over bytes, for golden hashes of buffers.
+class Fnv1a {
+ public:
+  void add(const void* data, size_t bytes) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (size_t k = 0; k < bytes; ++k) h_ = (h_ ^ p[k]) * 0x100000001b3ull;
+  }
+  std::string hex() const;
+
+ private:
+  unsigned long long h_ = 0xcbf29ce484222325ull;
+};
+
+/// Camera parameters from command-line camera flags ("--camera thinlens --eye 0,0,5 ..."),
+/// parsed exactly as `aperture render` parses them (the flags must give --at or --dir).
+CameraParams cameraParamsFromFlags(const std::string& flags);
 
 }  // namespace aperture::test
 
