@@ -8,19 +8,18 @@
 #include <csignal>
 #include <cstdio>
 #include <deque>
-#include <functional>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <thread>
 
-#include <nlohmann/json.hpp>
-
 #include "apps/commands.h"
-#include "apps/frame.h"
 #include "apps/job.h"
 #include "apps/options.h"
+#include "apps/view.h"
 #include "cameras/culling.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -89,17 +88,22 @@ class SigintGuard {
 enum class Status { Pending, Ok, Failed, Skipped, Interrupted };
 const char* statusName(Status s) {
   switch (s) {
-    case Status::Pending: return "pending";
-    case Status::Ok: return "ok";
-    case Status::Failed: return "failed";
-    case Status::Skipped: return "skipped";
-    case Status::Interrupted: return "interrupted";
+    case Status::Pending:
+      return "pending";
+    case Status::Ok:
+      return "ok";
+    case Status::Failed:
+      return "failed";
+    case Status::Skipped:
+      return "skipped";
+    case Status::Interrupted:
+      return "interrupted";
   }
   return "?";
 }
 
 struct FrameResult {
-  const JobFrame* frame = nullptr;
+  const JobImage* frame = nullptr;
   Status status = Status::Pending;
   std::string error;
   double renderSeconds = 0, writeSeconds = 0;
@@ -107,7 +111,7 @@ struct FrameResult {
   double mrays() const { return renderSeconds > 0 ? double(rays) / renderSeconds * 1e-6 : 0; }
 };
 
-std::string frameLabel(const JobFrame& f) { return cat(f.camera, " frame ", f.frame); }
+std::string frameLabel(const JobImage& f) { return cat(f.camera, " frame ", f.frame); }
 
 std::string hms(double seconds) {
   const long s = long(seconds + 0.5);
@@ -238,7 +242,7 @@ class FrameWriter {
 struct BatchScene {
   std::deque<Mesh> meshes;
   std::deque<TriangleSubset> subsets;  ///< with performance.cull
-  std::vector<std::string> names;  ///< one per job mesh entry
+  std::vector<std::string> names;      ///< one per job mesh entry
   std::unique_ptr<Scene> scene;
   double loadSeconds = 0;
 };
@@ -267,8 +271,8 @@ BatchScene buildScene(const Device& device, const Job& job, bool quiet,
   std::vector<SceneObject> objects;
   for (const JobMesh& m : job.meshes) {
     const bool instanced = uses[m.spec] > 1;
-    objects.push_back({bySpec[m.spec], instanced ? m.worldFromMesh.value_or(glm::dmat4(1.0))
-                                                 : glm::dmat4(1.0)});
+    objects.push_back(
+        {bySpec[m.spec], instanced ? m.worldFromMesh.value_or(glm::dmat4(1.0)) : glm::dmat4(1.0)});
     s.names.push_back(m.spec);
   }
   // Meshes used once share the render origin (the first object's anchor), so they are
@@ -309,8 +313,8 @@ void printTable(const std::vector<FrameResult>& results) {
   std::printf("%-20s %7s  %-11s %9s %8s %9s  %s\n", "camera", "frame", "status", "render s",
               "write s", "Mrays/s", "output");
   for (const FrameResult& r : results)
-    std::printf("%-20s %7d  %-11s %9.3f %8.3f %9.1f  %s\n", r.frame->camera.c_str(),
-                r.frame->frame, statusName(r.status), r.renderSeconds, r.writeSeconds, r.mrays(),
+    std::printf("%-20s %7d  %-11s %9.3f %8.3f %9.1f  %s\n", r.frame->camera.c_str(), r.frame->frame,
+                statusName(r.status), r.renderSeconds, r.writeSeconds, r.mrays(),
                 r.frame->output.c_str());
 }
 
@@ -323,17 +327,17 @@ int runBatch(const BatchArgs& a) {
     for (const JobMesh& m : job.meshes)
       if (std::find(specs.begin(), specs.end(), m.spec) == specs.end()) specs.push_back(m.spec);
     uint64_t pixels = 0;
-    for (const JobFrame& f : job.frames)
+    for (const JobImage& f : job.images)
       pixels = std::max(pixels, uint64_t(f.params.width) * uint64_t(f.params.height));
     // Two framebuffers live at once: the frame being rendered and the one being written.
-    const uint64_t perPixel = framebufferBytesPerPixel(job.aovs) * 2 +
-                              (job.previewPattern.empty() ? 0 : 4);
+    const uint64_t perPixel =
+        framebufferBytesPerPixel(job.aovs) * 2 + (job.previewPattern.empty() ? 0 : 4);
     checkMemoryLimit(estimateMemory(specs, pixels, 1, 0, perPixel), limit, "--max-memory",
                      a.maxMemory);
   }
 
   std::vector<FrameResult> results;
-  for (const JobFrame& f : job.frames)
+  for (const JobImage& f : job.images)
     if (f.index % shard.n == shard.k) {
       results.emplace_back();
       results.back().frame = &f;
@@ -348,7 +352,7 @@ int runBatch(const BatchArgs& a) {
 
   if (a.dryRun) {
     std::printf("%s: %zu frames in the job, %zu in this shard, %zu to render\n", job.path.c_str(),
-                job.frames.size(), results.size(), toRender);
+                job.images.size(), results.size(), toRender);
     for (const FrameResult& r : results)
       std::printf("%6zu  %-20s %7d  %-9s %s\n", r.frame->index, r.frame->camera.c_str(),
                   r.frame->frame, r.status == Status::Skipped ? "skip" : "render",
@@ -375,8 +379,8 @@ int runBatch(const BatchArgs& a) {
     FrameResult& r = *task.result;
     const auto t0 = Clock::now();
     try {
-      const ExrMetadata meta = viewMetadata(task.view, scene.names, job.aovs, job.build.quality,
-                                            job.placement);
+      const ExrMetadata meta =
+          viewMetadata(task.view, scene.names, job.aovs, job.build.quality, job.placement);
       writeExr(r.frame->output, task.view.fb, meta, job.exr);
       if (!r.frame->preview.empty()) {
         ensureParentDirectory(r.frame->preview, "preview");
@@ -430,66 +434,59 @@ int runBatch(const BatchArgs& a) {
     if (r.status == Status::Skipped) skipped.push_back(r.frame->output);
     if (r.status == Status::Interrupted) interrupted.push_back(frameLabel(*r.frame));
     const glm::dvec3& eye = r.frame->params.eye;
-    nlohmann::json f = {{"index", r.frame->index},
-                        {"camera", r.frame->camera},
-                        {"frame", r.frame->frame},
-                        {"output", r.frame->output},
-                        {"status", statusName(r.status)},
-                        {"render_seconds", r.renderSeconds},
-                        {"write_seconds", r.writeSeconds},
-                        {"rays", r.rays},
-                        {"mrays_per_s", r.mrays()},
-                        {"eye", {eye.x, eye.y, eye.z}}};
+    nlohmann::json f = {{"index", r.frame->index},         {"camera", r.frame->camera},
+                        {"frame", r.frame->frame},         {"output", r.frame->output},
+                        {"status", statusName(r.status)},  {"render_seconds", r.renderSeconds},
+                        {"write_seconds", r.writeSeconds}, {"rays", r.rays},
+                        {"mrays_per_s", r.mrays()},        {"eye", {eye.x, eye.y, eye.z}}};
     if (!r.frame->preview.empty()) f["preview"] = r.frame->preview;
     if (!r.error.empty()) f["error"] = r.error;
     frames.push_back(f);
   }
-  const size_t ok = size_t(std::count_if(results.begin(), results.end(), [](const FrameResult& r) {
-    return r.status == Status::Ok;
-  }));
-  nlohmann::json summary = {
-      {"job", job.path},
-      {"aperture_version", APERTURE_VERSION},
-      {"shard", {{"k", shard.k}, {"n", shard.n}}},
-      {"resume", a.resume},
-      {"overlap_writes", !a.noOverlap},
-      {"frames_in_job", job.frames.size()},
-      {"frames_in_shard", results.size()},
-      {"frames_ok", ok},
-      {"frames_failed", failed.size()},
-      {"frames_skipped", skipped.size()},
-      {"frames_interrupted", interrupted.size()},
-      {"failed", failed},
-      {"skipped", skipped},
-      {"interrupted", interrupted},
-      {"meshes", scene.names},
-      {"load_seconds", scene.loadSeconds},
-      {"bvh_builds", 1},
-      {"build_seconds", build.buildSeconds},
-      {"triangles", build.triangles},
-      {"unique_triangles", build.uniqueTriangles},
-      {"instances", scene.scene->instanceCount()},
-      {"embree_bytes", build.embreeBytes},
-      {"threads", threads.threads()},
-      {"isa", device.isaName()},
-      {"width", job.width},
-      {"height", job.height},
-      {"spp", job.render.spp},
-      {"aovs", aovListString(job.aovs)},
-      {"elapsed_seconds", elapsed},
-      {"render_seconds", renderSeconds},
-      {"write_seconds", writeSeconds},
-      {"rays", rays},
-      {"mrays_per_s", elapsed > 0 ? double(rays) / elapsed * 1e-6 : 0.0},
-      {"frames", frames}};
+  const size_t ok = size_t(std::count_if(
+      results.begin(), results.end(), [](const FrameResult& r) { return r.status == Status::Ok; }));
+  nlohmann::json summary = {{"job", job.path},
+                            {"aperture_version", APERTURE_VERSION},
+                            {"shard", {{"k", shard.k}, {"n", shard.n}}},
+                            {"resume", a.resume},
+                            {"overlap_writes", !a.noOverlap},
+                            {"frames_in_job", job.images.size()},
+                            {"frames_in_shard", results.size()},
+                            {"frames_ok", ok},
+                            {"frames_failed", failed.size()},
+                            {"frames_skipped", skipped.size()},
+                            {"frames_interrupted", interrupted.size()},
+                            {"failed", failed},
+                            {"skipped", skipped},
+                            {"interrupted", interrupted},
+                            {"meshes", scene.names},
+                            {"load_seconds", scene.loadSeconds},
+                            {"bvh_builds", 1},
+                            {"build_seconds", build.buildSeconds},
+                            {"triangles", build.triangles},
+                            {"unique_triangles", build.uniqueTriangles},
+                            {"instances", scene.scene->instanceCount()},
+                            {"embree_bytes", build.embreeBytes},
+                            {"threads", threads.threads()},
+                            {"isa", device.isaName()},
+                            {"width", job.width},
+                            {"height", job.height},
+                            {"spp", job.render.spp},
+                            {"aovs", aovListString(job.aovs)},
+                            {"elapsed_seconds", elapsed},
+                            {"render_seconds", renderSeconds},
+                            {"write_seconds", writeSeconds},
+                            {"rays", rays},
+                            {"mrays_per_s", elapsed > 0 ? double(rays) / elapsed * 1e-6 : 0.0},
+                            {"frames", frames}};
 
   if (!a.quiet) {
     printTable(results);
-    std::printf("%zu ok, %zu failed, %zu skipped, %zu interrupted; %.3f s elapsed (render %.3f s, "
-                "write %.3f s%s), %.1f Mrays/s; BVH built once in %.3f s\n",
-                ok, failed.size(), skipped.size(), interrupted.size(), elapsed, renderSeconds,
-                writeSeconds, a.noOverlap ? "" : ", overlapped", double(rays) / elapsed * 1e-6,
-                build.buildSeconds);
+    std::printf(
+        "%zu ok, %zu failed, %zu skipped, %zu interrupted; %.3f s elapsed (render %.3f s, "
+        "write %.3f s%s), %.1f Mrays/s; BVH built once in %.3f s\n",
+        ok, failed.size(), skipped.size(), interrupted.size(), elapsed, renderSeconds, writeSeconds,
+        a.noOverlap ? "" : ", overlapped", double(rays) / elapsed * 1e-6, build.buildSeconds);
   }
   try {
     ensureParentDirectory(summaryPath, "--summary");
@@ -508,8 +505,8 @@ int runBatch(const BatchArgs& a) {
   if (!failed.empty()) {
     std::string list;
     for (const std::string& f : failed) list += (list.empty() ? "" : ", ") + f;
-    std::fprintf(stderr, "aperture: %zu of %zu frames failed: %s\n", failed.size(),
-                 results.size(), list.c_str());
+    std::fprintf(stderr, "aperture: %zu of %zu frames failed: %s\n", failed.size(), results.size(),
+                 list.c_str());
     return 1;
   }
   return 0;
@@ -519,8 +516,8 @@ int runBatch(const BatchArgs& a) {
 
 Command addBatchCommand(CLI::App& app) {
   auto args = std::make_shared<BatchArgs>();
-  CLI::App* sub = app.add_subcommand(
-      "batch", "Render every frame of a job file (docs/batch.md) over one BVH");
+  CLI::App* sub =
+      app.add_subcommand("batch", "Render every frame of a job file (docs/batch.md) over one BVH");
   sub->add_option("job", args->job, "Job file (JSON)")->required();
   sub->add_flag("--resume", args->resume, "Skip frames whose output is already a complete EXR");
   sub->add_option("--shard", args->shard,

@@ -4,12 +4,11 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
 #include "apps/options.h"
@@ -61,7 +60,7 @@ std::vector<double> timeFrames(const Scene& scene, const Camera& camera, const R
   Framebuffer fb(width, height, aovs);
   std::vector<double> mrays;
   for (int f = 0; f < warmup + frames; ++f) {
-    const RenderStats st = renderFrame(scene, camera, rs, fb);
+    const RenderStats st = renderImage(scene, camera, rs, fb);
     if (f >= warmup) mrays.push_back(st.mraysPerSecond());
   }
   return mrays;
@@ -85,7 +84,8 @@ void printSummary(const char* label, const Summary& s, int frames) {
 int runBench(const BenchArgs& a) {
   const AovMask aovs = parseAovList(a.render.aovs);
   const RenderSettings settings = a.render.settings(a.camera.spp);
-  if (a.frames < 1 || a.frames > 100000) throw Error(cat("--frames ", a.frames, " must be in [1, 100000]"));
+  if (a.frames < 1 || a.frames > 100000)
+    throw Error(cat("--frames ", a.frames, " must be in [1, 100000]"));
   if (a.warmup < 0) throw Error(cat("--warmup ", a.warmup, " must be >= 0"));
   if (a.builds < 1) throw Error(cat("--builds ", a.builds, " must be >= 1"));
   if (!a.sweep.empty() && a.sweep != "packet" && a.sweep != "threads" && a.sweep != "quality" &&
@@ -124,13 +124,13 @@ int runBench(const BenchArgs& a) {
                  {"spp", params.spp},
                  {"frames", a.frames},
                  {"warmup", a.warmup}};
-  std::printf("config: %s, %zu triangles; %d threads, Embree ISA %s; packet %d, tile %d; BVH %s%s%s; "
-              "AOVs %s; %s %dx%d, %d spp\n",
-              meshNames.c_str(), loaded.scene->stats().triangles, threads.threads(),
-              device.isaName().c_str(), settings.packetWidth, settings.tileSize,
-              a.scene.quality.c_str(), a.scene.robust ? " robust" : "",
-              a.scene.compact ? " compact" : "", aovListString(aovs).c_str(), params.type.c_str(),
-              params.width, params.height, params.spp);
+  std::printf(
+      "config: %s, %zu triangles; %d threads, Embree ISA %s; packet %d, tile %d; BVH %s%s%s; "
+      "AOVs %s; %s %dx%d, %d spp\n",
+      meshNames.c_str(), loaded.scene->stats().triangles, threads.threads(),
+      device.isaName().c_str(), settings.packetWidth, settings.tileSize, a.scene.quality.c_str(),
+      a.scene.robust ? " robust" : "", a.scene.compact ? " compact" : "",
+      aovListString(aovs).c_str(), params.type.c_str(), params.width, params.height, params.spp);
 
   // Load and build.
   const double loadMBps = loaded.fileBytes / 1e6 / std::max(loaded.loadSeconds, 1e-9);
@@ -138,7 +138,8 @@ int runBench(const BenchArgs& a) {
   j["load_mb_per_s"] = loaded.fileBytes ? loadMBps : 0.0;
   j["file_bytes"] = loaded.fileBytes;
   std::vector<double> buildTimes{loaded.scene->stats().buildSeconds};
-  for (int b = 1; b < a.builds; ++b) buildTimes.push_back(Scene(device, loaded.objects, build).stats().buildSeconds);
+  for (int b = 1; b < a.builds; ++b)
+    buildTimes.push_back(Scene(device, loaded.objects, build).stats().buildSeconds);
   const Summary buildSummary = summarize(buildTimes);
   const double tris = double(loaded.scene->stats().triangles);
   const double bytes = double(loaded.scene->stats().embreeBytes);
@@ -154,10 +155,11 @@ int runBench(const BenchArgs& a) {
   }
   std::printf("load: %.1f MB in %.3f s (%.1f MB/s)\n", loaded.fileBytes / 1e6, loaded.loadSeconds,
               loaded.fileBytes ? loadMBps : 0.0);
-  std::printf("build: median %.3f s over %d builds (min %.3f, max %.3f); Embree memory %.1f MB "
-              "(%.1f bytes/triangle)\n",
-              buildSummary.median, a.builds, buildSummary.min, buildSummary.max, bytes / 1e6,
-              tris > 0 ? bytes / tris : 0.0);
+  std::printf(
+      "build: median %.3f s over %d builds (min %.3f, max %.3f); Embree memory %.1f MB "
+      "(%.1f bytes/triangle)\n",
+      buildSummary.median, a.builds, buildSummary.min, buildSummary.max, bytes / 1e6,
+      tris > 0 ? bytes / tris : 0.0);
 
   // The frame loop, and the baseline right after it in the same run.
   const Summary render = summarize(timeFrames(*loaded.scene, *camera, settings, aovs, params.width,
@@ -183,7 +185,8 @@ int runBench(const BenchArgs& a) {
       const Summary r = summarize(timeFrames(*loaded.scene, *camera, s, aovs, params.width,
                                              params.height, a.warmup, a.frames));
       printSummary(cat("sweep packet ", w, ":").c_str(), r, a.frames);
-      rows.push_back({{"packet_width", w}, {"mrays_per_s", toJson(r)}, {"mrays_per_s_median", r.median}});
+      rows.push_back(
+          {{"packet_width", w}, {"mrays_per_s", toJson(r)}, {"mrays_per_s_median", r.median}});
     }
     j["sweep_packet"] = rows;
   } else if (a.sweep == "threads") {
@@ -197,7 +200,9 @@ int runBench(const BenchArgs& a) {
       const double efficiency = single > 0 ? r.median / (single * t) : 0;
       printSummary(cat("sweep threads ", t, ":").c_str(), r, a.frames);
       std::printf("%-28s parallel efficiency %.1f%%\n", "", 100 * efficiency);
-      rows.push_back({{"threads", t}, {"mrays_per_s", toJson(r)}, {"mrays_per_s_median", r.median},
+      rows.push_back({{"threads", t},
+                      {"mrays_per_s", toJson(r)},
+                      {"mrays_per_s_median", r.median},
                       {"parallel_efficiency", efficiency}});
     }
     j["sweep_threads"] = rows;
@@ -211,11 +216,14 @@ int runBench(const BenchArgs& a) {
         Scene scene(device, loaded.objects, bo);
         const Summary r = summarize(timeFrames(scene, *camera, settings, aovs, params.width,
                                                params.height, a.warmup, a.frames));
-        printSummary(cat("sweep ", bvhQualityName(q), robust ? " robust:" : ":").c_str(), r, a.frames);
+        printSummary(cat("sweep ", bvhQualityName(q), robust ? " robust:" : ":").c_str(), r,
+                     a.frames);
         std::printf("%-28s build %.3f s, Embree %.1f MB\n", "", scene.stats().buildSeconds,
                     scene.stats().embreeBytes / 1e6);
-        rows.push_back({{"bvh_quality", bvhQualityName(q)}, {"robust", robust},
-                        {"mrays_per_s", toJson(r)}, {"mrays_per_s_median", r.median},
+        rows.push_back({{"bvh_quality", bvhQualityName(q)},
+                        {"robust", robust},
+                        {"mrays_per_s", toJson(r)},
+                        {"mrays_per_s_median", r.median},
                         {"build_seconds", scene.stats().buildSeconds},
                         {"embree_bytes", scene.stats().embreeBytes}});
       }
@@ -234,7 +242,7 @@ int runBench(const BenchArgs& a) {
     std::vector<std::vector<double>> mrays(sets.size());
     for (int f = 0; f < a.warmup + a.frames; ++f)
       for (size_t k = 0; k < sets.size(); ++k) {
-        const RenderStats st = renderFrame(*loaded.scene, *camera, settings, fbs[k]);
+        const RenderStats st = renderImage(*loaded.scene, *camera, settings, fbs[k]);
         if (f >= a.warmup) mrays[k].push_back(st.mraysPerSecond());
       }
     nlohmann::json rows = nlohmann::json::object();
@@ -269,7 +277,8 @@ Command addBenchCommand(CLI::App& app) {
   sub->add_option("--builds", args->builds, "BVH builds to time (median)")->capture_default_str();
   sub->add_flag("--baseline", args->baseline,
                 "Also trace the same rays with bare rtcIntersect16 (no shading, no framebuffer)");
-  sub->add_option("--sweep", args->sweep, "Also sweep: packet, threads, quality or aovs (depth alone .. all AOVs, "
+  sub->add_option("--sweep", args->sweep,
+                  "Also sweep: packet, threads, quality or aovs (depth alone .. all AOVs, "
                   "interleaved frames)");
   sub->add_option("--json", args->json, "Write every figure to this JSON file");
   sub->add_flag("--quiet", args->quiet, "No log lines on stderr");

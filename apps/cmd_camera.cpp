@@ -36,7 +36,8 @@ Command addCameraCommand(CLI::App& app) {
       "camera", "Describe a camera: frame, parameters in every convention, view volume");
   addCameraOptions(*sub, args->camera);
   sub->add_flag("--describe", args->describe, "Print the description");
-  sub->add_option("--near", args->nearDist, "Near distance of the printed view volume (scene units)");
+  sub->add_option("--near", args->nearDist,
+                  "Near distance of the printed view volume (scene units)");
   sub->add_option("--far", args->farDist, "Far distance of the printed view volume (scene units)");
   return [args] { return runCamera(*args); };
 }

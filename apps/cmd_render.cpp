@@ -4,8 +4,8 @@
 #include <vector>
 
 #include "apps/commands.h"
-#include "apps/frame.h"
 #include "apps/options.h"
+#include "apps/view.h"
 #include "cameras/registry.h"
 #include "core/error.h"
 #include "core/exr.h"
@@ -44,7 +44,8 @@ int runRender(const RenderArgs& a) {
   const RenderedView view = renderView(*loaded.scene, params, settings, aovs);
   const Framebuffer& fb = view.fb;
   if (!a.quiet)
-    std::fprintf(stderr, "aperture: rendered %dx%d, %d spp, AOVs %s: %.3f s, %.1f Mrays/s (%d threads)\n",
+    std::fprintf(stderr,
+                 "aperture: rendered %dx%d, %d spp, AOVs %s: %.3f s, %.1f Mrays/s (%d threads)\n",
                  fb.width, fb.height, settings.spp, aovListString(aovs).c_str(), view.stats.seconds,
                  view.stats.mraysPerSecond(), threads.threads());
 
@@ -71,7 +72,8 @@ Command addRenderCommand(CLI::App& app) {
   addSceneOptions(*sub, args->scene);
   addCameraOptions(*sub, args->camera);
   addRenderOptions(*sub, args->render);
-  sub->add_option("--out", args->out, "Output EXR path (written atomically)")->capture_default_str();
+  sub->add_option("--out", args->out, "Output EXR path (written atomically)")
+      ->capture_default_str();
   sub->add_option("--preview", args->preview, "Also write an 8-bit preview (PNG)");
   sub->add_flag("--half", args->half, "Store color (R G B A) as half; geometry stays float32");
   sub->add_option("--compression", args->compression,

@@ -1,7 +1,8 @@
 // `aperture tradeoff`: what each speed knob costs in accuracy, on one scene and camera.
+#include <unistd.h>
+
 #include <cstdio>
 #include <filesystem>
-#include <unistd.h>
 
 #include "apps/commands.h"
 #include "apps/options.h"
@@ -78,8 +79,8 @@ int runTradeoff(const TradeoffArgs& a) {
   const std::string md = (fs::path(a.outDir) / (a.name + ".md")).string();
   writeTextAtomically(csv, tradeoffCsv(rows));
   const std::string title =
-      cat(a.name, ": ", c.camera.type, " ", c.camera.width, "x", c.camera.height,
-          ", reference ", c.referenceSpp, " spp (robust, high, camera-relative); ", c.frames,
+      cat(a.name, ": ", c.camera.type, " ", c.camera.width, "x", c.camera.height, ", reference ",
+          c.referenceSpp, " spp (robust, high, camera-relative); ", c.frames,
           " timed frames after ", c.warmup, " warm-up, ", threads.threads(), " threads");
   writeTextAtomically(md, tradeoffMarkdown(rows, title));
   if (!a.quiet) std::fprintf(stderr, "aperture: wrote %s and %s\n", csv.c_str(), md.c_str());

@@ -1,9 +1,8 @@
 #pragma once
 // Subcommands of the `aperture` executable; each registers its options and returns the
 // function that runs it (exit code).
-#include <functional>
-
 #include <CLI/CLI.hpp>
+#include <functional>
 
 namespace aperture::app {
 

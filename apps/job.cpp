@@ -5,13 +5,12 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <glm/gtc/matrix_transform.hpp>
 #include <initializer_list>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
-
-#include <glm/gtc/matrix_transform.hpp>
-#include <nlohmann/json.hpp>
 
 #include "apps/options.h"
 #include "cameras/registry.h"
@@ -37,8 +36,8 @@ class Object {
       : file_(file), path_(std::move(path)), j_(j) {
     if (!j.is_object()) fail(path_, cat("expected an object, got ", typeName(j)));
     for (const auto& item : j.items()) {
-      const bool ok = std::any_of(known.begin(), known.end(),
-                                  [&](const char* k) { return item.key() == k; });
+      const bool ok =
+          std::any_of(known.begin(), known.end(), [&](const char* k) { return item.key() == k; });
       if (ok) continue;
       std::string list;
       for (const char* k : known) list += std::string(list.empty() ? "" : ", ") + k;
@@ -221,10 +220,14 @@ void readCameraFields(const Object& c, CameraParams& p) {
   if (auto v = c.vec3("up")) p.up = *v;
   if (auto v = c.number("fov")) p.fovDeg = *v;
   if (auto v = c.string("fov_axis")) {
-    if (*v == "x") p.fovAxis = FovAxis::X;
-    else if (*v == "y") p.fovAxis = FovAxis::Y;
-    else if (*v == "diagonal") p.fovAxis = FovAxis::Diagonal;
-    else c.fail(c.keyPath("fov_axis"), cat("'", *v, "' is not one of x, y, diagonal"));
+    if (*v == "x")
+      p.fovAxis = FovAxis::X;
+    else if (*v == "y")
+      p.fovAxis = FovAxis::Y;
+    else if (*v == "diagonal")
+      p.fovAxis = FovAxis::Diagonal;
+    else
+      c.fail(c.keyPath("fov_axis"), cat("'", *v, "' is not one of x, y, diagonal"));
   }
   if (auto v = c.number("d")) p.d = *v;
   if (auto v = c.vec2("viewport")) p.viewport = *v;
@@ -250,10 +253,30 @@ void finishImagePlane(CameraParams& p) {
   if (!p.fovDeg && !p.viewport && !p.focalLengthMm) p.fovDeg = 45.0;
 }
 
-const std::initializer_list<const char*> kCameraKeys = {
-    "name", "type", "eye", "at", "dir", "up", "fov", "fov_axis", "d", "viewport",
-    "focal_length", "sensor", "shift", "architectural", "oblique_dir", "oblique_angles",
-    "aperture", "focus", "lon", "lat", "fisheye_fov", "orbit", "keyframes", "frames"};
+const std::initializer_list<const char*> kCameraKeys = {"name",
+                                                        "type",
+                                                        "eye",
+                                                        "at",
+                                                        "dir",
+                                                        "up",
+                                                        "fov",
+                                                        "fov_axis",
+                                                        "d",
+                                                        "viewport",
+                                                        "focal_length",
+                                                        "sensor",
+                                                        "shift",
+                                                        "architectural",
+                                                        "oblique_dir",
+                                                        "oblique_angles",
+                                                        "aperture",
+                                                        "focus",
+                                                        "lon",
+                                                        "lat",
+                                                        "fisheye_fov",
+                                                        "orbit",
+                                                        "keyframes",
+                                                        "frames"};
 
 bool validName(const std::string& name) {
   if (name.empty() || name.size() > 128 || name == "." || name == "..") return false;
@@ -272,8 +295,7 @@ OrbitPath parseOrbit(const Object& c, const CameraParams& base) {
   if (!(orbit.radius > 0)) o.fail(o.keyPath("radius"), cat(orbit.radius, ": must be > 0"));
   orbit.height = o.number("height");
   orbit.elevationDeg = o.number("elevation");
-  if (orbit.height && orbit.elevationDeg)
-    o.fail(o.path(), "give height or elevation, not both");
+  if (orbit.height && orbit.elevationDeg) o.fail(o.path(), "give height or elevation, not both");
   if (orbit.elevationDeg && !(std::abs(*orbit.elevationDeg) < 90))
     o.fail(o.keyPath("elevation"), cat(*orbit.elevationDeg, ": must be in (-90, 90) degrees"));
   orbit.startDeg = o.number("start", 0.0);
@@ -320,8 +342,8 @@ glm::dvec3 orbitEye(const OrbitPath& orbit, int k) {
   if (std::abs(glm::dot(ref, a)) > 0.999) ref = glm::dvec3(1, 0, 0);
   const glm::dvec3 e1 = glm::normalize(ref - glm::dot(ref, a) * a);
   const glm::dvec3 e2 = glm::cross(a, e1);
-  const double theta = (orbit.startDeg + orbit.sweepDeg * double(k) / double(orbit.frames)) *
-                       kPi / 180.0;
+  const double theta =
+      (orbit.startDeg + orbit.sweepDeg * double(k) / double(orbit.frames)) * kPi / 180.0;
   const glm::dvec3 around = std::cos(theta) * e1 + std::sin(theta) * e2;
   if (orbit.elevationDeg) {
     const double phi = *orbit.elevationDeg * kPi / 180.0;
@@ -373,9 +395,9 @@ std::string expandOutputPattern(const std::string& pattern, const std::string& c
       out += std::to_string(frame);
     } else if (field.size() >= 9 && field.compare(0, 7, "frame:0") == 0 && field.back() == 'd') {
       const std::string digits = field.substr(7, field.size() - 8);
-      const bool numeric = !digits.empty() && digits.size() <= 2 &&
-                           std::all_of(digits.begin(), digits.end(),
-                                       [](char d) { return d >= '0' && d <= '9'; });
+      const bool numeric =
+          !digits.empty() && digits.size() <= 2 &&
+          std::all_of(digits.begin(), digits.end(), [](char d) { return d >= '0' && d <= '9'; });
       const int width = numeric ? std::stoi(digits) : 0;
       if (width < 1 || width > 20)
         throw Error(
@@ -489,8 +511,8 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
     if (job.threads < 0 || job.threads > 4096)
       p.fail(p.keyPath("threads"), cat(job.threads, ": must be in [0, 4096] (0 = all cores)"));
     try {
-      job.build.quality = parseBvhQuality(
-          p.string("bvh_quality").value_or(bvhQualityName(job.build.quality)));
+      job.build.quality =
+          parseBvhQuality(p.string("bvh_quality").value_or(bvhQualityName(job.build.quality)));
     } catch (const Error& e) {
       p.fail(p.keyPath("bvh_quality"), e.what());
     }
@@ -527,9 +549,9 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
       if (fs::is_directory(mesh.spec, ec))
         m.fail(m.keyPath("path"), cat("'", mesh.spec, "': is a directory, not a mesh file"));
       if (!fs::is_regular_file(mesh.spec, ec))
-        m.fail(m.keyPath("path"), cat("'", mesh.spec, "': ",
-                                      fs::exists(mesh.spec, ec) ? "not a regular file"
-                                                                : "no such file"));
+        m.fail(m.keyPath("path"),
+               cat("'", mesh.spec,
+                   "': ", fs::exists(mesh.spec, ec) ? "not a regular file" : "no such file"));
     }
     if (m.has("transform") && m.has("matrix"))
       m.fail(m.path(), "give transform or matrix, not both");
@@ -576,10 +598,10 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
     std::vector<std::pair<int, CameraParams>> frames;
     auto frameCount = [&](int def) {
       const int n = c.integer("frames", def);
-      if (n < 1 || size_t(n) > kMaxJobFrames)
-        c.fail(c.keyPath("frames"), cat(n, ": must be in [1, ", kMaxJobFrames, "]"));
-      if (job.frames.size() + size_t(n) > kMaxJobFrames)
-        c.fail(c.keyPath("frames"), cat("the job would have more than ", kMaxJobFrames, " frames"));
+      if (n < 1 || size_t(n) > kMaxJobImages)
+        c.fail(c.keyPath("frames"), cat(n, ": must be in [1, ", kMaxJobImages, "]"));
+      if (job.images.size() + size_t(n) > kMaxJobImages)
+        c.fail(c.keyPath("frames"), cat("the job would have more than ", kMaxJobImages, " frames"));
       return n;
     };
     if (orbit) {
@@ -621,8 +643,8 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
       } catch (const Error& e) {
         c.fail(c.path(), cat("camera '", camName, "' frame ", f, ": ", e.what()));
       }
-      JobFrame jf;
-      jf.index = job.frames.size();
+      JobImage jf;
+      jf.index = job.images.size();
       jf.camera = camName;
       jf.frame = f;
       jf.params = p;
@@ -638,7 +660,7 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
           top.fail("preview", e.what());
         }
       }
-      job.frames.push_back(std::move(jf));
+      job.images.push_back(std::move(jf));
     }
   }
 
@@ -649,8 +671,8 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
   };
   if (lower(fs::path(job.outputPattern).extension().string()) != ".exr")
     top.fail("output", cat("'", job.outputPattern, "': the pattern must end in .exr"));
-  std::map<std::string, const JobFrame*> used;
-  for (const JobFrame& f : job.frames) {
+  std::map<std::string, const JobImage*> used;
+  for (const JobImage& f : job.images) {
     for (const std::string* out : {&f.output, &f.preview}) {
       if (out->empty()) continue;
       const char* key = out == &f.output ? "output" : "preview";

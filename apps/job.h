@@ -1,11 +1,10 @@
 #pragma once
 // Batch job files: a JSON description of one scene and many camera views (docs/batch.md).
 #include <cstddef>
+#include <glm/glm.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 #include "cameras/params.h"
 #include "core/exr.h"
@@ -22,7 +21,7 @@ struct JobMesh {
 };
 
 /// One image to render: a camera name, its frame number and everything the camera needs.
-struct JobFrame {
+struct JobImage {
   size_t index = 0;     ///< position in job order over all cameras (what --shard selects on)
   std::string camera;   ///< the camera's name
   int frame = 0;        ///< frame number within the camera (0 for a fixed camera)
@@ -35,24 +34,24 @@ struct JobFrame {
 struct Job {
   std::string path;  ///< the job file
   std::vector<JobMesh> meshes;
-  std::vector<JobFrame> frames;  ///< in job order: cameras as listed, frames ascending
+  std::vector<JobImage> images;  ///< in job order: cameras as listed, path frames ascending
   AovMask aovs = 0;
   int width = 0, height = 0;
-  RenderSettings render;          ///< packet, tile, spp
-  int threads = 0;                ///< 0 = all cores
+  RenderSettings render;  ///< packet, tile, spp
+  int threads = 0;        ///< 0 = all cores
   BuildOptions build;
   bool cull = false;  ///< performance.cull: BVH over the triangles the frames may see
   Placement placement = Placement::CameraRelative;  ///< scene.placement
   ExrOptions exr;
-  std::string outputPattern;      ///< as written in the job file
-  std::string previewPattern;     ///< as written; "" for none
+  std::string outputPattern;   ///< as written in the job file
+  std::string previewPattern;  ///< as written; "" for none
   /// The output pattern's directory up to the first placeholder, resolved (where summary.json
   /// goes by default); "." when the pattern starts with a placeholder.
   std::string outputDirectory;
 };
 
 /// Most frames one job may hold (so a malformed file cannot exhaust memory).
-inline constexpr size_t kMaxJobFrames = 100000;
+inline constexpr size_t kMaxJobImages = 100000;
 
 /// Reads and validates a job file: unknown keys, types, ranges, mesh files (existence only,
 /// nothing is loaded), output patterns (distinct outputs per frame) and every camera (each

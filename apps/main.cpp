@@ -1,11 +1,10 @@
 // aperture: render triangle meshes through Embree ray packets into multi-channel EXR files.
+#include <CLI/CLI.hpp>
 #include <csignal>
 #include <cstdio>
 #include <exception>
 #include <string>
 #include <vector>
-
-#include <CLI/CLI.hpp>
 
 #include "apps/commands.h"
 #include "core/error.h"

@@ -1,12 +1,12 @@
 #include "apps/options.h"
 
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
-
-#include <tbb/global_control.h>
-#include <tbb/info.h>
 
 #include "cameras/culling.h"
 #include "core/error.h"
@@ -30,11 +30,13 @@ std::vector<double> parseNumbers(const std::string& flag, const std::string& tex
       used = 0;
     }
     if (used == 0 || used != item.size())
-      throw Error(cat(flag, ": '", item, "' in '", text, "' is not a number (expected ", shape, ")"));
+      throw Error(
+          cat(flag, ": '", item, "' in '", text, "' is not a number (expected ", shape, ")"));
     v.push_back(x);
   }
   if (v.size() != n)
-    throw Error(cat(flag, ": expected ", shape, " (", n, " comma-separated numbers), got '", text, "'"));
+    throw Error(
+        cat(flag, ": expected ", shape, " (", n, " comma-separated numbers), got '", text, "'"));
   for (double x : v)
     if (!std::isfinite(x)) throw Error(cat(flag, ": '", text, "' has a non-finite value"));
   return v;
@@ -88,9 +90,10 @@ BuildOptions SceneOptions::buildOptions() const {
 }
 
 void addSceneOptions(CLI::App& app, SceneOptions& o) {
-  app.add_option("--mesh", o.meshes,
-                 "Mesh file (.ply, .obj) or procedural:NAME?k=v (e.g. procedural:spheres?tris=2000000);"
-                 " repeatable. Default: the procedural default scene");
+  app.add_option(
+      "--mesh", o.meshes,
+      "Mesh file (.ply, .obj) or procedural:NAME?k=v (e.g. procedural:spheres?tris=2000000);"
+      " repeatable. Default: the procedural default scene");
   app.add_option("--bvh-quality", o.quality, "Embree BVH build quality: low, medium, high")
       ->capture_default_str();
   app.add_flag("--robust", o.robust, "Embree robust (watertight) traversal");
@@ -112,11 +115,12 @@ void addCameraOptions(CLI::App& app, CameraOptions& o) {
                  "Camera model: perspective, orthographic, oblique, thinlens, equirect, fisheye")
       ->capture_default_str();
   app.add_option("--eye", o.eye, "Eye position X,Y,Z (default: frames the scene)");
-  app.add_option("--at", o.at, "Look-at point X,Y,Z")->excludes(app.add_option("--dir", o.dir,
-                 "View direction X,Y,Z"));
+  app.add_option("--at", o.at, "Look-at point X,Y,Z")
+      ->excludes(app.add_option("--dir", o.dir, "View direction X,Y,Z"));
   app.add_option("--up", o.up, "Up vector X,Y,Z")->capture_default_str();
   app.add_option("--fov", o.fov, "Field of view in degrees, in (0, 180) (default 45, vertical)");
-  app.add_option("--fov-axis", o.fovAxis, "Axis --fov spans: x, y or diagonal")->capture_default_str();
+  app.add_option("--fov-axis", o.fovAxis, "Axis --fov spans: x, y or diagonal")
+      ->capture_default_str();
   app.add_option("--d", o.d, "Image-plane distance d, scene units (with --viewport)");
   app.add_option("--viewport", o.viewport, "Viewport VW,VH on the image plane, scene units");
   app.add_option("--focal-length", o.focalLength, "35 mm-style focal length, millimetres");
@@ -125,15 +129,18 @@ void addCameraOptions(CLI::App& app, CameraOptions& o) {
   app.add_flag("--architectural", o.architectural,
                "Keep the image plane vertical (parallel to up): verticals stay parallel");
   app.add_option("--oblique-dir", o.obliqueDir, "Oblique camera: common ray direction X,Y,Z");
-  app.add_option("--oblique-angles", o.obliqueAngles, "Oblique camera: shear angles AX,AY, degrees");
+  app.add_option("--oblique-angles", o.obliqueAngles,
+                 "Oblique camera: shear angles AX,AY, degrees");
   app.add_option("--aperture", o.aperture, "Thin lens radius, scene units");
   app.add_option("--focus", o.focus, "Thin lens focus distance along the view axis, scene units");
   app.add_option("--lon", o.lon, "Equirect longitude range MIN,MAX, degrees (default -180,180)");
   app.add_option("--lat", o.lat, "Equirect latitude range MIN,MAX, degrees (default -90,90)");
   app.add_option("--fisheye-fov", o.fisheyeFov, "Fisheye field of view, degrees, up to 360")
       ->capture_default_str();
-  app.add_option("--size", o.size, "Image size W,H in pixels: each side in [1, 65536], "
-                 "at most 2^28 pixels")->capture_default_str();
+  app.add_option("--size", o.size,
+                 "Image size W,H in pixels: each side in [1, 65536], "
+                 "at most 2^28 pixels")
+      ->capture_default_str();
   app.add_option("--spp", o.spp, "Samples per pixel in [1, 65536] (stratified; 1 = pixel centres)")
       ->capture_default_str();
 }
@@ -142,9 +149,12 @@ void addRenderOptions(CLI::App& app, RenderOptions& o) {
   app.add_option("--aov", o.aovs,
                  "AOVs to compute: color, depth, distance, normal, position, primid, geomid, all")
       ->capture_default_str();
-  app.add_option("--packet", o.packet, "Rays per Embree call: 1, 4, 8 or 16")->capture_default_str();
-  app.add_option("--tile", o.tile, "Tile size in pixels: a multiple of 4 in [4, 4096]")->capture_default_str();
-  app.add_option("--threads", o.threads, "Worker threads in [0, 4096] (0 = all cores)")->capture_default_str();
+  app.add_option("--packet", o.packet, "Rays per Embree call: 1, 4, 8 or 16")
+      ->capture_default_str();
+  app.add_option("--tile", o.tile, "Tile size in pixels: a multiple of 4 in [4, 4096]")
+      ->capture_default_str();
+  app.add_option("--threads", o.threads, "Worker threads in [0, 4096] (0 = all cores)")
+      ->capture_default_str();
 }
 
 RenderSettings RenderOptions::settings(int spp) const {
@@ -153,7 +163,8 @@ RenderSettings RenderOptions::settings(int spp) const {
   s.tileSize = tile;
   s.spp = spp;
   validateRenderSettings(s);
-  if (threads < 0 || threads > 4096) throw Error(cat("--threads ", threads, " must be in [0, 4096]"));
+  if (threads < 0 || threads > 4096)
+    throw Error(cat("--threads ", threads, " must be in [0, 4096]"));
   return s;
 }
 
@@ -167,10 +178,14 @@ CameraParams CameraOptions::toParams(const glm::dvec3& worldLo, const glm::dvec3
   p.spp = spp;
   p.up = parseVec3("--up", up);
   if (fov != 0) p.fovDeg = fov;
-  if (fovAxis == "x") p.fovAxis = FovAxis::X;
-  else if (fovAxis == "y") p.fovAxis = FovAxis::Y;
-  else if (fovAxis == "diagonal") p.fovAxis = FovAxis::Diagonal;
-  else throw Error(cat("--fov-axis: '", fovAxis, "' is not one of x, y, diagonal"));
+  if (fovAxis == "x")
+    p.fovAxis = FovAxis::X;
+  else if (fovAxis == "y")
+    p.fovAxis = FovAxis::Y;
+  else if (fovAxis == "diagonal")
+    p.fovAxis = FovAxis::Diagonal;
+  else
+    throw Error(cat("--fov-axis: '", fovAxis, "' is not one of x, y, diagonal"));
   if (d != 0) p.d = d;
   if (!viewport.empty()) p.viewport = parseVec2("--viewport", viewport);
   if (focalLength != 0) p.focalLengthMm = focalLength;
@@ -196,8 +211,8 @@ CameraParams CameraOptions::toParams(const glm::dvec3& worldLo, const glm::dvec3
     // sphere to fit the vertical field of view.
     const double radius = std::max(0.5 * glm::length(worldHi - worldLo), 1e-6);
     const double halfFov = 0.5 * p.fovDeg.value_or(45.0) * 3.14159265358979323846 / 180.0;
-    const glm::dvec3 view = p.dir ? glm::normalize(*p.dir)
-                                  : glm::normalize(glm::dvec3(-0.35, -0.45, -1.0));
+    const glm::dvec3 view =
+        p.dir ? glm::normalize(*p.dir) : glm::normalize(glm::dvec3(-0.35, -0.45, -1.0));
     const glm::dvec3 target = p.at.value_or(centre);
     p.eye = target - view * (0.8 * radius / std::sin(halfFov));
     if (!p.dir) p.at = target;
@@ -209,8 +224,8 @@ CameraParams CameraOptions::toParams(const glm::dvec3& worldLo, const glm::dvec3
 }
 
 void logLoadedMesh(const Mesh& m) {
-  std::fprintf(stderr, "aperture: loaded %s: %zu triangles, %zu vertices in %.3f s",
-               m.name.c_str(), m.triangleCount(), m.vertexCount, m.stats.loadSeconds);
+  std::fprintf(stderr, "aperture: loaded %s: %zu triangles, %zu vertices in %.3f s", m.name.c_str(),
+               m.triangleCount(), m.vertexCount, m.stats.loadSeconds);
   if (m.stats.fileBytes)
     std::fprintf(stderr, " (%.1f MB/s)",
                  m.stats.fileBytes / 1e6 / std::max(m.stats.loadSeconds, 1e-9));
@@ -262,14 +277,13 @@ LoadedScene loadSceneMeshes(const SceneOptions& o, bool quiet) {
 }
 
 void logCullStats(const CullStats& c, size_t cameras) {
-  std::fprintf(stderr,
-               "aperture: culled to the view volume%s of %zu camera%s: kept %zu of %zu "
-               "triangles (%.2f%%) in %.3f s\n",
-               cameras == 1 ? "" : "s", cameras, cameras == 1 ? "" : "s", c.trianglesKept,
-               c.trianglesBefore,
-               c.trianglesBefore ? 100.0 * double(c.trianglesKept) / double(c.trianglesBefore)
-                                 : 100.0,
-               c.seconds);
+  std::fprintf(
+      stderr,
+      "aperture: culled to the view volume%s of %zu camera%s: kept %zu of %zu "
+      "triangles (%.2f%%) in %.3f s\n",
+      cameras == 1 ? "" : "s", cameras, cameras == 1 ? "" : "s", c.trianglesKept, c.trianglesBefore,
+      c.trianglesBefore ? 100.0 * double(c.trianglesKept) / double(c.trianglesBefore) : 100.0,
+      c.seconds);
 }
 
 void buildLoadedScene(const Device& device, LoadedScene& s, const SceneOptions& o, bool quiet,
@@ -280,7 +294,8 @@ void buildLoadedScene(const Device& device, LoadedScene& s, const SceneOptions& 
     const CameraCuller culler = cullerFor(cameras, s.meshes[0].anchor);
     if (culler.seesEverything) {
       if (!quiet)
-        std::fprintf(stderr, "aperture: --cull: a panorama camera sees all space; nothing culled\n");
+        std::fprintf(stderr,
+                     "aperture: --cull: a panorama camera sees all space; nothing culled\n");
     } else {
       s.cull = cullObjects(s.objects, culler.test(), s.subsets);
       if (!quiet) logCullStats(*s.cull, cameras.size());

@@ -1,12 +1,11 @@
 #pragma once
 // Option groups shared by the subcommands (render, bench, camera), with their validation.
+#include <CLI/CLI.hpp>
 #include <deque>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <CLI/CLI.hpp>
 
 #include "cameras/params.h"
 #include "core/cull.h"
@@ -65,9 +64,9 @@ glm::dvec2 parseVec2(const std::string& flag, const std::string& text);
 /// Loaded meshes + Embree scene, logged as they are made.
 struct LoadedScene {
   std::vector<Mesh> meshes;
-  std::vector<SceneObject> objects;     ///< what the scene is built from (subsets when culled)
-  std::deque<TriangleSubset> subsets;   ///< the culled triangles, when culling
-  std::optional<CullStats> cull;        ///< set when the scene was culled
+  std::vector<SceneObject> objects;    ///< what the scene is built from (subsets when culled)
+  std::deque<TriangleSubset> subsets;  ///< the culled triangles, when culling
+  std::optional<CullStats> cull;       ///< set when the scene was culled
   std::unique_ptr<Scene> scene;
   glm::dvec3 worldLo{0.0}, worldHi{0.0};
   double loadSeconds = 0;

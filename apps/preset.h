@@ -15,7 +15,7 @@ struct Preset {
   BuildOptions build;
   RenderSettings render;  ///< packet, tile, spp
   ExrOptions exr;
-  std::string why;        ///< one line: the measurement that justifies it
+  std::string why;  ///< one line: the measurement that justifies it
 };
 
 /// The presets in order fast, balanced, exact.

@@ -108,7 +108,7 @@ class Study {
   Framebuffer render(const Scene& scene, const RenderSettings& rs, RenderStats* stats = nullptr) {
     const auto cam = camera(scene, rs.spp);
     Framebuffer fb(c_.camera.width, c_.camera.height, kStudyAovs);
-    const RenderStats st = renderFrame(scene, *cam, rs, fb);
+    const RenderStats st = renderImage(scene, *cam, rs, fb);
     if (stats) *stats = st;
     return fb;
   }
@@ -178,11 +178,10 @@ class Study {
     TradeoffRow r;
     r.setting = s;
     // Rows that only change how the file is written reuse the base frame and its timing.
-    const bool exrOnly = s.knob != "base" && sameBuild(s.build, base.build) &&
-                         s.placement == base.placement &&
-                         s.render.packetWidth == base.render.packetWidth &&
-                         s.render.tileSize == base.render.tileSize &&
-                         s.render.spp == base.render.spp;
+    const bool exrOnly =
+        s.knob != "base" && sameBuild(s.build, base.build) && s.placement == base.placement &&
+        s.render.packetWidth == base.render.packetWidth &&
+        s.render.tileSize == base.render.tileSize && s.render.spp == base.render.spp;
     if (exrOnly && baseFrame_) {
       r.frameSeconds = baseRow_.frameSeconds;
       r.mraysPerSecond = baseRow_.mraysPerSecond;
@@ -213,7 +212,7 @@ class Study {
     Framebuffer fb(c_.camera.width, c_.camera.height, kStudyAovs);
     std::vector<double> seconds, mrays;
     for (int f = 0; f < c_.warmup + std::max(1, c_.frames); ++f) {
-      const RenderStats st = renderFrame(*scene, *cam, s.render, fb);
+      const RenderStats st = renderImage(*scene, *cam, s.render, fb);
       if (f < c_.warmup) continue;
       seconds.push_back(st.seconds);
       mrays.push_back(st.mraysPerSecond());
@@ -269,10 +268,10 @@ std::vector<TradeoffSetting> tradeoffSettings(const TradeoffConfig& c) {
   base.placement = c.scene.loadOptions().placement;
   base.render = c.base;
   base.exr = c.baseExr;
-  base.value = cat(buildName(base.build), ", ", placementName(base.placement), ", packet ",
-                   base.render.packetWidth, ", tile ", base.render.tileSize, ", ",
-                   base.render.spp, " spp, ", base.exr.halfColor ? "half" : "float", " ",
-                   exrCompressionName(base.exr.compression));
+  base.value =
+      cat(buildName(base.build), ", ", placementName(base.placement), ", packet ",
+          base.render.packetWidth, ", tile ", base.render.tileSize, ", ", base.render.spp, " spp, ",
+          base.exr.halfColor ? "half" : "float", " ", exrCompressionName(base.exr.compression));
   std::vector<TradeoffSetting> out{base};
   auto add = [&](const char* knob, const std::string& value,
                  const std::function<void(TradeoffSetting&)>& change) {
@@ -302,11 +301,10 @@ std::vector<TradeoffSetting> tradeoffSettings(const TradeoffConfig& c) {
   const std::vector<ExrCompression> compressions =
       c.quick ? std::vector<ExrCompression>{ExrCompression::None, ExrCompression::Zip,
                                             ExrCompression::Dwaa}
-              : std::vector<ExrCompression>{ExrCompression::None, ExrCompression::Rle,
-                                            ExrCompression::Zips, ExrCompression::Zip,
-                                            ExrCompression::Piz,  ExrCompression::Pxr24,
-                                            ExrCompression::B44,  ExrCompression::Dwaa,
-                                            ExrCompression::Dwab};
+              : std::vector<ExrCompression>{
+                    ExrCompression::None, ExrCompression::Rle,  ExrCompression::Zips,
+                    ExrCompression::Zip,  ExrCompression::Piz,  ExrCompression::Pxr24,
+                    ExrCompression::B44,  ExrCompression::Dwaa, ExrCompression::Dwab};
   for (ExrCompression comp : compressions)
     add("exr_compression", exrCompressionName(comp),
         [&](TradeoffSetting& s) { s.exr.compression = comp; });
@@ -354,8 +352,8 @@ std::string tradeoffCsv(const std::vector<TradeoffRow>& rows) {
     s << t.knob << ",\"" << t.value << "\"," << bvhQualityName(t.build.quality) << ","
       << int(t.build.robust) << "," << int(t.build.compact) << "," << placementName(t.placement)
       << "," << t.render.packetWidth << "," << t.render.tileSize << "," << t.render.spp << ","
-      << (t.exr.halfColor ? "half" : "float") << "," << exrCompressionName(t.exr.compression)
-      << "," << general(r.rmse) << "," << number(r.psnr, 3) << "," << general(r.maxError) << ","
+      << (t.exr.halfColor ? "half" : "float") << "," << exrCompressionName(t.exr.compression) << ","
+      << general(r.rmse) << "," << number(r.psnr, 3) << "," << general(r.maxError) << ","
       << general(r.rmseSameSpp) << "," << general(r.primIdMismatch) << ","
       << general(r.depthRelError) << "," << general(r.frameSeconds) << ","
       << number(r.mraysPerSecond, 2) << "," << general(r.buildSeconds) << "," << r.embreeBytes
@@ -396,13 +394,13 @@ std::string tradeoffMarkdown(const std::vector<TradeoffRow>& rows, const std::st
        "| frame ms | Mrays/s | build s | Embree MB | EXR KB | write ms | Pareto |\n"
        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|:-:|\n";
   for (const TradeoffRow& r : rows) {
-    s << "| " << r.setting.knob << " | " << r.setting.value << " | " << number(r.psnr, 2)
-      << " | " << general(r.rmse) << " | " << general(r.maxError) << " | "
-      << general(r.rmseSameSpp) << " | " << number(100 * r.primIdMismatch, 3) << " | "
-      << general(r.depthRelError) << " | " << number(1e3 * r.frameSeconds, 2) << " | "
-      << number(r.mraysPerSecond, 1) << " | " << number(r.buildSeconds, 3) << " | "
-      << number(r.embreeBytes / 1e6, 1) << " | " << number(r.exrBytes / 1e3, 0) << " | "
-      << number(1e3 * r.writeSeconds, 1) << " | " << (r.pareto ? "★" : "") << " |\n";
+    s << "| " << r.setting.knob << " | " << r.setting.value << " | " << number(r.psnr, 2) << " | "
+      << general(r.rmse) << " | " << general(r.maxError) << " | " << general(r.rmseSameSpp) << " | "
+      << number(100 * r.primIdMismatch, 3) << " | " << general(r.depthRelError) << " | "
+      << number(1e3 * r.frameSeconds, 2) << " | " << number(r.mraysPerSecond, 1) << " | "
+      << number(r.buildSeconds, 3) << " | " << number(r.embreeBytes / 1e6, 1) << " | "
+      << number(r.exrBytes / 1e3, 0) << " | " << number(1e3 * r.writeSeconds, 1) << " | "
+      << (r.pareto ? "★" : "") << " |\n";
   }
   s << "\nFrontier (cost = frame + write, ascending):";
   std::vector<const TradeoffRow*> front;

@@ -34,7 +34,7 @@ struct TradeoffRow {
   double rmseSameSpp = 0;
   /// Geometry (first sample of each pixel) against the reference settings at this row's spp.
   double primIdMismatch = 0, depthRelError = 0;
-  double frameSeconds = 0;  ///< median over the timed frames
+  double frameSeconds = 0;    ///< median over the timed frames
   double mraysPerSecond = 0;  ///< median
   double buildSeconds = 0;
   long long embreeBytes = 0;
@@ -45,15 +45,15 @@ struct TradeoffRow {
 };
 
 struct TradeoffConfig {
-  SceneOptions scene;      ///< meshes; its BVH and placement flags set the base setting
-  CameraParams camera;     ///< complete (size included); spp is set per row
-  RenderSettings base;     ///< base packet, tile, spp
+  SceneOptions scene;   ///< meshes; its BVH and placement flags set the base setting
+  CameraParams camera;  ///< complete (size included); spp is set per row
+  RenderSettings base;  ///< base packet, tile, spp
   ExrOptions baseExr;
   int referenceSpp = 256;
   int frames = 3, warmup = 1, writes = 3;
-  bool quick = false;      ///< fewer values per knob, no combinations
+  bool quick = false;        ///< fewer values per knob, no combinations
   bool combinations = true;  ///< also a few spp x BVH-quality combinations
-  std::string tempDir;     ///< where the EXR knobs write their files
+  std::string tempDir;       ///< where the EXR knobs write their files
   bool quiet = false;
 };
 

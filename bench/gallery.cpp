@@ -86,12 +86,11 @@ int run(const std::string& outDir) {
     RenderSettings settings;
     settings.spp = shot.params.spp;
     Framebuffer fb(shot.params.width, shot.params.height, kAovColor);
-    const RenderStats stats = renderFrame(scene, *camera, settings, fb);
+    const RenderStats stats = renderImage(scene, *camera, settings, fb);
     const std::string path = outDir + "/" + shot.file;
     writePreview(path, fb);
-    std::printf("%-22s %-12s %dx%d spp %-3d %.2f s\n", shot.file.c_str(),
-                shot.params.type.c_str(), shot.params.width, shot.params.height,
-                shot.params.spp, stats.seconds);
+    std::printf("%-22s %-12s %dx%d spp %-3d %.2f s\n", shot.file.c_str(), shot.params.type.c_str(),
+                shot.params.width, shot.params.height, shot.params.spp, stats.seconds);
   }
   return 0;
 }

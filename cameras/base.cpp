@@ -66,14 +66,14 @@ void resolveImagePlane(const CameraParams& p, double& d, double& vw, double& vh)
 }
 
 CameraFrame frameFromParams(const CameraParams& p) {
-  if (p.at && p.dir) throw Error("camera: give either a look-at point or a view direction, not both");
+  if (p.at && p.dir)
+    throw Error("camera: give either a look-at point or a view direction, not both");
   if (p.at) return CameraFrame::fromLookAt(p.eye, *p.at, p.up);
   if (p.dir) return CameraFrame::fromDirection(p.eye, *p.dir, p.up);
   return CameraFrame::fromLookAt(p.eye, glm::dvec3(0.0), p.up);
 }
 
-FrameCamera::FrameCamera(const CameraParams& p, const glm::dvec3& renderOrigin,
-                         const char* typeName)
+CameraBase::CameraBase(const CameraParams& p, const glm::dvec3& renderOrigin, const char* typeName)
     : params_(p), renderOrigin_(renderOrigin), type_(typeName) {
   if (p.spp < 1) throw Error(cat("camera: spp ", p.spp, " must be >= 1"));
   requireFinite(renderOrigin, "render origin");
@@ -99,9 +99,10 @@ FrameCamera::FrameCamera(const CameraParams& p, const glm::dvec3& renderOrigin,
     const double cosT = glm::length(horizontal);
     tiltRad_ = std::atan2(sinT, cosT);
     if (!(std::abs(tiltRad_) < radians(89.0)))
-      throw Error(cat("camera: --architectural needs a view direction less than 89 degrees "
-                      "from the horizon (tilt is ",
-                      tiltRad_ * 180.0 / kPi, " degrees)"));
+      throw Error(
+          cat("camera: --architectural needs a view direction less than 89 degrees "
+              "from the horizon (tilt is ",
+              tiltRad_ * 180.0 / kPi, " degrees)"));
     frame_ = CameraFrame::fromDirection(frame_.e, horizontal, p.up);
     shift_.y += d_ * (sinT / cosT) / vh_;
   }
@@ -110,11 +111,12 @@ FrameCamera::FrameCamera(const CameraParams& p, const glm::dvec3& renderOrigin,
   viewAxis_ = glm::vec3(-frame_.w);
 }
 
-void FrameCamera::rejectShift() const {
+void CameraBase::rejectShift() const {
   if (params_.shift != glm::dvec2(0.0) || params_.architectural)
-    throw Error(cat("camera: --shift and --architectural apply to perspective and thinlens "
-                    "cameras, not to '",
-                    type_, "'"));
+    throw Error(
+        cat("camera: --shift and --architectural apply to perspective and thinlens "
+            "cameras, not to '",
+            type_, "'"));
 }
 
 namespace {
@@ -139,20 +141,20 @@ uint32_t permuteIndex(uint32_t index, uint32_t n, uint32_t seed) {
 }
 }  // namespace
 
-void FrameCamera::lensSample(int i, int j, int s, double& lensX, double& lensY) const {
+void CameraBase::lensSample(int i, int j, int s, double& lensX, double& lensY) const {
   const uint32_t seed = hash32(uint32_t(j) ^ hash32(uint32_t(i) ^ 0x5bd1e995u));
   const int stratum = spp_ > 1 ? int(permuteIndex(uint32_t(s), uint32_t(spp_), seed)) : s;
   stratified2D(uint32_t(j), uint32_t(i), stratum, spp_, 1, lensX, lensY);
 }
 
-void FrameCamera::samplePosition(int i, int j, int s, double& x, double& y) const {
+void CameraBase::samplePosition(int i, int j, int s, double& x, double& y) const {
   double sx, sy;
   stratified2D(uint32_t(j), uint32_t(i), s, spp_, 0, sx, sy);
   x = j + sx;
   y = i + sy;
 }
 
-CameraDescription FrameCamera::describe() const {
+CameraDescription CameraBase::describe() const {
   CameraDescription c;
   c.type = type_;
   c.eye = frame_.e;

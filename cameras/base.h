@@ -25,9 +25,9 @@ CameraFrame frameFromParams(const CameraParams& p);
 
 /// Base for cameras defined by a frame and an image plane. Precomputes the render-space eye,
 /// the axes and the effective shift (user shift plus the architectural tilt shift).
-class FrameCamera : public Camera {
+class CameraBase : public Camera {
  public:
-  FrameCamera(const CameraParams& p, const glm::dvec3& renderOrigin, const char* typeName);
+  CameraBase(const CameraParams& p, const glm::dvec3& renderOrigin, const char* typeName);
 
   glm::vec3 renderEye() const override { return renderEye_; }
   glm::vec3 viewAxis() const override { return viewAxis_; }
@@ -123,9 +123,9 @@ inline void setLane(RayLanes& out, int k, const glm::dvec3& org, const glm::dvec
 /// `bool rayAt(x, y, lensX, lensY, org, dir) const` and `bool usesLens() const`. generate()
 /// and the scalar ray() both call rayAt, so packets equal the scalar path exactly.
 template <class Derived>
-class PacketCamera : public FrameCamera {
+class PacketCamera : public CameraBase {
  public:
-  using FrameCamera::FrameCamera;
+  using CameraBase::CameraBase;
 
   void generate(const PacketRequest& req, RayLanes& out, int* valid) const override {
     const Derived& self = static_cast<const Derived&>(*this);

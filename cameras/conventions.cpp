@@ -10,7 +10,6 @@ namespace aperture {
 
 namespace {
 
-
 void checkImage(int width, int height, double d) {
   if (width <= 0 || height <= 0)
     throw Error(cat("conventions: image size ", width, "x", height, " must be positive"));
@@ -24,7 +23,9 @@ double extentOfFov(double fovDeg, double d) {
   return 2.0 * d * std::tan(0.5 * fovDeg * kRadPerDeg);
 }
 
-double fullAngleDeg(double extent, double d) { return 2.0 * std::atan(0.5 * extent / d) / kRadPerDeg; }
+double fullAngleDeg(double extent, double d) {
+  return 2.0 * std::atan(0.5 * extent / d) / kRadPerDeg;
+}
 
 std::string lower(std::string s) {
   for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -55,7 +56,8 @@ MitsubaFovAxis parseMitsubaFovAxis(const std::string& name) {
   if (n == "diagonal") return MitsubaFovAxis::Diagonal;
   if (n == "smaller") return MitsubaFovAxis::Smaller;
   if (n == "larger") return MitsubaFovAxis::Larger;
-  throw Error(cat("unknown Mitsuba fov_axis '", name, "' (known: x, y, diagonal, smaller, larger)"));
+  throw Error(
+      cat("unknown Mitsuba fov_axis '", name, "' (known: x, y, diagonal, smaller, larger)"));
 }
 
 ImagePlane fromMitsuba(double fovDeg, MitsubaFovAxis axis, int width, int height, double d) {
@@ -98,13 +100,13 @@ ImagePlane fromBlender(double focalMm, double sensorWidthMm, double sensorHeight
   checkImage(width, height, d);
   if (!(focalMm > 0 && sensorWidthMm > 0 && sensorHeightMm > 0 && std::isfinite(focalMm) &&
         std::isfinite(sensorWidthMm) && std::isfinite(sensorHeightMm)))
-    throw Error(cat("conventions: focal length ", focalMm, " mm and sensor ", sensorWidthMm,
-                    "x", sensorHeightMm, " mm must be positive"));
+    throw Error(cat("conventions: focal length ", focalMm, " mm and sensor ", sensorWidthMm, "x",
+                    sensorHeightMm, " mm must be positive"));
   const double aspect = double(width) / height;
   ImagePlane p;
   p.d = d;
-  const bool horizontal = fit == BlenderSensorFit::Horizontal ||
-                          (fit == BlenderSensorFit::Auto && width >= height);
+  const bool horizontal =
+      fit == BlenderSensorFit::Horizontal || (fit == BlenderSensorFit::Auto && width >= height);
   if (horizontal) {
     p.vw = d * sensorWidthMm / focalMm;
     p.vh = p.vw / aspect;
@@ -115,13 +117,12 @@ ImagePlane fromBlender(double focalMm, double sensorWidthMm, double sensorHeight
   return p;
 }
 
-ImagePlane fromOpenCV(double fx, double fy, double cx, double cy, int width, int height,
-                      double d) {
+ImagePlane fromOpenCV(double fx, double fy, double cx, double cy, int width, int height, double d) {
   checkImage(width, height, d);
   if (!(fx > 0 && fy > 0 && std::isfinite(fx) && std::isfinite(fy) && std::isfinite(cx) &&
         std::isfinite(cy)))
-    throw Error(cat("conventions: OpenCV intrinsics fx ", fx, ", fy ", fy, ", cx ", cx, ", cy ",
-                    cy, " must be finite with fx, fy > 0"));
+    throw Error(cat("conventions: OpenCV intrinsics fx ", fx, ", fy ", fy, ", cx ", cx, ", cy ", cy,
+                    " must be finite with fx, fy > 0"));
   ImagePlane p;
   p.d = d;
   p.vw = d * width / fx;

@@ -2,9 +2,8 @@
 // Converters from other renderers' camera conventions to aperture's own parameters
 // (d, vw, vh, shift), and back to every convention for --describe. The table with the
 // formulas is in docs/cameras.md.
-#include <string>
-
 #include <glm/glm.hpp>
+#include <string>
 
 #include "cameras/params.h"
 
@@ -46,10 +45,10 @@ void applyImagePlane(const ImagePlane& plane, CameraParams& p);
 /// One perspective image plane expressed in every convention.
 struct ConventionSummary {
   double fovXDeg = 0, fovYDeg = 0, fovDiagonalDeg = 0;  ///< full angles of the centred window
-  double pbrtFovDeg = 0;           ///< pbrt-v4 fov (shorter axis)
-  double mitsubaFovXDeg = 0;       ///< Mitsuba fov with fov_axis x (the default)
-  double focal35DiagonalMm = 0;    ///< 35 mm equivalent: same diagonal angle as 36 x 24 mm
-  double focal35HorizontalMm = 0;  ///< 35 mm equivalent: same horizontal angle as 36 mm
+  double pbrtFovDeg = 0;                                ///< pbrt-v4 fov (shorter axis)
+  double mitsubaFovXDeg = 0;              ///< Mitsuba fov with fov_axis x (the default)
+  double focal35DiagonalMm = 0;           ///< 35 mm equivalent: same diagonal angle as 36 x 24 mm
+  double focal35HorizontalMm = 0;         ///< 35 mm equivalent: same horizontal angle as 36 mm
   double fx = 0, fy = 0, cx = 0, cy = 0;  ///< OpenCV intrinsics, pixels
 };
 ConventionSummary toConventions(const ImagePlane& plane, int width, int height);

@@ -27,7 +27,7 @@ CameraCuller cullerFor(const std::vector<CameraParams>& cameras, const glm::dvec
   CameraCuller c;
   const double inf = std::numeric_limits<double>::infinity();
   for (const CameraParams& p : cameras) {
-    const auto cam = makeFrameCamera(p, renderOrigin);
+    const auto cam = makeCameraModel(p, renderOrigin);
     ViewVolume v = cam->viewVolume(0.0, inf);
     if (v.kind == ViewVolume::Kind::AllSpace) c.seesEverything = true;
     // Ray origins are e (+ a lens point, + a point of the viewport for parallel cameras)
@@ -35,8 +35,7 @@ CameraCuller cullerFor(const std::vector<CameraParams>& cameras, const glm::dvec
     // largest magnitude, bounded here by 2^-22 of a generous magnitude.
     const glm::dvec3 eye = cam->frame().e - renderOrigin;
     const double reach = std::max({std::abs(eye.x), std::abs(eye.y), std::abs(eye.z)}) +
-                         std::abs(cam->vw()) + std::abs(cam->vh()) +
-                         std::abs(p.apertureRadius);
+                         std::abs(cam->vw()) + std::abs(cam->vh()) + std::abs(p.apertureRadius);
     c.pad = std::max(c.pad, reach * std::ldexp(1.0, -22));
     c.volumes.push_back(std::move(v));
   }

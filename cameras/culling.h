@@ -14,7 +14,7 @@ namespace aperture {
 /// render space (|origin| · 2^-22, so far-from-anchor eyes in world-space mode stay exact).
 struct CameraCuller {
   std::vector<ViewVolume> volumes;
-  double pad = 0;            ///< world units added to every side of a tested box
+  double pad = 0;               ///< world units added to every side of a tested box
   bool seesEverything = false;  ///< a panorama among the cameras: culling keeps all
   bool mayIntersectBox(const glm::dvec3& lo, const glm::dvec3& hi) const;
   WorldBoxTest test() const;

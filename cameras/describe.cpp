@@ -20,7 +20,7 @@ std::string vec(const glm::dvec3& v) {
 }  // namespace
 
 std::string describeCamera(const CameraParams& params, double nearDist, double farDist) {
-  const auto cam = makeFrameCamera(params);
+  const auto cam = makeCameraModel(params);
   const CameraDescription desc = cam->describe();
   const bool planarPerspective = params.type == "perspective" || params.type == "thinlens";
   const bool parallel = params.type == "orthographic" || params.type == "oblique";
@@ -45,8 +45,8 @@ std::string describeCamera(const CameraParams& params, double nearDist, double f
     const ConventionSummary c =
         toConventions({desc.d, desc.vw, desc.vh, cam->shift()}, desc.width, desc.height);
     s << "conventions:\n"
-      << "  fov horizontal " << c.fovXDeg << " deg, vertical " << c.fovYDeg
-      << " deg, diagonal " << c.fovDiagonalDeg << " deg (centred window)\n"
+      << "  fov horizontal " << c.fovXDeg << " deg, vertical " << c.fovYDeg << " deg, diagonal "
+      << c.fovDiagonalDeg << " deg (centred window)\n"
       << "  pbrt-v4 fov (shorter axis) " << c.pbrtFovDeg << " deg\n"
       << "  Mitsuba 3 fov " << c.mitsubaFovXDeg << " deg (fov_axis x)\n"
       << "  35 mm equivalent focal length " << c.focal35DiagonalMm
@@ -63,12 +63,11 @@ std::string describeCamera(const CameraParams& params, double nearDist, double f
   const char* names[8] = {"near bottom-left", "near bottom-right", "near top-right",
                           "near top-left",    "far bottom-left",   "far bottom-right",
                           "far top-right",    "far top-left"};
-  if (vv.kind == ViewVolume::Kind::AllSpace)
-    s << "  corners of the cube around the far sphere:\n";
+  if (vv.kind == ViewVolume::Kind::AllSpace) s << "  corners of the cube around the far sphere:\n";
   for (int c = 0; c < 8; ++c)
     s << "  " << (vv.kind == ViewVolume::Kind::AllSpace ? "corner" : names[c])
-      << (vv.kind == ViewVolume::Kind::AllSpace ? " " + std::to_string(c) : std::string())
-      << " " << vec(vv.corners[c]) << "\n";
+      << (vv.kind == ViewVolume::Kind::AllSpace ? " " + std::to_string(c) : std::string()) << " "
+      << vec(vv.corners[c]) << "\n";
   return s.str();
 }
 

@@ -12,7 +12,6 @@ namespace aperture {
 /// volume with the 8 corners. nearDist/farDist < 0 pick defaults: near = d for perspective
 /// and thin lens, 0 otherwise; far = 2·|at − eye| with a look-at point, else 10·d (or
 /// 10·max(vw, vh) for parallel cameras). Throws Error as makeCamera.
-std::string describeCamera(const CameraParams& params, double nearDist = -1,
-                           double farDist = -1);
+std::string describeCamera(const CameraParams& params, double nearDist = -1, double farDist = -1);
 
 }  // namespace aperture

@@ -16,7 +16,6 @@ namespace aperture {
 
 namespace {
 
-
 class EquirectCamera final : public PacketCamera<EquirectCamera> {
  public:
   EquirectCamera(const CameraParams& p, const glm::dvec3& renderOrigin)
@@ -77,8 +76,8 @@ class EquirectCamera final : public PacketCamera<EquirectCamera> {
 
 }  // namespace
 
-std::unique_ptr<FrameCamera> makeEquirectCamera(const CameraParams& p,
-                                                const glm::dvec3& renderOrigin) {
+std::unique_ptr<CameraBase> makeEquirectCamera(const CameraParams& p,
+                                               const glm::dvec3& renderOrigin) {
   return std::make_unique<EquirectCamera>(p, renderOrigin);
 }
 

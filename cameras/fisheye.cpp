@@ -18,15 +18,14 @@ namespace aperture {
 
 namespace {
 
-
 class FisheyeCamera final : public PacketCamera<FisheyeCamera> {
  public:
   FisheyeCamera(const CameraParams& p, const glm::dvec3& renderOrigin)
       : PacketCamera(p, renderOrigin, "fisheye") {
     rejectShift();
     if (!(p.fisheyeFovDeg > 0 && p.fisheyeFovDeg <= 360))
-      throw Error(cat("camera: fisheye field of view ", p.fisheyeFovDeg,
-                      " degrees must be in (0, 360]"));
+      throw Error(
+          cat("camera: fisheye field of view ", p.fisheyeFovDeg, " degrees must be in (0, 360]"));
     halfFov_ = 0.5 * p.fisheyeFovDeg * kRadPerDeg;
     radius_ = 0.5 * std::min(width_, height_);
     cx_ = 0.5 * width_;
@@ -80,8 +79,8 @@ class FisheyeCamera final : public PacketCamera<FisheyeCamera> {
 
 }  // namespace
 
-std::unique_ptr<FrameCamera> makeFisheyeCamera(const CameraParams& p,
-                                               const glm::dvec3& renderOrigin) {
+std::unique_ptr<CameraBase> makeFisheyeCamera(const CameraParams& p,
+                                              const glm::dvec3& renderOrigin) {
   return std::make_unique<FisheyeCamera>(p, renderOrigin);
 }
 

@@ -48,8 +48,8 @@ CameraFrame CameraFrame::fromLookAt(const glm::dvec3& eye, const glm::dvec3& at,
                                     const glm::dvec3& up) {
   requireFinite(at, "look-at point");
   if (eye == at)
-    throw Error(cat("camera: the look-at point equals the eye (", eye.x, ",", eye.y, ",", eye.z,
-                    ")"));
+    throw Error(
+        cat("camera: the look-at point equals the eye (", eye.x, ",", eye.y, ",", eye.z, ")"));
   return fromDirection(eye, at - eye, up);
 }
 

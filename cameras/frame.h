@@ -6,7 +6,7 @@ namespace aperture {
 
 /// Orthonormal right-handed frame: U right, V up, W backwards (away from the view direction).
 struct CameraFrame {
-  glm::dvec3 e{0.0};          ///< eye, world space
+  glm::dvec3 e{0.0};  ///< eye, world space
   glm::dvec3 u{1.0, 0.0, 0.0};
   glm::dvec3 v{0.0, 1.0, 0.0};
   glm::dvec3 w{0.0, 0.0, 1.0};

@@ -6,18 +6,18 @@
 
 namespace aperture {
 
-std::unique_ptr<FrameCamera> makePerspectiveCamera(const CameraParams& p,
+std::unique_ptr<CameraBase> makePerspectiveCamera(const CameraParams& p,
+                                                  const glm::dvec3& renderOrigin);
+std::unique_ptr<CameraBase> makeOrthographicCamera(const CameraParams& p,
                                                    const glm::dvec3& renderOrigin);
-std::unique_ptr<FrameCamera> makeOrthographicCamera(const CameraParams& p,
-                                                    const glm::dvec3& renderOrigin);
-std::unique_ptr<FrameCamera> makeObliqueCamera(const CameraParams& p,
+std::unique_ptr<CameraBase> makeObliqueCamera(const CameraParams& p,
+                                              const glm::dvec3& renderOrigin);
+std::unique_ptr<CameraBase> makeThinLensCamera(const CameraParams& p,
                                                const glm::dvec3& renderOrigin);
-std::unique_ptr<FrameCamera> makeThinLensCamera(const CameraParams& p,
-                                                const glm::dvec3& renderOrigin);
-std::unique_ptr<FrameCamera> makeEquirectCamera(const CameraParams& p,
-                                                const glm::dvec3& renderOrigin);
-std::unique_ptr<FrameCamera> makeFisheyeCamera(const CameraParams& p,
+std::unique_ptr<CameraBase> makeEquirectCamera(const CameraParams& p,
                                                const glm::dvec3& renderOrigin);
+std::unique_ptr<CameraBase> makeFisheyeCamera(const CameraParams& p,
+                                              const glm::dvec3& renderOrigin);
 
 /// The common unit direction of an oblique camera (errors for a missing, zero, backwards or
 /// too-steep direction: 89° or more from −W).

@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "cameras/models.h"
-#include "cameras/parallel.h"
+#include "cameras/parallel_projection.h"
 #include "core/error.h"
 #include "core/units.h"
 
@@ -40,11 +40,10 @@ glm::dvec3 obliqueDirection(const CameraParams& p, const CameraFrame& frame) {
   return dir;
 }
 
-std::unique_ptr<FrameCamera> makeObliqueCamera(const CameraParams& p,
-                                               const glm::dvec3& renderOrigin) {
+std::unique_ptr<CameraBase> makeObliqueCamera(const CameraParams& p,
+                                              const glm::dvec3& renderOrigin) {
   const CameraFrame frame = frameFromParams(p);
-  return std::make_unique<ParallelCamera>(p, renderOrigin, "oblique",
-                                          obliqueDirection(p, frame));
+  return std::make_unique<ParallelCamera>(p, renderOrigin, "oblique", obliqueDirection(p, frame));
 }
 
 }  // namespace aperture

@@ -12,8 +12,7 @@
 namespace aperture {
 
 PerspectiveCamera::PerspectiveCamera(const CameraParams& p, const glm::dvec3& renderOrigin,
-                                     const char* typeName, double lensRadius,
-                                     double focusDistance)
+                                     const char* typeName, double lensRadius, double focusDistance)
     : PacketCamera(p, renderOrigin, typeName),
       lensRadius_(lensRadius),
       focusDistance_(focusDistance),
@@ -146,8 +145,8 @@ void PerspectiveCamera::describeExtra(CameraDescription& c) const {
   }
 }
 
-std::unique_ptr<FrameCamera> makePerspectiveCamera(const CameraParams& p,
-                                                   const glm::dvec3& renderOrigin) {
+std::unique_ptr<CameraBase> makePerspectiveCamera(const CameraParams& p,
+                                                  const glm::dvec3& renderOrigin) {
   if (p.apertureRadius != 0)
     throw Error("camera: --aperture needs --camera thinlens (perspective is a pinhole)");
   return std::make_unique<PerspectiveCamera>(p, renderOrigin, "perspective", 0.0, 1.0);

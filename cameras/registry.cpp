@@ -6,7 +6,7 @@
 namespace aperture {
 
 namespace {
-using Factory = std::unique_ptr<FrameCamera> (*)(const CameraParams&, const glm::dvec3&);
+using Factory = std::unique_ptr<CameraBase> (*)(const CameraParams&, const glm::dvec3&);
 struct Entry {
   const char* name;
   Factory make;
@@ -26,11 +26,11 @@ std::vector<std::string> cameraTypeNames() {
 }
 
 std::unique_ptr<Camera> makeCamera(const CameraParams& params, const glm::dvec3& renderOrigin) {
-  return makeFrameCamera(params, renderOrigin);
+  return makeCameraModel(params, renderOrigin);
 }
 
-std::unique_ptr<FrameCamera> makeFrameCamera(const CameraParams& params,
-                                             const glm::dvec3& renderOrigin) {
+std::unique_ptr<CameraBase> makeCameraModel(const CameraParams& params,
+                                            const glm::dvec3& renderOrigin) {
   for (const auto& e : kCameras)
     if (params.type == e.name) return e.make(params, renderOrigin);
   std::string known;

@@ -16,10 +16,10 @@ namespace aperture {
 std::unique_ptr<Camera> makeCamera(const CameraParams& params,
                                    const glm::dvec3& renderOrigin = glm::dvec3(0.0));
 
-class FrameCamera;
+class CameraBase;
 /// The same, with the model's full interface (scalar ray(), project(), viewVolume()).
-std::unique_ptr<FrameCamera> makeFrameCamera(const CameraParams& params,
-                                             const glm::dvec3& renderOrigin = glm::dvec3(0.0));
+std::unique_ptr<CameraBase> makeCameraModel(const CameraParams& params,
+                                            const glm::dvec3& renderOrigin = glm::dvec3(0.0));
 
 /// Known type names, in registration order.
 std::vector<std::string> cameraTypeNames();

@@ -8,8 +8,8 @@
 
 namespace aperture {
 
-std::unique_ptr<FrameCamera> makeThinLensCamera(const CameraParams& p,
-                                                const glm::dvec3& renderOrigin) {
+std::unique_ptr<CameraBase> makeThinLensCamera(const CameraParams& p,
+                                               const glm::dvec3& renderOrigin) {
   requireFinite(p.apertureRadius, "aperture radius");
   requireFinite(p.focusDistance, "focus distance");
   if (!(p.apertureRadius >= 0))

@@ -107,8 +107,7 @@ bool ViewVolume::mayIntersectBox(const glm::dvec3& lo, const glm::dvec3& hi) con
     const double c = pl.eyeOffset;
     const double reach = glm::dot(glm::abs(pl.normal), half);
     const double minDot = glm::dot(pl.normal, centre) - reach;
-    const double slack =
-        slackRel * (std::abs(c) + std::abs(glm::dot(pl.normal, centre)) + reach);
+    const double slack = slackRel * (std::abs(c) + std::abs(glm::dot(pl.normal, centre)) + reach);
     if (minDot > c + slack) return false;
   }
   return true;
@@ -116,17 +115,22 @@ bool ViewVolume::mayIntersectBox(const glm::dvec3& lo, const glm::dvec3& hi) con
 
 std::string ViewVolume::kindName() const {
   switch (kind) {
-    case Kind::Box: return "box";
-    case Kind::Parallelepiped: return "parallelepiped";
-    case Kind::Frustum: return "frustum";
-    case Kind::ShearedFrustum: return "sheared frustum";
-    case Kind::AllSpace: return "all space";
+    case Kind::Box:
+      return "box";
+    case Kind::Parallelepiped:
+      return "parallelepiped";
+    case Kind::Frustum:
+      return "frustum";
+    case Kind::ShearedFrustum:
+      return "sheared frustum";
+    case Kind::AllSpace:
+      return "all space";
   }
   return "?";
 }
 
 ViewVolume viewVolumeFor(const CameraParams& params, double nearDist, double farDist) {
-  return makeFrameCamera(params)->viewVolume(nearDist, farDist);
+  return makeCameraModel(params)->viewVolume(nearDist, farDist);
 }
 
 }  // namespace aperture

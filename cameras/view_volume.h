@@ -2,10 +2,9 @@
 // The view volume of a camera: the part of space its rays reach between a near and a far
 // distance. Used by --describe and, later, to cull geometry no camera can see.
 #include <array>
+#include <glm/glm.hpp>
 #include <string>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 namespace aperture {
 
@@ -42,7 +41,7 @@ struct ViewVolume {
   Kind kind = Kind::AllSpace;
   double nearDist = 0, farDist = 0;  ///< depth (planar kinds) or distance (AllSpace)
   glm::dvec3 eye{0.0}, u{1, 0, 0}, v{0, 1, 0}, w{0, 0, 1};  ///< the camera frame, world
-  Linear xLo, xHi, yLo, yHi;  ///< planar kinds only
+  Linear xLo, xHi, yLo, yHi;                                ///< planar kinds only
   /// World-space corners: the near cross-section (xLo,yLo), (xHi,yLo), (xHi,yHi), (xLo,yHi),
   /// then the far one in the same order. AllSpace: the cube around the far sphere. Corners
   /// at an infinite far distance are not finite.

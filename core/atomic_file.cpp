@@ -59,8 +59,7 @@ void writeAtomically(const std::string& finalPath,
   if (name.empty()) throw Error(cat("cannot write '", finalPath, "': not a file name"));
   struct stat st;
   if (::stat(dir.c_str(), &st) != 0)
-    throw Error(cat("cannot write '", finalPath, "': directory '", dir,
-                    "': ", errnoText(errno)));
+    throw Error(cat("cannot write '", finalPath, "': directory '", dir, "': ", errnoText(errno)));
   if (!S_ISDIR(st.st_mode))
     throw Error(cat("cannot write '", finalPath, "': '", dir, "' is not a directory"));
 

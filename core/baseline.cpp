@@ -6,7 +6,6 @@
 #include <chrono>
 #include <cstring>
 
-
 #include "core/packet.h"
 #include "core/parallel.h"
 
@@ -40,19 +39,19 @@ BaselineTracer::BaselineTracer(const Camera& camera, int width, int height, int 
 double BaselineTracer::traceFrame(const Scene& scene) const {
   const auto start = std::chrono::steady_clock::now();
   parallelFor(tiles_.size(), 1, [&](size_t first, size_t last) {
-        _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
-        _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-        alignas(64) RTCRayHit16 packet;
-        for (size_t t = first; t != last; ++t)
-          for (size_t p = tiles_[t].first; p < tiles_[t].first + tiles_[t].count; ++p) {
-            packet.ray = rays16_[p];
-            clearHits<16>(packet);
-            rtcIntersect16(valid_[p].lanes, scene.handle(), &ctx, &packet);
-          }
-      });
+    _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+    _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    alignas(64) RTCRayHit16 packet;
+    for (size_t t = first; t != last; ++t)
+      for (size_t p = tiles_[t].first; p < tiles_[t].first + tiles_[t].count; ++p) {
+        packet.ray = rays16_[p];
+        clearHits<16>(packet);
+        rtcIntersect16(valid_[p].lanes, scene.handle(), &ctx, &packet);
+      }
+  });
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 

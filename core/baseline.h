@@ -1,10 +1,10 @@
 #pragma once
 // The benchmark ceiling: the camera's rays, generated once up front, traced by bare
 // rtcIntersect16 with nothing else (no shading, no framebuffer).
+#include <embree3/rtcore.h>
+
 #include <cstdint>
 #include <vector>
-
-#include <embree3/rtcore.h>
 
 #include "core/camera.h"
 #include "core/scene.h"

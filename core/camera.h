@@ -10,11 +10,10 @@
 //  - valid[k] = -1 for a lane to trace, 0 for a lane outside the image or without a ray
 //    (a fisheye pixel outside its circle). Invalid lanes still get finite values.
 #include <cstdint>
+#include <glm/glm.hpp>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 namespace aperture {
 
@@ -29,20 +28,20 @@ struct RayLanes {
 
 /// The pixels and sample one packet covers.
 struct PacketRequest {
-  int x0 = 0, y0 = 0;         ///< column and row of the block's top-left pixel
-  int blockW = 4, blockH = 4; ///< lanes = blockW * blockH, at most 16
-  int sample = 0;             ///< sample index in [0, spp)
+  int x0 = 0, y0 = 0;          ///< column and row of the block's top-left pixel
+  int blockW = 4, blockH = 4;  ///< lanes = blockW * blockH, at most 16
+  int sample = 0;              ///< sample index in [0, spp)
 };
 
 /// Everything a file header or --describe needs to reproduce and re-project an image.
 struct CameraDescription {
-  std::string type;                 ///< registry name: "perspective", "orthographic", ...
-  glm::dvec3 eye{0.0};              ///< e, world space, scene units
+  std::string type;     ///< registry name: "perspective", "orthographic", ...
+  glm::dvec3 eye{0.0};  ///< e, world space, scene units
   glm::dvec3 u{1, 0, 0}, v{0, 1, 0}, w{0, 0, 1};  ///< frame: right, up, backwards
-  double d = 1;                     ///< image-plane distance, scene units
-  double vw = 1, vh = 1;            ///< viewport size on the image plane, scene units
-  int width = 0, height = 0;        ///< image size, pixels
-  int spp = 1;                      ///< samples per pixel
+  double d = 1;                                   ///< image-plane distance, scene units
+  double vw = 1, vh = 1;                          ///< viewport size on the image plane, scene units
+  int width = 0, height = 0;                      ///< image size, pixels
+  int spp = 1;                                    ///< samples per pixel
   /// Camera space: origin at e, axes (U, V, W). Column-vector convention (p' = M p).
   glm::dmat4 cameraFromWorld{1.0};
   /// NDC: x = column / width, y = row / height (continuous; pixel (i, j) centre at

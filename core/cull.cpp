@@ -104,8 +104,7 @@ CullStats cullObjects(std::vector<SceneObject>& objects, const WorldBoxTest& tes
     stats.subsetBytes += (s.indices.capacity() + s.primIds.capacity()) * sizeof(uint32_t);
   }
   for (SceneObject& o : objects) o.subset = done[o.mesh];
-  stats.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stats;
 }
 

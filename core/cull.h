@@ -5,9 +5,8 @@
 #include <cstddef>
 #include <deque>
 #include <functional>
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "core/scene.h"
 
@@ -23,9 +22,9 @@ inline constexpr size_t kCullClusterSize = 64;
 struct CullStats {
   size_t trianglesBefore = 0;  ///< over the distinct meshes
   size_t trianglesKept = 0;
-  size_t clustersTested = 0;   ///< clusters of kCullClusterSize triangles
-  double seconds = 0;          ///< wall time of the culling pass
-  size_t subsetBytes = 0;      ///< memory of the culled index and primID buffers
+  size_t clustersTested = 0;  ///< clusters of kCullClusterSize triangles
+  double seconds = 0;         ///< wall time of the culling pass
+  size_t subsetBytes = 0;     ///< memory of the culled index and primID buffers
 };
 
 /// The triangles of `mesh` whose box, in at least one of `placements` (world from mesh), may

@@ -25,9 +25,10 @@ std::string cat(const Args&... args) {
 }  // namespace aperture
 
 /// Internal invariant check that prints both operands; active in every build type.
-#define APERTURE_CHECK_OP(a, op, b)                                                             \
-  do {                                                                                          \
-    if (!((a)op(b)))                                                                            \
-      throw ::aperture::Error(::aperture::cat(__FILE__, ":", __LINE__, ": check failed: " #a    \
-                                              " " #op " " #b " (", (a), " vs ", (b), ")"));     \
+#define APERTURE_CHECK_OP(a, op, b)                                                           \
+  do {                                                                                        \
+    if (!((a)op(b)))                                                                          \
+      throw ::aperture::Error(::aperture::cat(__FILE__, ":", __LINE__,                        \
+                                              ": check failed: " #a " " #op " " #b " (", (a), \
+                                              " vs ", (b), ")"));                             \
   } while (0)

@@ -76,9 +76,8 @@ const char* const kNormalNames[3] = {"N.X", "N.Y", "N.Z"};
 const char* const kPositionNames[3] = {"P.X", "P.Y", "P.Z"};
 
 /// Adds a channel and a slice over interleaved data (`components` values a pixel).
-void addChannel(Imf::Header& header, Imf::FrameBuffer& frame, const char* name,
-                Imf::PixelType type, const void* data, size_t valueSize, int components,
-                int width) {
+void addChannel(Imf::Header& header, Imf::FrameBuffer& frame, const char* name, Imf::PixelType type,
+                const void* data, size_t valueSize, int components, int width) {
   header.channels().insert(name, Imf::Channel(type));
   const size_t xStride = valueSize * size_t(components);
   frame.insert(name, Imf::Slice(type, static_cast<char*>(const_cast<void*>(data)), xStride,
@@ -178,8 +177,8 @@ std::string exrCompressionName(ExrCompression c) {
 void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata& meta,
               const ExrOptions& options) {
   if (fb.width <= 0 || fb.height <= 0)
-    throw Error(cat("cannot write '", path, "': empty framebuffer (", fb.width, "x", fb.height,
-                    ")"));
+    throw Error(
+        cat("cannot write '", path, "': empty framebuffer (", fb.width, "x", fb.height, ")"));
   const size_t n = fb.pixelCount();
   auto checkSize = [&](const char* aov, size_t have, size_t perPixel) {
     if (have != n * perPixel)
@@ -199,12 +198,12 @@ void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata&
     if (options.halfColor) {
       halfColor.assign(fb.rgba.begin(), fb.rgba.end());
       for (int c = 0; c < 4; ++c)
-        addChannel(header, frame, kColorNames[c], Imf::HALF, halfColor.data() + c, sizeof(half),
-                   4, w);
+        addChannel(header, frame, kColorNames[c], Imf::HALF, halfColor.data() + c, sizeof(half), 4,
+                   w);
     } else {
       for (int c = 0; c < 4; ++c)
-        addChannel(header, frame, kColorNames[c], Imf::FLOAT, fb.rgba.data() + c, sizeof(float),
-                   4, w);
+        addChannel(header, frame, kColorNames[c], Imf::FLOAT, fb.rgba.data() + c, sizeof(float), 4,
+                   w);
     }
   }
   if (fb.has(kAovDepth)) {
@@ -218,8 +217,8 @@ void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata&
   if (fb.has(kAovNormal)) {
     checkSize("normal", fb.normal.size(), 3);
     for (int c = 0; c < 3; ++c)
-      addChannel(header, frame, kNormalNames[c], Imf::FLOAT, fb.normal.data() + c,
-                 sizeof(float), 3, w);
+      addChannel(header, frame, kNormalNames[c], Imf::FLOAT, fb.normal.data() + c, sizeof(float), 3,
+                 w);
   }
   if (fb.has(kAovPosition)) {
     checkSize("position", fb.position.size(), 3);
@@ -276,8 +275,8 @@ Framebuffer readExr(const std::string& path, ExrMetadata* meta) {
     auto insert = [&](const char* name, Imf::PixelType type, void* data, size_t valueSize,
                       int components, double fill) {
       const size_t xStride = valueSize * size_t(components);
-      frame.insert(name, Imf::Slice::Make(type, data, window, xStride, xStride * size_t(width),
-                                          1, 1, fill));
+      frame.insert(
+          name, Imf::Slice::Make(type, data, window, xStride, xStride * size_t(width), 1, 1, fill));
     };
     if (mask & kAovColor)
       for (int c = 0; c < 4; ++c)

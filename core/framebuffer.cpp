@@ -13,8 +13,8 @@ struct AovName {
   Aov bit;
 };
 constexpr AovName kAovNames[] = {
-    {"color", kAovColor},       {"depth", kAovDepth},     {"distance", kAovDistance},
-    {"normal", kAovNormal},     {"position", kAovPosition}, {"primid", kAovPrimId},
+    {"color", kAovColor},   {"depth", kAovDepth},       {"distance", kAovDistance},
+    {"normal", kAovNormal}, {"position", kAovPosition}, {"primid", kAovPrimId},
     {"geomid", kAovGeomId},
 };
 }  // namespace

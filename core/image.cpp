@@ -17,9 +17,7 @@ namespace aperture {
 
 namespace {
 
-uint8_t toByte(double v) {
-  return uint8_t(std::lround(std::clamp(v, 0.0, 1.0) * 255.0));
-}
+uint8_t toByte(double v) { return uint8_t(std::lround(std::clamp(v, 0.0, 1.0) * 255.0)); }
 
 /// The sRGB transfer function (IEC 61966-2-1) of a linear value in [0, 1].
 double srgbEncode(double linear) {
@@ -37,8 +35,7 @@ std::string extensionOf(const std::string& path) {
 }
 
 /// Pixels (channels interleaved) of the preview of `fb`.
-std::vector<uint8_t> previewPixels(const Framebuffer& fb, const std::string& path,
-                                   int* channels) {
+std::vector<uint8_t> previewPixels(const Framebuffer& fb, const std::string& path, int* channels) {
   const size_t n = fb.pixelCount();
   std::vector<uint8_t> out;
   if (fb.has(kAovColor) && fb.rgba.size() == 4 * n) {
@@ -70,8 +67,8 @@ std::vector<uint8_t> previewPixels(const Framebuffer& fb, const std::string& pat
     for (size_t i = 0; i < 3 * n; ++i) out[i] = toByte(fb.normal[i] * 0.5 + 0.5);
     return out;
   }
-  throw Error(cat("cannot write preview '", path,
-                  "': the framebuffer has no color, depth or normal AOV"));
+  throw Error(
+      cat("cannot write preview '", path, "': the framebuffer has no color, depth or normal AOV"));
 }
 
 /// Mean relative depth error over pixels finite in both with Zref != 0.
@@ -116,16 +113,15 @@ void writePreview(const std::string& path, const Framebuffer& fb) {
       extensionOf(path));
 }
 
-ImageDiff compareFramebuffers(const Framebuffer& test, const Framebuffer& reference,
-                              double peak) {
+ImageDiff compareFramebuffers(const Framebuffer& test, const Framebuffer& reference, double peak) {
   if (test.width != reference.width || test.height != reference.height)
     throw Error(cat("cannot compare images of different sizes: ", test.width, "x", test.height,
                     " vs reference ", reference.width, "x", reference.height));
   const size_t n = test.pixelCount();
-  const bool color = test.has(kAovColor) && reference.has(kAovColor) &&
-                     test.rgba.size() == 4 * n && reference.rgba.size() == 4 * n;
-  const bool depth = test.has(kAovDepth) && reference.has(kAovDepth) &&
-                     test.depth.size() == n && reference.depth.size() == n;
+  const bool color = test.has(kAovColor) && reference.has(kAovColor) && test.rgba.size() == 4 * n &&
+                     reference.rgba.size() == 4 * n;
+  const bool depth = test.has(kAovDepth) && reference.has(kAovDepth) && test.depth.size() == n &&
+                     reference.depth.size() == n;
   if (!color && !depth)
     throw Error("cannot compare images: they share neither a color nor a depth AOV");
 
@@ -155,8 +151,8 @@ ImageDiff compareFramebuffers(const Framebuffer& test, const Framebuffer& refere
   diff.rmse = result.rms_error;
   diff.maxError = result.maxerror;
   diff.meanError = result.meanerror;
-  diff.psnr = diff.rmse > 0 ? 20.0 * std::log10(peak / diff.rmse)
-                            : std::numeric_limits<double>::infinity();
+  diff.psnr =
+      diff.rmse > 0 ? 20.0 * std::log10(peak / diff.rmse) : std::numeric_limits<double>::infinity();
   if (test.has(kAovPrimId) && reference.has(kAovPrimId) && test.primId.size() == n &&
       reference.primId.size() == n && n > 0) {
     size_t differ = 0;

@@ -17,7 +17,7 @@ void writePreview(const std::string& path, const Framebuffer& fb);
 /// OpenImageIO's ImageBufAlgo::compare.
 struct ImageDiff {
   double rmse = 0;
-  double psnr = 0;        ///< 20 log10(peak / rmse), peak given to compareColor; inf if equal
+  double psnr = 0;  ///< 20 log10(peak / rmse), peak given to compareColor; inf if equal
   double maxError = 0;
   double meanError = 0;
   double primIdMismatch = 0;  ///< share of pixels whose primID differs (if both have it)

@@ -137,8 +137,8 @@ void estimatePly(const std::string& head, uint64_t fileBytes, MeshSizeEstimate& 
       // follows from the bytes the faces take.
       if (!ascii && othersFixed && e.lists == 1 && e.count > 0 && dataBytes > otherBytes) {
         const double perFace = double(dataBytes - otherBytes) / double(e.count);
-        const double corners = (perFace - double(e.fixedBytes + e.listCountBytes)) /
-                               double(e.listItemBytes);
+        const double corners =
+            (perFace - double(e.fixedBytes + e.listCountBytes)) / double(e.listItemBytes);
         if (corners > 3) m.triangles = e.count * uint64_t(std::lround(corners - 2));
       }
     } else if (e.name == "tristrips") {
@@ -261,8 +261,10 @@ MeshSizeEstimate estimateMeshSize(const std::string& spec) {
     return m;
   }
   const std::string ext = lowerExtension(spec);
-  if (ext == ".ply") estimatePly(head, m.fileBytes, m);
-  else if (ext == ".obj") estimateObj(sampleChunks(spec, m.fileBytes), m.fileBytes, m);
+  if (ext == ".ply")
+    estimatePly(head, m.fileBytes, m);
+  else if (ext == ".obj")
+    estimateObj(sampleChunks(spec, m.fileBytes), m.fileBytes, m);
   // The loaders map the whole file; its pages count too.
   m.loaderBytes += m.fileBytes;
   if (m.how.empty()) {
@@ -287,11 +289,16 @@ uint64_t framebufferBytesPerPixel(AovMask aovs) {
 std::string formatBytes(uint64_t bytes) {
   const double b = double(bytes);
   char buf[64];
-  if (b >= 1e12) std::snprintf(buf, sizeof buf, "%.1f TB", b / 1e12);
-  else if (b >= 1e9) std::snprintf(buf, sizeof buf, "%.2f GB", b / 1e9);
-  else if (b >= 1e6) std::snprintf(buf, sizeof buf, "%.1f MB", b / 1e6);
-  else if (b >= 1e3) std::snprintf(buf, sizeof buf, "%.1f KB", b / 1e3);
-  else std::snprintf(buf, sizeof buf, "%llu bytes", static_cast<unsigned long long>(bytes));
+  if (b >= 1e12)
+    std::snprintf(buf, sizeof buf, "%.1f TB", b / 1e12);
+  else if (b >= 1e9)
+    std::snprintf(buf, sizeof buf, "%.2f GB", b / 1e9);
+  else if (b >= 1e6)
+    std::snprintf(buf, sizeof buf, "%.1f MB", b / 1e6);
+  else if (b >= 1e3)
+    std::snprintf(buf, sizeof buf, "%.1f KB", b / 1e3);
+  else
+    std::snprintf(buf, sizeof buf, "%llu bytes", static_cast<unsigned long long>(bytes));
   return buf;
 }
 
@@ -337,14 +344,20 @@ uint64_t parseMemoryLimit(const std::string& flag, const std::string& text) {
   std::string suffix(e);
   for (char& c : suffix) c = char(std::toupper(static_cast<unsigned char>(c)));
   double scale = 0;
-  if (suffix.empty() || suffix == "B") scale = 1;
-  else if (suffix == "K" || suffix == "KB" || suffix == "KIB") scale = 1024.0;
-  else if (suffix == "M" || suffix == "MB" || suffix == "MIB") scale = 1024.0 * 1024;
-  else if (suffix == "G" || suffix == "GB" || suffix == "GIB") scale = 1024.0 * 1024 * 1024;
-  else if (suffix == "T" || suffix == "TB" || suffix == "TIB") scale = 1024.0 * 1024 * 1024 * 1024;
+  if (suffix.empty() || suffix == "B")
+    scale = 1;
+  else if (suffix == "K" || suffix == "KB" || suffix == "KIB")
+    scale = 1024.0;
+  else if (suffix == "M" || suffix == "MB" || suffix == "MIB")
+    scale = 1024.0 * 1024;
+  else if (suffix == "G" || suffix == "GB" || suffix == "GIB")
+    scale = 1024.0 * 1024 * 1024;
+  else if (suffix == "T" || suffix == "TB" || suffix == "TIB")
+    scale = 1024.0 * 1024 * 1024 * 1024;
   const double bytes = v * scale;
   if (e == b || scale == 0 || !std::isfinite(bytes) || bytes < 1 || bytes > 9.2e18)
-    throw Error(cat(flag, ": '", text, "' is not a memory size (expected BYTES with an optional "
+    throw Error(cat(flag, ": '", text,
+                    "' is not a memory size (expected BYTES with an optional "
                     "K, M, G or T suffix, or auto)"));
   return uint64_t(bytes);
 }

@@ -2,11 +2,10 @@
 // Triangle meshes as loaded from PLY, OBJ or a procedural generator.
 #include <cstddef>
 #include <cstdint>
+#include <glm/glm.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 namespace aperture {
 
@@ -16,22 +15,22 @@ inline constexpr size_t kVertexPaddingFloats = 4;
 
 /// What the loader saw, reported to the user and in bench output.
 struct MeshStats {
-  size_t fileBytes = 0;              ///< bytes of the source file (0 for procedural meshes)
-  double loadSeconds = 0;            ///< wall time of loadMesh
-  size_t sourceFaces = 0;            ///< faces/strips/polygons in the file before triangulation
-  size_t nonFiniteVertices = 0;      ///< vertices with a NaN or Inf coordinate (set to 0)
-  size_t droppedTriangles = 0;       ///< triangles dropped because they use a non-finite vertex
-  size_t degenerateTriangles = 0;    ///< triangles with a repeated index (kept; Embree skips them)
+  size_t fileBytes = 0;            ///< bytes of the source file (0 for procedural meshes)
+  double loadSeconds = 0;          ///< wall time of loadMesh
+  size_t sourceFaces = 0;          ///< faces/strips/polygons in the file before triangulation
+  size_t nonFiniteVertices = 0;    ///< vertices with a NaN or Inf coordinate (set to 0)
+  size_t droppedTriangles = 0;     ///< triangles dropped because they use a non-finite vertex
+  size_t degenerateTriangles = 0;  ///< triangles with a repeated index (kept; Embree skips them)
 };
 
 /// An indexed triangle mesh. World position of vertex k is anchor + positions[3k..3k+2].
 /// The anchor is chosen at load (the bounding-box centre in camera-relative mode, the origin
 /// in world-space mode) and kept in double so far-from-origin meshes keep float precision.
 struct Mesh {
-  std::string name;                ///< file path or procedural spec it came from
-  glm::dvec3 anchor{0.0};          ///< world-space origin of `positions`, scene units
-  std::vector<float> positions;    ///< 3 * vertexCount floats, then kVertexPaddingFloats zeros
-  std::vector<uint32_t> indices;   ///< 3 per triangle, each < vertexCount
+  std::string name;               ///< file path or procedural spec it came from
+  glm::dvec3 anchor{0.0};         ///< world-space origin of `positions`, scene units
+  std::vector<float> positions;   ///< 3 * vertexCount floats, then kVertexPaddingFloats zeros
+  std::vector<uint32_t> indices;  ///< 3 per triangle, each < vertexCount
   size_t vertexCount = 0;
   /// Optional: loaders of double-precision sources (PLY double properties, procedural scenes)
   /// fill this instead of `positions`; finishMesh() anchors it in double and clears it.

@@ -105,8 +105,8 @@ Mesh loadObjFromMemory(const char* data, size_t size, const std::string& path) {
         if (v < 0) {
           if (v < -have)
             throw Error(cat(path, ":", line, ": relative index ", v,
-                            " points before the first vertex (", have,
-                            " vertices so far, line ", line, ")"));
+                            " points before the first vertex (", have, " vertices so far, line ",
+                            line, ")"));
           v = have + v;
         } else {
           if (v > int64_t(std::numeric_limits<uint32_t>::max()))

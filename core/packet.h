@@ -55,11 +55,11 @@ struct HitLanes {
 template <int N>
 HitLanes hitLanes(const typename PacketOf<N>::type& p) {
   if constexpr (N == 1)
-    return {&p.ray.tfar, &p.hit.Ng_x, &p.hit.Ng_y, &p.hit.Ng_z,
+    return {&p.ray.tfar,   &p.hit.Ng_x,   &p.hit.Ng_y,     &p.hit.Ng_z,
             &p.hit.geomID, &p.hit.primID, &p.hit.instID[0]};
   else
-    return {p.ray.tfar, p.hit.Ng_x, p.hit.Ng_y, p.hit.Ng_z, p.hit.geomID, p.hit.primID,
-            p.hit.instID[0]};
+    return {p.ray.tfar,   p.hit.Ng_x,   p.hit.Ng_y,     p.hit.Ng_z,
+            p.hit.geomID, p.hit.primID, p.hit.instID[0]};
 }
 
 /// Sets hit.geomID of every lane to RTC_INVALID_GEOMETRY_ID (required before rtcIntersect).

@@ -3,10 +3,10 @@
 // ThreadSanitizer annotations for the fork and join edges. Debian's TBB is not instrumented,
 // so without them TSan cannot see that a task runs after the caller wrote its inputs, nor
 // that the caller resumes after every task finished.
-#include <cstddef>
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+
+#include <cstddef>
 
 #if defined(__SANITIZE_THREAD__)
 extern "C" void __tsan_acquire(void* addr);

@@ -38,14 +38,22 @@ bool isInteger(PType t) { return t != PType::Float32 && t != PType::Float64; }
 
 const char* typeName(PType t) {
   switch (t) {
-    case PType::Int8: return "char";
-    case PType::UInt8: return "uchar";
-    case PType::Int16: return "short";
-    case PType::UInt16: return "ushort";
-    case PType::Int32: return "int";
-    case PType::UInt32: return "uint";
-    case PType::Float32: return "float";
-    case PType::Float64: return "double";
+    case PType::Int8:
+      return "char";
+    case PType::UInt8:
+      return "uchar";
+    case PType::Int16:
+      return "short";
+    case PType::UInt16:
+      return "ushort";
+    case PType::Int32:
+      return "int";
+    case PType::UInt32:
+      return "uint";
+    case PType::Float32:
+      return "float";
+    case PType::Float64:
+      return "double";
   }
   return "?";
 }
@@ -55,14 +63,20 @@ const char* typeName(PType t) {
 bool fitsType(PType t, int64_t v) {
   if (v == -1) return true;
   switch (t) {
-    case PType::Int8: return v >= -128 && v <= 127;
-    case PType::UInt8: return v >= 0 && v <= 255;
-    case PType::Int16: return v >= -32768 && v <= 32767;
-    case PType::UInt16: return v >= 0 && v <= 65535;
-    case PType::Int32: return v >= std::numeric_limits<int32_t>::min() &&
-                              v <= std::numeric_limits<int32_t>::max();
-    case PType::UInt32: return v >= 0 && v <= int64_t(std::numeric_limits<uint32_t>::max());
-    default: return true;
+    case PType::Int8:
+      return v >= -128 && v <= 127;
+    case PType::UInt8:
+      return v >= 0 && v <= 255;
+    case PType::Int16:
+      return v >= -32768 && v <= 32767;
+    case PType::UInt16:
+      return v >= 0 && v <= 65535;
+    case PType::Int32:
+      return v >= std::numeric_limits<int32_t>::min() && v <= std::numeric_limits<int32_t>::max();
+    case PType::UInt32:
+      return v >= 0 && v <= int64_t(std::numeric_limits<uint32_t>::max());
+    default:
+      return true;
   }
 }
 
@@ -90,8 +104,8 @@ bool parseType(std::string_view s, PType& t) {
 struct Prop {
   std::string name;
   bool list = false;
-  PType type = PType::Float32;       // value type (list items for a list)
-  PType countType = PType::UInt8;    // list count type
+  PType type = PType::Float32;     // value type (list items for a list)
+  PType countType = PType::UInt8;  // list count type
 };
 
 struct Elem {
@@ -120,35 +134,49 @@ T loadRaw(const char* p, bool swap) {
 
 double loadDouble(PType t, const char* p, bool swap) {
   switch (t) {
-    case PType::Int8: return loadRaw<int8_t>(p, swap);
-    case PType::UInt8: return loadRaw<uint8_t>(p, swap);
-    case PType::Int16: return loadRaw<int16_t>(p, swap);
-    case PType::UInt16: return loadRaw<uint16_t>(p, swap);
-    case PType::Int32: return loadRaw<int32_t>(p, swap);
-    case PType::UInt32: return loadRaw<uint32_t>(p, swap);
-    case PType::Float32: return loadRaw<float>(p, swap);
-    case PType::Float64: return loadRaw<double>(p, swap);
+    case PType::Int8:
+      return loadRaw<int8_t>(p, swap);
+    case PType::UInt8:
+      return loadRaw<uint8_t>(p, swap);
+    case PType::Int16:
+      return loadRaw<int16_t>(p, swap);
+    case PType::UInt16:
+      return loadRaw<uint16_t>(p, swap);
+    case PType::Int32:
+      return loadRaw<int32_t>(p, swap);
+    case PType::UInt32:
+      return loadRaw<uint32_t>(p, swap);
+    case PType::Float32:
+      return loadRaw<float>(p, swap);
+    case PType::Float64:
+      return loadRaw<double>(p, swap);
   }
   return 0;
 }
 
 int64_t loadInt(PType t, const char* p, bool swap) {
   switch (t) {
-    case PType::Int8: return loadRaw<int8_t>(p, swap);
-    case PType::UInt8: return loadRaw<uint8_t>(p, swap);
-    case PType::Int16: return loadRaw<int16_t>(p, swap);
-    case PType::UInt16: return loadRaw<uint16_t>(p, swap);
-    case PType::Int32: return loadRaw<int32_t>(p, swap);
-    case PType::UInt32: return loadRaw<uint32_t>(p, swap);
-    default: return 0;  // header validation keeps float types out of integer slots
+    case PType::Int8:
+      return loadRaw<int8_t>(p, swap);
+    case PType::UInt8:
+      return loadRaw<uint8_t>(p, swap);
+    case PType::Int16:
+      return loadRaw<int16_t>(p, swap);
+    case PType::UInt16:
+      return loadRaw<uint16_t>(p, swap);
+    case PType::Int32:
+      return loadRaw<int32_t>(p, swap);
+    case PType::UInt32:
+      return loadRaw<uint32_t>(p, swap);
+    default:
+      return 0;  // header validation keeps float types out of integer slots
   }
 }
 
 /// Reads values from binary data; every read is bounds-checked and errors give byte offsets.
 class BinaryReader {
  public:
-  BinaryReader(const std::string& path, const char* base, const char* p, const char* end,
-               bool swap)
+  BinaryReader(const std::string& path, const char* base, const char* p, const char* end, bool swap)
       : path_(path), base_(base), p_(p), end_(end), swap_(swap) {}
 
   std::string where() const { return cat("byte offset ", p_ - base_); }
@@ -159,8 +187,8 @@ class BinaryReader {
 
   void need(size_t n, const char* what) const {
     if (remaining() < n)
-      throw Error(cat(path_, ": truncated data: ", what, " at byte offset ", p_ - base_,
-                      " needs ", n, " bytes but the file ends at byte ", end_ - base_));
+      throw Error(cat(path_, ": truncated data: ", what, " at byte offset ", p_ - base_, " needs ",
+                      n, " bytes but the file ends at byte ", end_ - base_));
   }
   double readReal(PType t, const char* what) {
     need(typeSize(t), what);
@@ -204,7 +232,9 @@ class BinaryReader {
   bool swap_;
 };
 
-bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f'; }
+bool isSpace(char c) {
+  return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f';
+}
 
 /// Reads whitespace-separated tokens from ASCII data; errors give line numbers and tokens.
 class TextReader {
@@ -221,8 +251,8 @@ class TextReader {
       ++p_;
     }
     if (p_ == end_)
-      throw Error(cat(path_, ": truncated data: the file ends at line ", line_, " while reading ",
-                      what));
+      throw Error(
+          cat(path_, ": truncated data: the file ends at line ", line_, " while reading ", what));
     b = p_;
     while (p_ < end_ && !isSpace(*p_)) ++p_;
     e = p_;
@@ -261,8 +291,8 @@ class TextReader {
     // Every value takes at least one character and one separator.
     if (uint64_t(n) > remaining() / 2 + 1)
       throw Error(cat(path_, ":", line, ": list count ", n, " for property '", prop.name,
-                      "' is larger than the rest of the file (", remaining(), " bytes, line ",
-                      line, ")"));
+                      "' is larger than the rest of the file (", remaining(), " bytes, line ", line,
+                      ")"));
     return uint64_t(n);
   }
   void skipValues(uint64_t n, PType t, const char* what) {
@@ -331,8 +361,8 @@ Header parseHeader(const std::string& path, const char* data, size_t size) {
     size_t next;
     auto words = splitWords(headerLine(window, p, next));
     ++lineCount;
-    if (words.size() == 1 && words[0] == "end_header" && (next < window.size() ||
-                                                          window.size() == size)) {
+    if (words.size() == 1 && words[0] == "end_header" &&
+        (next < window.size() || window.size() == size)) {
       terminated = true;
       h.dataOffset = next;
       h.dataLine = lineCount + 1;
@@ -389,8 +419,7 @@ Header parseHeader(const std::string& path, const char* data, size_t size) {
           throw Error(cat(path, ":", lineNo, ": duplicate element '", printable(e.name), "'"));
       h.elems.push_back(std::move(e));
     } else if (w[0] == "property") {
-      if (h.elems.empty())
-        throw Error(cat(path, ":", lineNo, ": property before any element"));
+      if (h.elems.empty()) throw Error(cat(path, ":", lineNo, ": property before any element"));
       Prop p;
       if (w.size() == 5 && w[1] == "list") {
         p.list = true;
@@ -500,12 +529,12 @@ int findIndexList(const std::string& path, const Elem& e, bool allowVertexIndex)
   int k = findProp(e, "vertex_indices");
   if (k < 0 && allowVertexIndex) k = findProp(e, "vertex_index");
   if (k < 0)
-    throw Error(cat(path, ":", e.line, ": element '", e.name,
-                    "' has no vertex_indices list property"));
+    throw Error(
+        cat(path, ":", e.line, ": element '", e.name, "' has no vertex_indices list property"));
   const Prop& p = e.props[k];
   if (!p.list)
-    throw Error(cat(path, ":", e.line, ": property '", p.name, "' of '", e.name,
-                    "' is not a list"));
+    throw Error(
+        cat(path, ":", e.line, ": property '", p.name, "' of '", e.name, "' is not a list"));
   if (!isInteger(p.type))
     throw Error(cat(path, ":", e.line, ": index type of '", p.name, "' is not an integer type"));
   return k;

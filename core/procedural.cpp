@@ -17,8 +17,6 @@
 //   cube     size=S (default 1): closed cube [-S/2, S/2]^3, 8 shared vertices, 12 triangles.
 //   city     no keys: about 20x20 units of ground (y=0) with rows of closed boxes of different
 //            heights and some tall 24-sided columns (closed cylinders).
-#include "core/parallel.h"
-
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -26,11 +24,11 @@
 
 #include "core/error.h"
 #include "core/mesh.h"
+#include "core/parallel.h"
 #include "core/units.h"
 
 namespace aperture {
 namespace {
-
 
 using Params = std::map<std::string, double>;
 
@@ -143,8 +141,8 @@ Mesh makeSphere(const std::string& spec, const Params& p) {
   m.vertexCount = sphereVertices(segments, rings);
   m.positionsDouble.resize(3 * m.vertexCount);
   m.indices.resize(3 * sphereTriangles(segments, rings));
-  writeSphere(m.positionsDouble.data(), m.indices.data(), 0,
-              {p.at("cx"), p.at("cy"), p.at("cz")}, radius, segments, rings);
+  writeSphere(m.positionsDouble.data(), m.indices.data(), 0, {p.at("cx"), p.at("cy"), p.at("cz")},
+              radius, segments, rings);
   return m;
 }
 

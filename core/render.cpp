@@ -7,7 +7,6 @@
 #include <chrono>
 #include <cmath>
 
-
 #include "core/error.h"
 #include "core/packet.h"
 #include "core/parallel.h"
@@ -25,7 +24,7 @@ void validateRenderSettings(const RenderSettings& s) {
 namespace {
 
 /// What one frame computes, decided once from the framebuffer's AOVs.
-struct FramePlan {
+struct ImagePlan {
   const Scene& scene;
   const Camera& camera;
   Framebuffer& fb;
@@ -33,9 +32,9 @@ struct FramePlan {
   glm::vec3 eye, axis;  // render space
   glm::dvec3 origin;    // world position of the render-space origin
   bool color, depth, distance, normal, position, primId, geomId;
-  bool anyGeometry;     // any AOV filled from sample 0 only
-  bool instanced;       // normals of instanced hits need the instance's normal matrix
-  bool remapPrimIds;    // the scene was culled: primID goes through Scene::originalPrimId
+  bool anyGeometry;   // any AOV filled from sample 0 only
+  bool instanced;     // normals of instanced hits need the instance's normal matrix
+  bool remapPrimIds;  // the scene was culled: primID goes through Scene::originalPrimId
 };
 
 struct TileCounters {
@@ -48,7 +47,7 @@ inline bool finiteLane(const RayLanes& l, int k) {
 }
 
 template <int N>
-void renderTile(const FramePlan& plan, int x0, int y0, int x1, int y1, TileCounters& count) {
+void renderTile(const ImagePlan& plan, int x0, int y0, int x1, int y1, TileCounters& count) {
   constexpr int kBW = blockWidthFor(N), kBH = blockHeightFor(N);
   // Denormals flushed on every worker (Embree's recommendation); same mode on all threads.
   _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
@@ -105,8 +104,8 @@ void renderTile(const FramePlan& plan, int x0, int y0, int x1, int y1, TileCount
           if (plan.instanced)
             for (int k = 0; k < N; ++k)
               if (hitLane[k] && h.instID[k] != RTC_INVALID_GEOMETRY_ID) {
-                const glm::vec3 n = plan.scene.normalFromMesh(h.instID[k]) *
-                                    glm::vec3(nx[k], ny[k], nz[k]);
+                const glm::vec3 n =
+                    plan.scene.normalFromMesh(h.instID[k]) * glm::vec3(nx[k], ny[k], nz[k]);
                 nx[k] = n.x, ny[k] = n.y, nz[k] = n.z;
               }
           for (int k = 0; k < N; ++k) {
@@ -117,8 +116,8 @@ void renderTile(const FramePlan& plan, int x0, int y0, int x1, int y1, TileCount
         }
         if (plan.color)
           for (int k = 0; k < N; ++k) {
-            const float c = std::fabs(nx[k] * lanes.dirX[k] + ny[k] * lanes.dirY[k] +
-                                      nz[k] * lanes.dirZ[k]);
+            const float c =
+                std::fabs(nx[k] * lanes.dirX[k] + ny[k] * lanes.dirY[k] + nz[k] * lanes.dirZ[k]);
             shade[k] += hitLane[k] ? c : 0.0f;
             cover[k] += hitLane[k] ? 1.0f : 0.0f;
           }
@@ -144,20 +143,20 @@ void renderTile(const FramePlan& plan, int x0, int y0, int x1, int y1, TileCount
           }
           if (plan.position) {
             // Hit point in double: render-space origin + org + t·dir, then rounded once.
-            const glm::dvec3 p = plan.origin +
-                                 glm::dvec3(lanes.orgX[k], lanes.orgY[k], lanes.orgZ[k]) +
-                                 double(t) * glm::dvec3(lanes.dirX[k], lanes.dirY[k], lanes.dirZ[k]);
+            const glm::dvec3 p =
+                plan.origin + glm::dvec3(lanes.orgX[k], lanes.orgY[k], lanes.orgZ[k]) +
+                double(t) * glm::dvec3(lanes.dirX[k], lanes.dirY[k], lanes.dirZ[k]);
             fb.position[3 * px] = float(p.x);
             fb.position[3 * px + 1] = float(p.y);
             fb.position[3 * px + 2] = float(p.z);
           }
           if (plan.primId)
-            fb.primId[px] = plan.remapPrimIds
-                                ? plan.scene.originalPrimId(
-                                      h.instID[k] == RTC_INVALID_GEOMETRY_ID ? h.geomID[k]
-                                                                             : h.instID[k],
-                                      h.primID[k])
-                                : h.primID[k];
+            fb.primId[px] =
+                plan.remapPrimIds
+                    ? plan.scene.originalPrimId(
+                          h.instID[k] == RTC_INVALID_GEOMETRY_ID ? h.geomID[k] : h.instID[k],
+                          h.primID[k])
+                    : h.primID[k];
           if (plan.geomId)
             fb.geomId[px] = h.instID[k] == RTC_INVALID_GEOMETRY_ID ? h.geomID[k] : h.instID[k];
         }
@@ -178,7 +177,7 @@ void renderTile(const FramePlan& plan, int x0, int y0, int x1, int y1, TileCount
 
 }  // namespace
 
-RenderStats renderFrame(const Scene& scene, const Camera& camera, const RenderSettings& settings,
+RenderStats renderImage(const Scene& scene, const Camera& camera, const RenderSettings& settings,
                         Framebuffer& fb) {
   validateRenderSettings(settings);
   if (fb.width <= 0 || fb.height <= 0 || fb.aovs == 0)
@@ -189,13 +188,25 @@ RenderStats renderFrame(const Scene& scene, const Camera& camera, const RenderSe
     throw Error(cat("camera image ", desc.width, "x", desc.height, " spp ", desc.spp,
                     " does not match the framebuffer ", fb.width, "x", fb.height, " spp ",
                     settings.spp));
-  FramePlan plan{scene, camera, fb, settings, camera.renderEye(), camera.viewAxis(),
-                 scene.renderOrigin(), fb.has(kAovColor), fb.has(kAovDepth),
-                 fb.has(kAovDistance), fb.has(kAovNormal), fb.has(kAovPosition),
-                 fb.has(kAovPrimId), fb.has(kAovGeomId), false, scene.instanceCount() > 0,
+  ImagePlan plan{scene,
+                 camera,
+                 fb,
+                 settings,
+                 camera.renderEye(),
+                 camera.viewAxis(),
+                 scene.renderOrigin(),
+                 fb.has(kAovColor),
+                 fb.has(kAovDepth),
+                 fb.has(kAovDistance),
+                 fb.has(kAovNormal),
+                 fb.has(kAovPosition),
+                 fb.has(kAovPrimId),
+                 fb.has(kAovGeomId),
+                 false,
+                 scene.instanceCount() > 0,
                  scene.remapsPrimIds()};
-  plan.anyGeometry = plan.depth || plan.distance || plan.normal || plan.position ||
-                     plan.primId || plan.geomId;
+  plan.anyGeometry =
+      plan.depth || plan.distance || plan.normal || plan.position || plan.primId || plan.geomId;
 
   const int ts = settings.tileSize;
   const int tilesX = (fb.width + ts - 1) / ts, tilesY = (fb.height + ts - 1) / ts;
@@ -207,10 +218,18 @@ RenderStats renderFrame(const Scene& scene, const Camera& camera, const RenderSe
       const int x1 = std::min(x0 + ts, fb.width), y1 = std::min(y0 + ts, fb.height);
       TileCounters c;
       switch (settings.packetWidth) {
-        case 1: renderTile<1>(plan, x0, y0, x1, y1, c); break;
-        case 4: renderTile<4>(plan, x0, y0, x1, y1, c); break;
-        case 8: renderTile<8>(plan, x0, y0, x1, y1, c); break;
-        default: renderTile<16>(plan, x0, y0, x1, y1, c); break;
+        case 1:
+          renderTile<1>(plan, x0, y0, x1, y1, c);
+          break;
+        case 4:
+          renderTile<4>(plan, x0, y0, x1, y1, c);
+          break;
+        case 8:
+          renderTile<8>(plan, x0, y0, x1, y1, c);
+          break;
+        default:
+          renderTile<16>(plan, x0, y0, x1, y1, c);
+          break;
       }
       traced += c.traced;
       skipped += c.skipped;

@@ -15,9 +15,9 @@ struct RenderSettings {
 };
 
 struct RenderStats {
-  double seconds = 0;       ///< wall time of the frame
-  uint64_t raysTraced = 0;  ///< rays passed to Embree with a valid lane
-  uint64_t raysSkipped = 0; ///< lanes masked because the camera gave no ray or it was non-finite
+  double seconds = 0;        ///< wall time of the frame
+  uint64_t raysTraced = 0;   ///< rays passed to Embree with a valid lane
+  uint64_t raysSkipped = 0;  ///< lanes masked because the camera gave no ray or it was non-finite
   uint64_t hits = 0;
   double mraysPerSecond() const { return seconds > 0 ? raysTraced / seconds * 1e-6 : 0; }
 };
@@ -26,7 +26,7 @@ struct RenderStats {
 /// from the ambient TBB arena (limit them with tbb::global_control). The result is
 /// bit-identical for any thread count, tile size and packet width. FTZ/DAZ are set on every
 /// worker. Throws Error for bad settings.
-RenderStats renderFrame(const Scene& scene, const Camera& camera, const RenderSettings& settings,
+RenderStats renderImage(const Scene& scene, const Camera& camera, const RenderSettings& settings,
                         Framebuffer& fb);
 
 /// Checks settings (packet width in {1,4,8,16}, tile size a positive multiple of 4 up to 4096,

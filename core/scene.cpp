@@ -1,13 +1,11 @@
 #include "core/scene.h"
 
-#include <cstdlib>
-
 #include <atomic>
 #include <chrono>
+#include <cstdlib>
+#include <glm/gtc/matrix_transform.hpp>
 #include <map>
 #include <mutex>
-
-#include <glm/gtc/matrix_transform.hpp>
 
 #include "core/error.h"
 
@@ -23,13 +21,20 @@ namespace {
 
 const char* errorName(RTCError code) {
   switch (code) {
-    case RTC_ERROR_NONE: return "none";
-    case RTC_ERROR_UNKNOWN: return "unknown error";
-    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
-    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
-    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
-    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
-    case RTC_ERROR_CANCELLED: return "cancelled";
+    case RTC_ERROR_NONE:
+      return "none";
+    case RTC_ERROR_UNKNOWN:
+      return "unknown error";
+    case RTC_ERROR_INVALID_ARGUMENT:
+      return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION:
+      return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY:
+      return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU:
+      return "unsupported CPU";
+    case RTC_ERROR_CANCELLED:
+      return "cancelled";
   }
   return "unrecognised error";
 }
@@ -50,9 +55,12 @@ bool onEmbreeMemory(void* user, ssize_t bytes, bool /*post*/) {
 
 RTCBuildQuality toEmbree(BvhQuality q) {
   switch (q) {
-    case BvhQuality::Low: return RTC_BUILD_QUALITY_LOW;
-    case BvhQuality::Medium: return RTC_BUILD_QUALITY_MEDIUM;
-    case BvhQuality::High: return RTC_BUILD_QUALITY_HIGH;
+    case BvhQuality::Low:
+      return RTC_BUILD_QUALITY_LOW;
+    case BvhQuality::Medium:
+      return RTC_BUILD_QUALITY_MEDIUM;
+    case BvhQuality::High:
+      return RTC_BUILD_QUALITY_HIGH;
   }
   return RTC_BUILD_QUALITY_HIGH;
 }
@@ -67,8 +75,8 @@ Device::Device(const std::string& givenConfig) : state_(std::make_unique<State>(
       givenConfig.empty() && fromEnvironment ? std::string(fromEnvironment) : givenConfig;
   device_ = rtcNewDevice(config.empty() ? nullptr : config.c_str());
   if (!device_)
-    throw Error(cat("Embree: cannot create a device (config '", config, "'): ",
-                    errorName(rtcGetDeviceError(nullptr))));
+    throw Error(cat("Embree: cannot create a device (config '", config,
+                    "'): ", errorName(rtcGetDeviceError(nullptr))));
   rtcSetDeviceErrorFunction(device_, onEmbreeError, state_.get());
   rtcSetDeviceMemoryMonitorFunction(device_, onEmbreeMemory, state_.get());
 }
@@ -104,9 +112,12 @@ BvhQuality parseBvhQuality(const std::string& name) {
 
 const char* bvhQualityName(BvhQuality q) {
   switch (q) {
-    case BvhQuality::Low: return "low";
-    case BvhQuality::Medium: return "medium";
-    case BvhQuality::High: return "high";
+    case BvhQuality::Low:
+      return "low";
+    case BvhQuality::Medium:
+      return "medium";
+    case BvhQuality::High:
+      return "high";
   }
   return "?";
 }
@@ -130,8 +141,8 @@ RTCGeometry triangleGeometry(const Device& device, const Mesh& m, const Triangle
   APERTURE_CHECK_OP(m.positions.size(), >=, 3 * m.vertexCount + kVertexPaddingFloats - 1);
   RTCGeometry geom = rtcNewGeometry(device.handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
   rtcSetGeometryBuildQuality(geom, quality);
-  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                             m.positions.data(), 0, 3 * sizeof(float), m.vertexCount);
+  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, m.positions.data(),
+                             0, 3 * sizeof(float), m.vertexCount);
   const std::vector<uint32_t>& indices = subset ? subset->indices : m.indices;
   rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices.data(), 0,
                              3 * sizeof(uint32_t), indices.size() / 3);
@@ -150,7 +161,8 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
              const BuildOptions& options)
     : device_(device), options_(options) {
   if (objects.empty()) throw Error("scene: no meshes");
-  renderOrigin_ = glm::dvec3(objects.front().worldFromMesh * glm::dvec4(objects.front().mesh->anchor, 1.0));
+  renderOrigin_ =
+      glm::dvec3(objects.front().worldFromMesh * glm::dvec4(objects.front().mesh->anchor, 1.0));
   std::map<const Mesh*, size_t> uses;
   for (const SceneObject& o : objects) ++uses[o.mesh];
 
@@ -184,8 +196,8 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
       // Nothing of this object is kept: leave its geomID unused.
       if (placed == 0) continue;
     }
-    const bool direct = uses[&m] == 1 && objects[k].worldFromMesh == glm::dmat4(1.0) &&
-                        m.anchor == renderOrigin_;
+    const bool direct =
+        uses[&m] == 1 && objects[k].worldFromMesh == glm::dmat4(1.0) && m.anchor == renderOrigin_;
     if (direct) {
       RTCGeometry geom = triangleGeometry(device, m, subset, quality);
       rtcAttachGeometryByID(scene_, geom, unsigned(k));

@@ -3,11 +3,10 @@
 #include <embree3/rtcore.h>
 
 #include <cstddef>
+#include <glm/glm.hpp>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 #include "core/mesh.h"
 

@@ -61,11 +61,20 @@ std::vector<TraceHit> traceRays(const Scene& scene, const std::vector<TraceRay>&
                                 int packetWidth) {
   std::vector<TraceHit> out(rays.size());
   switch (packetWidth) {
-    case 1: traceAll<1>(scene, rays, out); break;
-    case 4: traceAll<4>(scene, rays, out); break;
-    case 8: traceAll<8>(scene, rays, out); break;
-    case 16: traceAll<16>(scene, rays, out); break;
-    default: throw Error(cat("traceRays: packet width ", packetWidth, " is not 1, 4, 8 or 16"));
+    case 1:
+      traceAll<1>(scene, rays, out);
+      break;
+    case 4:
+      traceAll<4>(scene, rays, out);
+      break;
+    case 8:
+      traceAll<8>(scene, rays, out);
+      break;
+    case 16:
+      traceAll<16>(scene, rays, out);
+      break;
+    default:
+      throw Error(cat("traceRays: packet width ", packetWidth, " is not 1, 4, 8 or 16"));
   }
   return out;
 }

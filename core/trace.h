@@ -2,10 +2,9 @@
 // Tracing arbitrary rays through a Scene (outside the camera frame loop): for tests and tools
 // that aim rays at chosen points, such as the watertightness checks.
 #include <cstdint>
+#include <glm/glm.hpp>
 #include <limits>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 #include "core/scene.h"
 

@@ -16,11 +16,20 @@ class PacketBuffer {
  public:
   explicit PacketBuffer(int width) : width_(width) {
     switch (width) {
-      case 1: lanes_ = bind(one_, 1); break;
-      case 4: lanes_ = bind(four_, 4); break;
-      case 8: lanes_ = bind(eight_, 8); break;
-      case 16: lanes_ = bind(sixteen_, 16); break;
-      default: ADD_FAILURE() << "bad packet width " << width;
+      case 1:
+        lanes_ = bind(one_, 1);
+        break;
+      case 4:
+        lanes_ = bind(four_, 4);
+        break;
+      case 8:
+        lanes_ = bind(eight_, 8);
+        break;
+      case 16:
+        lanes_ = bind(sixteen_, 16);
+        break;
+      default:
+        ADD_FAILURE() << "bad packet width " << width;
     }
   }
   RayLanes& lanes() { return lanes_; }

@@ -1,19 +1,17 @@
 #include "tests/support.h"
 
-#include <cstdio>
-
-#include "apps/options.h"
-
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <array>
-#include <cstring>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+
+#include "apps/options.h"
 
 namespace fs = std::filesystem;
 
@@ -76,8 +74,7 @@ Measured runMeasured(const std::string& command) {
   int status = 0;
   rusage usage{};
   if (::wait4(pid, &status, 0, &usage) != pid) return m;
-  m.wallSeconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  m.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   m.cpuSeconds = double(usage.ru_utime.tv_sec) + double(usage.ru_stime.tv_sec) +
                  1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
   m.maxRssKb = usage.ru_maxrss;

@@ -1,8 +1,8 @@
 #pragma once
 // Helpers shared by the test files.
-#include <string>
-
 #include <gtest/gtest.h>
+
+#include <string>
 
 #include "cameras/params.h"
 #include "core/framebuffer.h"
@@ -22,8 +22,8 @@ std::string apertureBinary();
 int runCommand(const std::string& command, std::string* output = nullptr);
 /// What runMeasured saw of a child process.
 struct Measured {
-  int exitCode = -1;    ///< exit status, or -1 when a signal ended it
-  int signal = 0;       ///< the signal that ended it, or 0
+  int exitCode = -1;  ///< exit status, or -1 when a signal ended it
+  int signal = 0;     ///< the signal that ended it, or 0
   double wallSeconds = 0;
   double cpuSeconds = 0;  ///< user + system time of the child
   long maxRssKb = 0;      ///< peak resident set of the child, KiB
@@ -66,7 +66,9 @@ CameraParams cameraParamsFromFlags(const std::string& flags);
 }  // namespace aperture::test
 
 /// Skips the current test with a message when a ../shared mesh is missing.
-#define APERTURE_REQUIRE_SHARED_MESH(var, rel)                                         \
-  const std::string var = ::aperture::test::sharedMesh(rel);                           \
-  if (var.empty()) GTEST_SKIP() << "../shared/meshes/" rel " is absent (no ../shared " \
-                                   "beside the project); this test needs it"
+#define APERTURE_REQUIRE_SHARED_MESH(var, rel)               \
+  const std::string var = ::aperture::test::sharedMesh(rel); \
+  if (var.empty())                                           \
+  GTEST_SKIP() << "../shared/meshes/" rel                    \
+                  " is absent (no ../shared "                \
+                  "beside the project); this test needs it"

@@ -9,8 +9,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
-    aperture::app::parseJobText(std::string(reinterpret_cast<const char*>(data), size),
-                                "fuzz.json", "/nonexistent-aperture-fuzz");
+    aperture::app::parseJobText(std::string(reinterpret_cast<const char*>(data), size), "fuzz.json",
+                                "/nonexistent-aperture-fuzz");
   } catch (const aperture::Error&) {
     // A clear error is the right answer to a malformed job.
   }

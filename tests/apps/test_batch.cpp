@@ -1,15 +1,15 @@
 // Batch rendering: job-file validation, camera paths, and `aperture batch` end to end (frames
 // equal to `aperture render`, shards, failures and --resume, instancing).
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
-
-#include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include "apps/job.h"
 #include "core/error.h"
@@ -96,10 +96,10 @@ json readJson(const std::string& path) {
 TEST(JobParse, ExampleJobIsValid) {
   const std::string example = std::string(APERTURE_TESTS_DIR) + "/../docs/example-job.json";
   const Job job = app::parseJob(example);
-  EXPECT_EQ(job.frames.size(), 15u);
+  EXPECT_EQ(job.images.size(), 15u);
   EXPECT_EQ(job.meshes.size(), 4u);
-  EXPECT_EQ(job.frames[2].camera, "turntable");
-  EXPECT_EQ(fs::path(job.frames[2].output).filename(), "turntable_0000.exr");
+  EXPECT_EQ(job.images[2].camera, "turntable");
+  EXPECT_EQ(fs::path(job.images[2].output).filename(), "turntable_0000.exr");
 }
 
 TEST(JobParse, UnknownKeyNamesFileJsonPathAndKnownKeys) {
@@ -147,9 +147,11 @@ TEST(JobParse, WrongTypesAndRangesNameKeyAndReason) {
       {"/cameras/0/name", "a b", "cameras[0].name: 'a b': use 1-128 letters"},
       {"/cameras/0/frames", 3, "cameras[0].frames: only a camera with orbit or keyframes"},
       {"/scene/meshes", json::array(), "scene.meshes: needs at least one mesh"},
-      {"/scene/meshes/0/transform", {{"scale", 0}},
+      {"/scene/meshes/0/transform",
+       {{"scale", 0}},
        "scene.meshes[0].transform.scale: scale must not be zero"},
-      {"/scene/meshes/0/matrix", {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 1, 1}},
+      {"/scene/meshes/0/matrix",
+       {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 1, 1}},
        "scene.meshes[0].matrix: the last row must be [0, 0, 0, 1]"},
       {"/cameras", json::object(), "cameras: expected an array, got an object"},
   };
@@ -222,8 +224,16 @@ TEST(JobParse, BadOutputPatterns) {
 
 TEST(JobParse, MalformedInputThrowsErrorNeverCrashes) {
   const std::string inputs[] = {
-      "", "{", "[]", "null", "{\"scene\": ", std::string(10000, '['), "{\"size\": [1e999, 2]}",
-      "{\"scene\": {\"meshes\": [{\"path\": 5}]}}", "\xff\xfe", "{\"cameras\": [[[]]]}",
+      "",
+      "{",
+      "[]",
+      "null",
+      "{\"scene\": ",
+      std::string(10000, '['),
+      "{\"size\": [1e999, 2]}",
+      "{\"scene\": {\"meshes\": [{\"path\": 5}]}}",
+      "\xff\xfe",
+      "{\"cameras\": [[[]]]}",
       "{\"size\": [18446744073709551615, 1], \"output\": \"x.exr\"}",
   };
   for (const std::string& text : inputs) {
@@ -243,31 +253,31 @@ TEST(JobParse, MalformedInputThrowsErrorNeverCrashes) {
 TEST(JobPaths, OrbitEyesMatchHandComputedPositions) {
   json j = baseJob();
   // Up +Y: frame k sits at azimuth start + sweep * k / frames, measured from +Z towards +X.
-  j["cameras"][0] = {{"name", "o"},
-                     {"orbit",
-                      {{"centre", {1, 2, 3}}, {"radius", 4}, {"height", 0.5}, {"start", 90}}},
-                     {"frames", 4}};
+  j["cameras"][0] = {
+      {"name", "o"},
+      {"orbit", {{"centre", {1, 2, 3}}, {"radius", 4}, {"height", 0.5}, {"start", 90}}},
+      {"frames", 4}};
   // Elevation 30 degrees at distance 2, up +Z: the reference direction becomes +X.
   j["cameras"].push_back({{"name", "e"},
                           {"orbit", {{"radius", 2}, {"elevation", 30}, {"sweep", 180}}},
                           {"frames", 2},
                           {"up", {0, 0, 1}}});
   const Job job = parse(j);
-  ASSERT_EQ(job.frames.size(), 6u);
+  ASSERT_EQ(job.images.size(), 6u);
   auto expectEye = [&](size_t index, glm::dvec3 expected) {
-    const glm::dvec3 eye = job.frames[index].params.eye;
+    const glm::dvec3 eye = job.images[index].params.eye;
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(eye[c], expected[c], 1e-12) << index << " axis " << c;
   };
-  expectEye(0, {5, 2.5, 3});   // 90 degrees: +X
-  expectEye(1, {1, 2.5, -1});  // 180 degrees: -Z
-  expectEye(2, {-3, 2.5, 3});  // 270 degrees: -X
-  expectEye(3, {1, 2.5, 7});   // 360 degrees: +Z
-  expectEye(4, {std::sqrt(3.0), 0, 1});   // azimuth 0 along +X, raised 30 degrees along +Z
-  expectEye(5, {0, std::sqrt(3.0), 1});   // azimuth 90: +Y (= up x X)
-  EXPECT_EQ(job.frames[1].params.at.value(), glm::dvec3(1, 2, 3));
-  EXPECT_EQ(job.frames[1].camera, "o");
-  EXPECT_EQ(job.frames[1].frame, 1);
-  EXPECT_EQ(job.frames[4].index, 4u);
+  expectEye(0, {5, 2.5, 3});             // 90 degrees: +X
+  expectEye(1, {1, 2.5, -1});            // 180 degrees: -Z
+  expectEye(2, {-3, 2.5, 3});            // 270 degrees: -X
+  expectEye(3, {1, 2.5, 7});             // 360 degrees: +Z
+  expectEye(4, {std::sqrt(3.0), 0, 1});  // azimuth 0 along +X, raised 30 degrees along +Z
+  expectEye(5, {0, std::sqrt(3.0), 1});  // azimuth 90: +Y (= up x X)
+  EXPECT_EQ(job.images[1].params.at.value(), glm::dvec3(1, 2, 3));
+  EXPECT_EQ(job.images[1].camera, "o");
+  EXPECT_EQ(job.images[1].frame, 1);
+  EXPECT_EQ(job.images[4].index, 4u);
 }
 
 TEST(JobPaths, KeyframesInterpolateLinearlyAndHoldAtTheEnds) {
@@ -279,20 +289,20 @@ TEST(JobPaths, KeyframesInterpolateLinearlyAndHoldAtTheEnds) {
        {{{"frame", 1}, {"eye", {0, 0, 10}}, {"at", {0, 0, 0}}, {"fov", 40}},
         {{"frame", 5}, {"eye", {8, 4, 10}}, {"at", {0, 2, 0}}, {"up", {0, 1, 0.4}}, {"fov", 60}}}}};
   const Job job = parse(j);
-  ASSERT_EQ(job.frames.size(), 7u);
+  ASSERT_EQ(job.images.size(), 7u);
   auto near = [](glm::dvec3 a, glm::dvec3 b) { return glm::length(a - b) < 1e-12; };
-  const CameraParams& f0 = job.frames[0].params;  // before the first keyframe: held
+  const CameraParams& f0 = job.images[0].params;  // before the first keyframe: held
   EXPECT_TRUE(near(f0.eye, {0, 0, 10}));
   EXPECT_DOUBLE_EQ(*f0.fovDeg, 40);
-  const CameraParams& f2 = job.frames[2].params;  // t = 1/4
+  const CameraParams& f2 = job.images[2].params;  // t = 1/4
   EXPECT_TRUE(near(f2.eye, {2, 1, 10}));
   EXPECT_TRUE(near(*f2.at, {0, 0.5, 0}));
   EXPECT_TRUE(near(f2.up, {0, 1, 0.1}));
   EXPECT_NEAR(*f2.fovDeg, 45, 1e-12);
-  const CameraParams& f4 = job.frames[4].params;  // t = 3/4
+  const CameraParams& f4 = job.images[4].params;  // t = 3/4
   EXPECT_TRUE(near(f4.eye, {6, 3, 10}));
   EXPECT_NEAR(*f4.fovDeg, 55, 1e-12);
-  const CameraParams& f6 = job.frames[6].params;  // after the last keyframe: held
+  const CameraParams& f6 = job.images[6].params;  // after the last keyframe: held
   EXPECT_TRUE(near(f6.eye, {8, 4, 10}));
   EXPECT_NEAR(*f6.fovDeg, 60, 1e-12);
   // Keyframes must ascend.
@@ -314,8 +324,8 @@ TEST(Batch, ThreeCamerasFourFramesEachEqualRenderBitForBit) {
   ASSERT_EQ(summary["frames"].size(), 12u);
 
   const Job job = app::parseJob(jobPath);
-  ASSERT_EQ(job.frames.size(), 12u);
-  for (const app::JobFrame& f : job.frames) {
+  ASSERT_EQ(job.images.size(), 12u);
+  for (const app::JobImage& f : job.images) {
     SCOPED_TRACE(f.output);
     ASSERT_TRUE(isCompleteExr(f.output));
     const CameraParams& p = f.params;
@@ -343,8 +353,8 @@ TEST(Batch, ShardsOfThreeUnionToTheFullJobWithNoFrameTwice) {
   const std::string shardJob = writeJob(sharded, j);
   std::set<size_t> seen;
   for (int k = 0; k < 3; ++k) {
-    ASSERT_EQ(runCommand(apertureBinary() + " batch --quiet --shard " + std::to_string(k) +
-                             "/3 " + quote(shardJob),
+    ASSERT_EQ(runCommand(apertureBinary() + " batch --quiet --shard " + std::to_string(k) + "/3 " +
+                             quote(shardJob),
                          &out),
               0)
         << out;
@@ -368,7 +378,8 @@ TEST(Batch, ShardsOfThreeUnionToTheFullJobWithNoFrameTwice) {
   EXPECT_EQ(fullNames.size(), 12u);
   EXPECT_EQ(fullNames, shardNames);
   for (const std::string& name : fullNames)
-    EXPECT_EQ(test::differingAovs(readExr(full + "/out/" + name), readExr(sharded + "/out/" + name)), "")
+    EXPECT_EQ(
+        test::differingAovs(readExr(full + "/out/" + name), readExr(sharded + "/out/" + name)), "")
         << name;
   EXPECT_NE(runCommand(apertureBinary() + " batch --shard 3/3 " + quote(shardJob), &out), 0);
   EXPECT_NE(out.find("--shard: '3/3' must be K/N with 0 <= K < N"), std::string::npos) << out;

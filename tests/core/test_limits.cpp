@@ -1,10 +1,10 @@
 // Documented bounds (size, spp, threads, tile, packet) checked before anything is loaded or
 // allocated, and the --max-memory estimate and refusal.
+#include <gtest/gtest.h>
+
 #include <chrono>
 #include <functional>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "core/error.h"
 #include "core/limits.h"
@@ -27,9 +27,10 @@ double secondsOf(const std::function<void()>& f) {
 TEST(Limits, PlyHeaderGivesCountsWithoutReadingTheData) {
   const std::string path = scratchDir() + "/m.ply";
   // 1000 float vertices and 500 quads (binary): 12000 + 500 * 17 bytes of data.
-  std::string s = "ply\nformat binary_little_endian 1.0\nelement vertex 1000\nproperty float x\n"
-                  "property float y\nproperty float z\nelement face 500\n"
-                  "property list uchar int vertex_indices\nend_header\n";
+  std::string s =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 1000\nproperty float x\n"
+      "property float y\nproperty float z\nelement face 500\n"
+      "property list uchar int vertex_indices\nend_header\n";
   s += std::string(12000 + 500 * 17, '\0');
   writeFile(path, s);
   const MeshSizeEstimate m = estimateMeshSize(path);
@@ -41,9 +42,10 @@ TEST(Limits, PlyHeaderGivesCountsWithoutReadingTheData) {
 
 TEST(Limits, PlyCountsLargerThanTheFileAreClamped) {
   const std::string path = scratchDir() + "/m.ply";
-  writeFile(path, "ply\nformat ascii 1.0\nelement vertex 1000000000000\nproperty float x\n"
-                  "property float y\nproperty float z\nelement face 1000000000000\n"
-                  "property list uchar int vertex_indices\nend_header\n0 0 0\n");
+  writeFile(path,
+            "ply\nformat ascii 1.0\nelement vertex 1000000000000\nproperty float x\n"
+            "property float y\nproperty float z\nelement face 1000000000000\n"
+            "property list uchar int vertex_indices\nend_header\n0 0 0\n");
   const MeshSizeEstimate m = estimateMeshSize(path);
   EXPECT_LE(m.vertices, 10u);
   EXPECT_LE(m.triangles, 10u);
@@ -55,7 +57,8 @@ TEST(Limits, ObjSampleFindsFacesAfterAllTheVertices) {
   const int n = 100000;  // ~3 MB: sampled, not read whole
   for (int i = 0; i < n; ++i) s += "v 0.123456 0.234567 0.345678\n";
   for (int i = 1; i + 2 <= n; ++i)
-    s += "f " + std::to_string(i) + " " + std::to_string(i + 1) + " " + std::to_string(i + 2) + "\n";
+    s +=
+        "f " + std::to_string(i) + " " + std::to_string(i + 1) + " " + std::to_string(i + 2) + "\n";
   writeFile(path, s);
   const MeshSizeEstimate m = estimateMeshSize(path);
   EXPECT_GT(m.triangles, uint64_t(n) / 3);
@@ -112,7 +115,8 @@ TEST(LimitsCli, MaxMemoryRefusesBeforeLoading) {
   // 400M triangles would take minutes and ~40 GB to load and build; refusing takes no time.
   const double s = secondsOf([&] {
     rc = runCommand(apertureBinary() + " render --max-memory 2G --out " + exr +
-                        " --mesh 'procedural:spheres?tris=400000000'", &out);
+                        " --mesh 'procedural:spheres?tris=400000000'",
+                    &out);
   });
   EXPECT_EQ(rc, 1) << out;
   EXPECT_NE(out.find("needs about"), std::string::npos) << out;
@@ -120,15 +124,23 @@ TEST(LimitsCli, MaxMemoryRefusesBeforeLoading) {
   EXPECT_LT(s, 2.0);
   EXPECT_FALSE(test::fileExists(exr));
   // The framebuffers alone: 65536 x 4096 x all AOVs is 15 GB.
-  EXPECT_EQ(runCommand(apertureBinary() + " render --max-memory 1G --size 65536,4096 --aov all "
-                           "--out " + exr, &out), 1) << out;
+  EXPECT_EQ(runCommand(apertureBinary() +
+                           " render --max-memory 1G --size 65536,4096 --aov all "
+                           "--out " +
+                           exr,
+                       &out),
+            1)
+      << out;
   EXPECT_NE(out.find("framebuffers 15"), std::string::npos) << out;
   EXPECT_EQ(runCommand(apertureBinary() + " bench --max-memory 1M --frames 1 --warmup 0", &out), 1)
       << out;
   EXPECT_NE(out.find("--max-memory 1M"), std::string::npos) << out;
   // Within the limit it renders.
-  EXPECT_EQ(runCommand(apertureBinary() + " render --quiet --max-memory 4G --size 32,32 --out " +
-                           exr, &out), 0) << out;
+  EXPECT_EQ(
+      runCommand(apertureBinary() + " render --quiet --max-memory 4G --size 32,32 --out " + exr,
+                 &out),
+      0)
+      << out;
   EXPECT_TRUE(test::fileExists(exr));
 }
 
@@ -168,8 +180,10 @@ TEST(LimitsCli, AbsurdValuesAreErrorsBeforeAnyAllocation) {
     std::string out;
     int rc = 0;
     const double s = secondsOf([&] {
-      rc = runCommand(apertureBinary() + " render --mesh 'procedural:spheres?tris=400000000' --out " +
-                          exr + " " + c.args, &out);
+      rc = runCommand(apertureBinary() +
+                          " render --mesh 'procedural:spheres?tris=400000000' --out " + exr + " " +
+                          c.args,
+                      &out);
     });
     EXPECT_TRUE(rc == 1 || rc == 2) << c.args << ": exit " << rc << "\n" << out;
     EXPECT_NE(out.find(c.expect), std::string::npos) << c.args << "\n" << out;

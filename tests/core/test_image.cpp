@@ -39,7 +39,8 @@ Png readPng(const std::string& path) {
   png.format = spec.format;
   EXPECT_EQ(std::string(in->format_name()), "png");
   png.pixels.resize(size_t(png.width) * png.height * png.channels);
-  EXPECT_TRUE(in->read_image(0, 0, 0, -1, OIIO::TypeDesc::UINT8, png.pixels.data())) << in->geterror();
+  EXPECT_TRUE(in->read_image(0, 0, 0, -1, OIIO::TypeDesc::UINT8, png.pixels.data()))
+      << in->geterror();
   in->close();
   return png;
 }

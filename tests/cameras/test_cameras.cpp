@@ -1,19 +1,19 @@
 // Camera geometry in closed form: perspective fov and edges, parallel projections, shift,
 // architectural mode, thin lens, panoramas, packets against the scalar path, view volumes.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstring>
 #include <random>
 #include <string>
 #include <tuple>
 
-#include <gtest/gtest.h>
-
-#include "camera_support.h"
 #include "cameras/base.h"
 #include "cameras/perspective.h"
 #include "cameras/registry.h"
 #include "cameras/view_volume.h"
 #include "core/error.h"
+#include "tests/camera_support.h"
 
 namespace aperture {
 namespace {
@@ -23,9 +23,9 @@ using test::PacketBuffer;
 constexpr double kPi = 3.14159265358979323846;
 double rad(double deg) { return deg * kPi / 180.0; }
 
-std::unique_ptr<FrameCamera> make(const CameraParams& p,
-                                  const glm::dvec3& renderOrigin = glm::dvec3(0.0)) {
-  return makeFrameCamera(p, renderOrigin);
+std::unique_ptr<CameraBase> make(const CameraParams& p,
+                                 const glm::dvec3& renderOrigin = glm::dvec3(0.0)) {
+  return makeCameraModel(p, renderOrigin);
 }
 
 /// Angle between two directions, accurate for tiny angles.
@@ -134,8 +134,7 @@ std::string fovName(const ::testing::TestParamInfo<FovCase>& info) {
   std::string fov = std::to_string(c.fovDeg);
   for (char& ch : fov)
     if (ch == '.') ch = 'p';
-  return "fov" + fov + "_" + std::to_string(c.width) + "x" + std::to_string(c.height) + "_" +
-         axis;
+  return "fov" + fov + "_" + std::to_string(c.width) + "x" + std::to_string(c.height) + "_" + axis;
 }
 
 INSTANTIATE_TEST_SUITE_P(Sweep, PerspectiveFov, ::testing::ValuesIn(fovCases()), fovName);
@@ -407,8 +406,8 @@ std::vector<double> columnsOfVerticalSegment(bool architectural, double tiltDeg)
   p.fovDeg = 60;
   p.eye = {0.0, 1.5, 0.0};
   const double yaw = rad(20.0), tilt = rad(tiltDeg);
-  p.dir = glm::dvec3(std::cos(tilt) * std::sin(yaw), std::sin(tilt),
-                     -std::cos(tilt) * std::cos(yaw));
+  p.dir =
+      glm::dvec3(std::cos(tilt) * std::sin(yaw), std::sin(tilt), -std::cos(tilt) * std::cos(yaw));
   p.up = {0.0, 1.0, 0.0};
   p.architectural = architectural;
   const auto cam = make(p);
@@ -592,10 +591,9 @@ TEST(ThinLensCamera, BadParametersThrow) {
 // Panoramas.
 
 TEST(PanoramaCamera, EquirectDirectionsMatchTheSphericalFormula) {
-  for (const auto& [lon, lat] :
-       {std::pair{glm::dvec2(-180, 180), glm::dvec2(-90, 90)},
-        std::pair{glm::dvec2(-60, 100), glm::dvec2(-30, 45)},
-        std::pair{glm::dvec2(0, 360), glm::dvec2(-10, 10)}}) {
+  for (const auto& [lon, lat] : {std::pair{glm::dvec2(-180, 180), glm::dvec2(-90, 90)},
+                                 std::pair{glm::dvec2(-60, 100), glm::dvec2(-30, 45)},
+                                 std::pair{glm::dvec2(0, 360), glm::dvec2(-10, 10)}}) {
     CameraParams p = test::tiltedParams("equirect");
     p.width = 73;
     p.height = 37;
@@ -607,8 +605,8 @@ TEST(PanoramaCamera, EquirectDirectionsMatchTheSphericalFormula) {
       for (int j = 0; j < p.width; ++j) {
         const double phi = rad(lon.x + (j + 0.5) / p.width * (lon.y - lon.x));
         const double theta = rad(lat.y - (i + 0.5) / p.height * (lat.y - lat.x));
-        const glm::dvec3 expected = std::cos(theta) * std::sin(phi) * f.u +
-                                    std::sin(theta) * f.v - std::cos(theta) * std::cos(phi) * f.w;
+        const glm::dvec3 expected = std::cos(theta) * std::sin(phi) * f.u + std::sin(theta) * f.v -
+                                    std::cos(theta) * std::cos(phi) * f.w;
         const Lane lane = pixelLane(*cam, i, j);
         ASSERT_LE(glm::length(toDouble(lane.dir) - expected), 1e-6) << i << "," << j;
         ASSERT_EQ(lane.valid, -1);

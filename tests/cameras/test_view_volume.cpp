@@ -1,15 +1,15 @@
 // View volumes: points inside project into the image, points just outside do not; the box
 // test is conservative for every ray of the camera.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
 
-#include <gtest/gtest.h>
-
-#include "camera_support.h"
 #include "cameras/base.h"
 #include "cameras/registry.h"
 #include "cameras/view_volume.h"
 #include "core/error.h"
+#include "tests/camera_support.h"
 
 namespace aperture {
 namespace {
@@ -30,7 +30,7 @@ TEST_P(ViewVolumePlanar, InsidePointsProjectIntoTheImageOutsidePointsDoNot) {
   CameraParams p = test::everyCamera()[GetParam()];
   p.width = 96;
   p.height = 64;
-  const auto cam = makeFrameCamera(p);
+  const auto cam = makeCameraModel(p);
   const double nearDist = 0.5, farDist = 30.0;
   const ViewVolume vv = cam->viewVolume(nearDist, farDist);
   std::mt19937 rng(11);
@@ -44,7 +44,8 @@ TEST_P(ViewVolumePlanar, InsidePointsProjectIntoTheImageOutsidePointsDoNot) {
     ASSERT_TRUE(inImage(cam->project(inside), p.width, p.height));
     ASSERT_TRUE(vv.mayIntersectBox(inside - 1e-3, inside + 1e-3));
     // Just outside, across each side: 1e-4 of the cross-section's width beyond the bound.
-    const double ex = 1e-4 * (vv.xHi.at(z) - vv.xLo.at(z)), ey = 1e-4 * (vv.yHi.at(z) - vv.yLo.at(z));
+    const double ex = 1e-4 * (vv.xHi.at(z) - vv.xLo.at(z)),
+                 ey = 1e-4 * (vv.yHi.at(z) - vv.yLo.at(z));
     for (const glm::dvec3& out :
          {fromCamera(vv, vv.xHi.at(z) + ex, y, z), fromCamera(vv, vv.xLo.at(z) - ex, y, z),
           fromCamera(vv, x, vv.yHi.at(z) + ey, z), fromCamera(vv, x, vv.yLo.at(z) - ey, z)}) {
@@ -54,8 +55,8 @@ TEST_P(ViewVolumePlanar, InsidePointsProjectIntoTheImageOutsidePointsDoNot) {
     ASSERT_FALSE(vv.contains(fromCamera(vv, x, y, farDist * 1.001)));
   }
   // The corners project onto the image corners.
-  const glm::dvec2 imageCorners[4] = {{0, double(p.height)}, {double(p.width), double(p.height)},
-                                      {double(p.width), 0}, {0, 0}};
+  const glm::dvec2 imageCorners[4] = {
+      {0, double(p.height)}, {double(p.width), double(p.height)}, {double(p.width), 0}, {0, 0}};
   for (int c = 0; c < 8; ++c) {
     const auto r = cam->project(vv.corners[c]);
     ASSERT_TRUE(r);
@@ -85,7 +86,7 @@ TEST(ViewVolume, ContainsEveryRayOfEveryCamera) {
       CameraParams p = base;
       p.width = 64;
       p.height = 48;
-      const auto cam = makeFrameCamera(p);
+      const auto cam = makeCameraModel(p);
       const double nearDist = 0.25;
       const ViewVolume vv = viewVolumeFor(p, nearDist, farDist);
       const bool planar = vv.kind != ViewVolume::Kind::AllSpace;
@@ -96,8 +97,7 @@ TEST(ViewVolume, ContainsEveryRayOfEveryCamera) {
           continue;
         // A depth (planar) or distance (panoramas) within [near, min(far, 40)].
         const double target = nearDist + (std::min(farDist, 40.0) - nearDist) * unit(rng);
-        const double t = planar ? (target + glm::dot(org - e, w)) / -glm::dot(dir, w)
-                                : target;
+        const double t = planar ? (target + glm::dot(org - e, w)) / -glm::dot(dir, w) : target;
         const glm::dvec3 point = org + t * dir;
         const glm::dvec3 q = planar ? point : e + target * dir;
         if (planar && t < 0) continue;
@@ -126,7 +126,7 @@ TEST(ViewVolume, FullSpherePanoramaSeesEveryPointOfTheShell) {
   CameraParams p = test::everyCamera()[6];
   p.width = 90;
   p.height = 45;
-  const auto cam = makeFrameCamera(p);
+  const auto cam = makeCameraModel(p);
   const ViewVolume vv = cam->viewVolume(1.0, 5.0);
   std::mt19937 rng(5);
   std::normal_distribution<double> g;

@@ -3,8 +3,8 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <iostream>
 #include <fstream>
+#include <iostream>
 #include <limits>
 #include <sstream>
 #include <vector>
@@ -93,13 +93,20 @@ class PlyBinary : public ::testing::TestWithParam<BinaryCase> {};
 template <typename T>
 void putAs(Bytes& b, const char* type, T v) {
   std::string t = type;
-  if (t == "uchar" || t == "uint8") b.put(uint8_t(v));
-  else if (t == "char" || t == "int8") b.put(int8_t(v));
-  else if (t == "ushort" || t == "uint16") b.put(uint16_t(v));
-  else if (t == "short" || t == "int16") b.put(int16_t(v));
-  else if (t == "uint" || t == "uint32") b.put(uint32_t(v));
-  else if (t == "int" || t == "int32") b.put(int32_t(v));
-  else FAIL() << "type " << t;
+  if (t == "uchar" || t == "uint8")
+    b.put(uint8_t(v));
+  else if (t == "char" || t == "int8")
+    b.put(int8_t(v));
+  else if (t == "ushort" || t == "uint16")
+    b.put(uint16_t(v));
+  else if (t == "short" || t == "int16")
+    b.put(int16_t(v));
+  else if (t == "uint" || t == "uint32")
+    b.put(uint32_t(v));
+  else if (t == "int" || t == "int32")
+    b.put(int32_t(v));
+  else
+    FAIL() << "type " << t;
 }
 
 TEST_P(PlyBinary, EncodesTheReferenceMesh) {
@@ -111,7 +118,8 @@ TEST_P(PlyBinary, EncodesTheReferenceMesh) {
         " 1.0\nelement vertex 6\nproperty " + real + " x\nproperty " + real +
         " y\nproperty list ushort float normals\nproperty " + real +
         " z\nelement face 3\nproperty uchar kind\nproperty list " + c.countType + " " +
-        c.indexType + " vertex_indices\nelement material 2\nproperty float shininess\n"
+        c.indexType +
+        " vertex_indices\nelement material 2\nproperty float shininess\n"
         "property list uchar uchar name\nend_header\n";
   for (int i = 0; i < 6; ++i) {
     for (int a = 0; a < 2; ++a)
@@ -360,8 +368,8 @@ TEST(FinishMesh, FarFromOriginKeepsRelativePrecision) {
       "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\n"
       "property double z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n";
   // Dyadic values stay exact when offset by 1e7 in double, so only the anchoring can differ.
-  const double pts[4][3] = {{0.125, 0.5, -0.25}, {1.0625, 0.5, -0.25}, {0.375, 1.75, 0.0625},
-                            {0.875, 0.1875, 0.625}};
+  const double pts[4][3] = {
+      {0.125, 0.5, -0.25}, {1.0625, 0.5, -0.25}, {0.375, 1.75, 0.0625}, {0.875, 0.1875, 0.625}};
   std::ostringstream near, far;
   near.precision(17);
   far.precision(17);
@@ -447,8 +455,8 @@ TEST(LoaderShared, CrownAndDragonLoadSpeed) {
   EXPECT_EQ(d.vertexCount, 437645u);
   // For information only; no timing assertions.
   std::cout << "[ info ] crown: " << c.stats.loadSeconds << " s, " << megabytesPerSecond(c)
-            << " MB/s; dragon (ASCII): " << d.stats.loadSeconds << " s, "
-            << megabytesPerSecond(d) << " MB/s\n";
+            << " MB/s; dragon (ASCII): " << d.stats.loadSeconds << " s, " << megabytesPerSecond(d)
+            << " MB/s\n";
 }
 
 TEST(LoaderShared, BathroomAndSmallObjs) {

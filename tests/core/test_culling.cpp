@@ -1,12 +1,12 @@
 // View-volume culling (issue 5, item 8): the BVH holds only the triangles the cameras may see,
 // and every AOV is bit-identical with and without culling.
+#include <gtest/gtest.h>
+
 #include <cstring>
 #include <deque>
+#include <glm/gtc/matrix_transform.hpp>
 #include <memory>
 #include <vector>
-
-#include <glm/gtc/matrix_transform.hpp>
-#include <gtest/gtest.h>
 
 #include "cameras/culling.h"
 #include "cameras/registry.h"
@@ -31,7 +31,7 @@ Framebuffer render(const Scene& scene, const CameraParams& p) {
   Framebuffer fb(p.width, p.height, parseAovList("all"));
   RenderSettings rs;
   rs.spp = p.spp;
-  renderFrame(scene, *cam, rs, fb);
+  renderImage(scene, *cam, rs, fb);
   return fb;
 }
 
@@ -170,7 +170,8 @@ TEST(CullingCity, AnObjectWithNothingKeptLeavesItsGeomIdUnused) {
   const glm::dvec3 delta = far.anchor - city.anchor;
   for (size_t v = 0; v < farMoved.vertexCount; ++v)
     for (int c = 0; c < 3; ++c)
-      farMoved.positions[3 * v + size_t(c)] = float(farMoved.positions[3 * v + size_t(c)] + delta[c]);
+      farMoved.positions[3 * v + size_t(c)] =
+          float(farMoved.positions[3 * v + size_t(c)] + delta[c]);
   farMoved.anchor = city.anchor;
   objects[1].mesh = &farMoved;
   const auto pair = cullFor(objects, {closeUp()});
@@ -214,7 +215,8 @@ TEST(CullingCli, RenderWithCullWritesTheSamePixelsAndJobFilesAcceptCull) {
     "scene": {"meshes": [{"path": "procedural:city"}], "placement": "world-space"},
     "cameras": [{"name": "a", "eye": [-3, 1.5, 4], "at": [-5.6, 1, -2.5], "fov": 35},
                 {"name": "b", "eye": [9, 2, 3], "at": [0, 1, 0], "fov": 20}],
-    "size": [48, 32], "aovs": "all", "output": ")" + dir + R"(/out/{camera}.exr",
+    "size": [48, 32], "aovs": "all", "output": ")" +
+                                         dir + R"(/out/{camera}.exr",
     "performance": {"cull": true}})");
   ASSERT_EQ(test::runCommand(test::apertureBinary() + " batch " + dir + "/job.json", &out), 0)
       << out;
@@ -222,7 +224,8 @@ TEST(CullingCli, RenderWithCullWritesTheSamePixelsAndJobFilesAcceptCull) {
   ExrMetadata meta;
   readExr(dir + "/out/a.exr", &meta);
   bool worldSpace = false;
-  for (const auto& [k, v] : meta.strings) worldSpace |= k == "aperture.placement" && v == "world-space";
+  for (const auto& [k, v] : meta.strings)
+    worldSpace |= k == "aperture.placement" && v == "world-space";
   EXPECT_TRUE(worldSpace);
   test::writeFile(dir + "/bad.json", R"({"scene": {"meshes": [{"path": "procedural:city"}],
     "placement": "nowhere"}, "cameras": [{"name": "a", "eye": [1, 2, 3], "at": [0, 0, 0]}],

@@ -37,9 +37,9 @@ TEST(PerspectiveShift, ImageEqualsTheCropOfALargerViewportOnZAndPrimId) {
     settings.packetWidth = width;
     Framebuffer fa(a.width, a.height, kAovDepth | kAovPrimId);
     Framebuffer fb(b.width, b.height, kAovDepth | kAovPrimId);
-    renderFrame(scene, *camA, settings, fa);
+    renderImage(scene, *camA, settings, fa);
     settings.packetWidth = 16;
-    renderFrame(scene, *camB, settings, fb);
+    renderImage(scene, *camB, settings, fb);
     size_t hits = 0;
     for (int i = 0; i < a.height; ++i)
       for (int j = 0; j < a.width; ++j) {

@@ -20,11 +20,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <glm/glm.hpp>
 #include <limits>
 #include <map>
 #include <sstream>
-
-#include <glm/glm.hpp>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -35,8 +34,8 @@ namespace aperture {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr AovMask kAllAovs = kAovColor | kAovDepth | kAovDistance | kAovNormal | kAovPosition |
-                             kAovPrimId | kAovGeomId;
+constexpr AovMask kAllAovs =
+    kAovColor | kAovDepth | kAovDistance | kAovNormal | kAovPosition | kAovPrimId | kAovGeomId;
 const float kInf = std::numeric_limits<float>::infinity();
 
 /// Every AOV filled with distinct values; every 5th pixel is a miss (+inf, invalid ids).
@@ -110,9 +109,9 @@ void checkDirectRead(const std::string& path, const Framebuffer& fb, bool halfCo
     channels[it.name()] = it.channel().type;
   const Imf::PixelType colorType = halfColor ? Imf::HALF : Imf::FLOAT;
   const std::map<std::string, Imf::PixelType> expected = {
-      {"R", colorType},     {"G", colorType},     {"B", colorType},     {"A", colorType},
-      {"Z", Imf::FLOAT},    {"T", Imf::FLOAT},    {"N.X", Imf::FLOAT},  {"N.Y", Imf::FLOAT},
-      {"N.Z", Imf::FLOAT},  {"P.X", Imf::FLOAT},  {"P.Y", Imf::FLOAT},  {"P.Z", Imf::FLOAT},
+      {"R", colorType},      {"G", colorType},     {"B", colorType},    {"A", colorType},
+      {"Z", Imf::FLOAT},     {"T", Imf::FLOAT},    {"N.X", Imf::FLOAT}, {"N.Y", Imf::FLOAT},
+      {"N.Z", Imf::FLOAT},   {"P.X", Imf::FLOAT},  {"P.Y", Imf::FLOAT}, {"P.Z", Imf::FLOAT},
       {"primID", Imf::UINT}, {"geomID", Imf::UINT}};
   EXPECT_EQ(channels, expected);
   const Imath::Box2i dw = file.header().dataWindow();
@@ -137,8 +136,7 @@ void checkDirectRead(const std::string& path, const Framebuffer& fb, bool halfCo
   const char* n[3] = {"N.X", "N.Y", "N.Z"};
   const char* p[3] = {"P.X", "P.Y", "P.Z"};
   for (int c = 0; c < 3; ++c) {
-    expectFloatsEqual(readChannel<float>(file, n[c], Imf::FLOAT), component(fb.normal, c, 3),
-                      n[c]);
+    expectFloatsEqual(readChannel<float>(file, n[c], Imf::FLOAT), component(fb.normal, c, 3), n[c]);
     expectFloatsEqual(readChannel<float>(file, p[c], Imf::FLOAT), component(fb.position, c, 3),
                       p[c]);
   }
@@ -198,7 +196,7 @@ TEST(Exr, OnlyRequestedAovsAreWritten) {
 }
 
 TEST(Exr, CompressionNamesParse) {
-  const char* names[] = {"none", "rle",  "zips", "zip",  "piz",
+  const char* names[] = {"none",  "rle", "zips", "zip",  "piz",
                          "pxr24", "b44", "b44a", "dwaa", "dwab"};
   for (const char* name : names) EXPECT_EQ(exrCompressionName(parseExrCompression(name)), name);
   try {
@@ -216,8 +214,8 @@ TEST(Exr, EveryCompressionWritesAReadableFile) {
   const std::string dir = test::scratchDir();
   const Framebuffer fb = patterned(40, 37);  // several scanline blocks for every compression
   const std::string lossless[] = {"none", "rle", "zips", "zip", "piz"};
-  for (const char* name : {"none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa",
-                           "dwab"}) {
+  for (const char* name :
+       {"none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa", "dwab"}) {
     SCOPED_TRACE(name);
     for (bool halfColor : {false, true}) {
       SCOPED_TRACE(halfColor ? "half color" : "float color");
@@ -438,8 +436,8 @@ TEST(Exr, WorldToNdcReprojectsPositionsIntoTheirPixels) {
       const size_t i = size_t(row) * cam.width + col;
       if (back.primId[i] == kInvalidId) continue;
       // Imath row-vector convention: [x y z 1] * M, then divide by w.
-      const float p[4] = {back.position[3 * i], back.position[3 * i + 1],
-                          back.position[3 * i + 2], 1.0f};
+      const float p[4] = {back.position[3 * i], back.position[3 * i + 1], back.position[3 * i + 2],
+                          1.0f};
       double h[4] = {0, 0, 0, 0};
       for (int j = 0; j < 4; ++j)
         for (int k = 0; k < 4; ++k) h[j] += double(p[k]) * m[k][j];

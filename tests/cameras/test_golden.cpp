@@ -101,7 +101,7 @@ void writeGolden(const char* file, const std::map<std::string, std::string>& m) 
 
 /// Hashes every ray of every sample of the camera, generated in blocks of bw x bh lanes,
 /// in pixel order (so any block shape gives the same hash when the rays are equal).
-std::string hashRays(const FrameCamera& cam, int bw, int bh) {
+std::string hashRays(const CameraBase& cam, int bw, int bh) {
   const CameraDescription d = cam.describe();
   const int w = d.width, h = d.height;
   test::Fnv1a hash;
@@ -140,7 +140,7 @@ TEST(Golden, RaysOfEveryCameraAreUnchanged) {
     const CameraParams params =
         test::cameraParamsFromFlags(std::string(c.flags) + " --size " + kRaySize);
     // A render origin away from zero, as for a mesh whose bounding box is off-centre.
-    const auto cam = makeFrameCamera(params, glm::dvec3(0.25, -0.5, 0.75));
+    const auto cam = makeCameraModel(params, glm::dvec3(0.25, -0.5, 0.75));
     const std::string packet = hashRays(*cam, 4, 4);
     EXPECT_EQ(packet, hashRays(*cam, 1, 1)) << "16-wide packets differ from single rays";
     EXPECT_EQ(packet, hashRays(*cam, 4, 2)) << "8-wide packets differ from 16-wide ones";

@@ -1,16 +1,15 @@
 // The speed/accuracy study (`aperture tradeoff`), --preset, and `bench --sweep aovs`, run
 // through the executable.
-#include <fstream>
-#include <map>
-#include <set>
-#include <sstream>
-
-#include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
-
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfInputFile.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
 
 #include "core/exr.h"
 #include "tests/support.h"
@@ -37,9 +36,12 @@ std::vector<std::map<std::string, std::string>> readCsv(const std::string& path)
     std::string cell;
     bool quoted = false;
     for (char c : line) {
-      if (c == '"') quoted = !quoted;
-      else if (c == ',' && !quoted) cells.push_back(cell), cell.clear();
-      else cell += c;
+      if (c == '"')
+        quoted = !quoted;
+      else if (c == ',' && !quoted)
+        cells.push_back(cell), cell.clear();
+      else
+        cell += c;
     }
     cells.push_back(cell);
     std::map<std::string, std::string> row;
@@ -59,7 +61,10 @@ TEST(Tradeoff, QuickStudyCoversEveryKnobAndSamplesReduceTheError) {
   const std::string dir = scratchDir();
   std::string out;
   ASSERT_EQ(runCommand(apertureBinary() + " tradeoff --quiet --quick --reference-spp 64" +
-                           kThinLensCity + " --out-dir " + dir + " --name t", &out), 0) << out;
+                           kThinLensCity + " --out-dir " + dir + " --name t",
+                       &out),
+            0)
+      << out;
   const auto rows = readCsv(dir + "/t.csv");
   std::set<std::string> knobs;
   std::map<std::string, double> sppRmse;
@@ -71,8 +76,8 @@ TEST(Tradeoff, QuickStudyCoversEveryKnobAndSamplesReduceTheError) {
     if (r.at("knob") == "spp") sppRmse[r.at("spp")] = std::stod(r.at("rmse"));
     EXPECT_GT(std::stod(r.at("frame_s")), 0.0);
   }
-  for (const char* k : {"base", "bvh", "packet", "spp", "placement", "exr_color",
-                        "exr_compression", "tile"})
+  for (const char* k :
+       {"base", "bvh", "packet", "spp", "placement", "exr_color", "exr_compression", "tile"})
     EXPECT_TRUE(knobs.count(k)) << "knob " << k << " missing from the study";
   EXPECT_GT(pareto, 0);
   // Stratified samples through a thin lens: the error against the 64-spp reference falls.
@@ -91,8 +96,10 @@ TEST(Tradeoff, ReferenceSettingsAgainstThemselvesHaveNoError) {
   std::string out;
   for (const char* name : {"a", "b"})
     ASSERT_EQ(runCommand(apertureBinary() + " render --quiet --preset exact --spp 16" +
-                             kThinLensCity + " --aov all --out " + dir + "/" + name + ".exr", &out),
-              0) << out;
+                             kThinLensCity + " --aov all --out " + dir + "/" + name + ".exr",
+                         &out),
+              0)
+        << out;
   EXPECT_EQ(test::differingAovs(readExr(dir + "/a.exr"), readExr(dir + "/b.exr")), "");
 }
 
@@ -101,7 +108,10 @@ TEST(Preset, MapsToTheDocumentedSettingsAndExplicitFlagsWin) {
   std::string out;
   auto render = [&](const std::string& args, const std::string& name) {
     EXPECT_EQ(runCommand(apertureBinary() + " render --quiet --size 16,12 --aov color,depth " +
-                             args + " --out " + dir + "/" + name, &out), 0) << out;
+                             args + " --out " + dir + "/" + name,
+                         &out),
+              0)
+        << out;
     Imf::InputFile file((dir + "/" + name).c_str());
     return std::make_pair(file.header(), readExr(dir + "/" + name));
   };
@@ -125,12 +135,17 @@ TEST(Preset, MapsToTheDocumentedSettingsAndExplicitFlagsWin) {
     EXPECT_EQ(h.compression(), Imf::PIZ_COMPRESSION);
     EXPECT_EQ(h.channels().findChannel("R")->type, Imf::FLOAT);
   }
-  EXPECT_EQ(runCommand(apertureBinary() + " render --preset turbo --out " + dir + "/x.exr", &out), 1);
+  EXPECT_EQ(runCommand(apertureBinary() + " render --preset turbo --out " + dir + "/x.exr", &out),
+            1);
   EXPECT_NE(out.find("known: fast, balanced, exact"), std::string::npos) << out;
   // bench takes the same presets; its JSON shows the BVH the preset chose.
   const std::string json = dir + "/b.json";
-  ASSERT_EQ(runCommand(apertureBinary() + " bench --quiet --preset balanced --mesh procedural:sphere "
-                           "--size 32,32 --frames 1 --warmup 0 --builds 1 --json " + json, &out), 0)
+  ASSERT_EQ(runCommand(apertureBinary() +
+                           " bench --quiet --preset balanced --mesh procedural:sphere "
+                           "--size 32,32 --frames 1 --warmup 0 --builds 1 --json " +
+                           json,
+                       &out),
+            0)
       << out;
   const auto j = nlohmann::json::parse(std::ifstream(json));
   EXPECT_EQ(j["config"]["bvh_quality"], "high");
@@ -141,8 +156,12 @@ TEST(Preset, MapsToTheDocumentedSettingsAndExplicitFlagsWin) {
 TEST(BenchSweep, AovsReportsDepthAloneAndAll) {
   const std::string json = scratchDir() + "/a.json";
   std::string out;
-  ASSERT_EQ(runCommand(apertureBinary() + " bench --quiet --mesh procedural:sphere --size 32,32 "
-                           "--frames 2 --warmup 0 --builds 1 --sweep aovs --json " + json, &out), 0)
+  ASSERT_EQ(runCommand(apertureBinary() +
+                           " bench --quiet --mesh procedural:sphere --size 32,32 "
+                           "--frames 2 --warmup 0 --builds 1 --sweep aovs --json " +
+                           json,
+                       &out),
+            0)
       << out;
   const auto j = nlohmann::json::parse(std::ifstream(json));
   ASSERT_TRUE(j.contains("sweep_aovs"));
@@ -157,22 +176,28 @@ TEST(Preset, JobFilesTakeThePresetAndExplicitKeysWin) {
     const std::string path = dir + "/job.json";
     test::writeFile(path, R"({"scene": {"meshes": [{"path": "procedural:sphere"}]},
       "cameras": [{"name": "v", "eye": [0, 0, 4], "at": [0, 0, 0], "fov": 40}],
-      "size": [16, 12], "output": "out/{camera}.exr")" + extra + "}");
+      "size": [16, 12], "output": "out/{camera}.exr")" +
+                              extra + "}");
     return path;
   };
   std::string out;
-  ASSERT_EQ(runCommand(apertureBinary() + " batch --quiet " + job(R"(, "preset": "balanced")"), &out),
-            0) << out;
+  ASSERT_EQ(
+      runCommand(apertureBinary() + " batch --quiet " + job(R"(, "preset": "balanced")"), &out), 0)
+      << out;
   ExrMetadata meta;
   readExr(dir + "/out/v.exr", &meta);
   EXPECT_EQ(meta.camera.spp, 4);
   ASSERT_EQ(runCommand(apertureBinary() + " batch --quiet " +
-                           job(R"(, "preset": "exact", "spp": 2, "half": true)"), &out), 0) << out;
+                           job(R"(, "preset": "exact", "spp": 2, "half": true)"),
+                       &out),
+            0)
+      << out;
   readExr(dir + "/out/v.exr", &meta);
   EXPECT_EQ(meta.camera.spp, 2);
   Imf::InputFile file((dir + "/out/v.exr").c_str());
   EXPECT_EQ(file.header().channels().findChannel("R")->type, Imf::HALF);
-  EXPECT_NE(runCommand(apertureBinary() + " batch --quiet " + job(R"(, "preset": "turbo")"), &out), 0);
+  EXPECT_NE(runCommand(apertureBinary() + " batch --quiet " + job(R"(, "preset": "turbo")"), &out),
+            0);
   EXPECT_NE(out.find("preset"), std::string::npos) << out;
   EXPECT_NE(out.find("known: fast, balanced, exact"), std::string::npos) << out;
 }

@@ -1,5 +1,7 @@
 // End-to-end tests of the `aperture` executable: exit codes, messages, no partial outputs,
 // bit-identical EXRs across packet widths and threads, EXR header reprojection.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -7,8 +9,6 @@
 #include <sstream>
 #include <utility>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "core/exr.h"
 #include "tests/support.h"
@@ -23,7 +23,6 @@ namespace {
 std::string quote(const std::string& s) { return "'" + s + "'"; }
 
 const char* kBunnyView = " --eye -0.02,0.11,0.35 --at -0.017,0.11,0 --up 0,1,0 --fov 30";
-
 
 TEST(Cli, HelpAndVersionExitZero) {
   std::string out;
@@ -40,8 +39,11 @@ TEST(Cli, HelpAndVersionExitZero) {
 TEST(Cli, DefaultSceneRendersExrAndPreview) {
   const std::string dir = scratchDir();
   std::string out;
-  ASSERT_EQ(runCommand(apertureBinary() + " render --size 64,48 --out " + dir + "/d.exr --preview " +
-                           dir + "/d.png", &out), 0) << out;
+  ASSERT_EQ(runCommand(apertureBinary() + " render --size 64,48 --out " + dir +
+                           "/d.exr --preview " + dir + "/d.png",
+                       &out),
+            0)
+      << out;
   const Framebuffer fb = readExr(dir + "/d.exr");
   EXPECT_EQ(fb.width, 64);
   EXPECT_EQ(fb.aovs, parseAovList("color,depth"));
@@ -103,8 +105,9 @@ void expectCleanFailure(const std::string& command, const std::string& name,
   EXPECT_LT(m.wallSeconds, 5.0) << name;
   EXPECT_LT(m.maxRssKb, 200 * 1024) << name;
 #endif
-  ::testing::Test::RecordProperty(name, std::to_string(m.cpuSeconds) + " s cpu, " + std::to_string(m.wallSeconds) +
-                           " s wall, " + std::to_string(m.maxRssKb / 1024) + " MB peak");
+  ::testing::Test::RecordProperty(name, std::to_string(m.cpuSeconds) + " s cpu, " +
+                                            std::to_string(m.wallSeconds) + " s wall, " +
+                                            std::to_string(m.maxRssKb / 1024) + " MB peak");
 }
 
 /// (file, expected message) pairs of a corpus directory's EXPECTED.txt.
@@ -136,10 +139,14 @@ TEST(Cli, MalformedMeshCorpusFailsCleanlyWithoutOutput) {
   // An empty file and a directory, made here.
   test::writeFile(dir + "/empty.ply", "");
   std::string out;
-  EXPECT_EQ(runCommand(apertureBinary() + " render --out " + exr + " --mesh " + dir + "/empty.ply", &out), 1);
+  EXPECT_EQ(
+      runCommand(apertureBinary() + " render --out " + exr + " --mesh " + dir + "/empty.ply", &out),
+      1);
   EXPECT_NE(out.find("empty.ply"), std::string::npos) << out;
   std::filesystem::create_directories(dir + "/adir.ply");
-  EXPECT_EQ(runCommand(apertureBinary() + " render --out " + exr + " --mesh " + dir + "/adir.ply", &out), 1);
+  EXPECT_EQ(
+      runCommand(apertureBinary() + " render --out " + exr + " --mesh " + dir + "/adir.ply", &out),
+      1);
   EXPECT_NE(out.find("directory"), std::string::npos) << out;
   EXPECT_FALSE(test::fileExists(exr));
 }
@@ -169,12 +176,16 @@ TEST(Cli, PacketWidthsAndThreadsGiveBitIdenticalExrOnBunny) {
   Framebuffer ref;
   for (int packet : {1, 4, 8, 16})
     for (int threads : {1, 2}) {
-      const std::string exr = dir + "/p" + std::to_string(packet) + "t" + std::to_string(threads) + ".exr";
+      const std::string exr =
+          dir + "/p" + std::to_string(packet) + "t" + std::to_string(threads) + ".exr";
       std::string out;
       ASSERT_EQ(runCommand(apertureBinary() + " render --quiet --mesh " + bunny + kBunnyView +
                                " --size 203,157 --aov all --packet " + std::to_string(packet) +
                                " --threads " + std::to_string(threads) + " --tile " +
-                               std::to_string(8 * packet) + " --out " + exr, &out), 0) << out;
+                               std::to_string(8 * packet) + " --out " + exr,
+                           &out),
+                0)
+          << out;
       const Framebuffer fb = readExr(exr);
       if (ref.width == 0) {
         ref = fb;
@@ -182,7 +193,8 @@ TEST(Cli, PacketWidthsAndThreadsGiveBitIdenticalExrOnBunny) {
         for (uint32_t id : fb.primId) hits += id != kInvalidId;
         EXPECT_GT(hits, 203 * 157 / 4);
       } else {
-        EXPECT_EQ(test::differingAovs(fb, ref), "") << "packet " << packet << " threads " << threads;
+        EXPECT_EQ(test::differingAovs(fb, ref), "")
+            << "packet " << packet << " threads " << threads;
       }
     }
 }
@@ -197,8 +209,11 @@ TEST(Cli, PacketWidthsGiveBitIdenticalPrimIdsOnTheCrown) {
     std::string out;
     ASSERT_EQ(runCommand(apertureBinary() + " render --quiet --mesh " + crown +
                              " --eye 0,5.5,24 --at 0,11,-10 --fov 47 --fov-axis x --size 250,350"
-                             " --aov primid,depth,normal --packet " + std::to_string(packet) +
-                             " --out " + exr, &out), 0) << out;
+                             " --aov primid,depth,normal --packet " +
+                             std::to_string(packet) + " --out " + exr,
+                         &out),
+              0)
+        << out;
     const Framebuffer fb = readExr(exr);
     if (packet == 16)
       ref = fb;
@@ -212,7 +227,10 @@ TEST(Cli, HeaderMatricesReprojectPositionsToTheirPixels) {
   const std::string exr = scratchDir() + "/b.exr";
   std::string out;
   ASSERT_EQ(runCommand(apertureBinary() + " render --quiet --mesh " + bunny + kBunnyView +
-                           " --size 120,90 --aov position,depth --out " + exr, &out), 0) << out;
+                           " --size 120,90 --aov position,depth --out " + exr,
+                       &out),
+            0)
+      << out;
   ExrMetadata meta;
   const Framebuffer fb = readExr(exr, &meta);
   const glm::dmat4 ndcFromWorld = meta.camera.ndcFromWorld;
@@ -221,7 +239,8 @@ TEST(Cli, HeaderMatricesReprojectPositionsToTheirPixels) {
     for (int j = 0; j < fb.width; ++j) {
       const size_t px = size_t(i) * size_t(fb.width) + size_t(j);
       if (!std::isfinite(fb.depth[px])) continue;
-      const glm::dvec4 p(fb.position[3 * px], fb.position[3 * px + 1], fb.position[3 * px + 2], 1.0);
+      const glm::dvec4 p(fb.position[3 * px], fb.position[3 * px + 1], fb.position[3 * px + 2],
+                         1.0);
       const glm::dvec4 q = ndcFromWorld * p;
       const double x = q.x / q.w * fb.width, y = q.y / q.w * fb.height;
       EXPECT_NEAR(x, j + 0.5, 1e-2) << i << "," << j;
@@ -237,8 +256,13 @@ TEST(Cli, HeaderMatricesReprojectPositionsToTheirPixels) {
 TEST(Cli, BenchReportsRenderAndBaselineInJson) {
   const std::string json = scratchDir() + "/b.json";
   std::string out;
-  ASSERT_EQ(runCommand(apertureBinary() + " bench --quiet --size 64,64 --frames 3 --warmup 1 --builds 2 "
-                           "--baseline --mesh 'procedural:sphere' --json " + json, &out), 0) << out;
+  ASSERT_EQ(runCommand(apertureBinary() +
+                           " bench --quiet --size 64,64 --frames 3 --warmup 1 --builds 2 "
+                           "--baseline --mesh 'procedural:sphere' --json " +
+                           json,
+                       &out),
+            0)
+      << out;
   std::ifstream in(json);
   std::stringstream text;
   text << in.rdbuf();
@@ -251,12 +275,17 @@ TEST(Cli, BenchReportsRenderAndBaselineInJson) {
 TEST(Cli, CameraDescribePrintsFrameConventionsAndVolume) {
   std::string out;
   // Horizontal fov 47° on a 1000x1400 image: vertical fov 2·atan(tan(23.5°)·1.4) = 62.6609°.
-  ASSERT_EQ(runCommand(apertureBinary() + " camera --describe --eye 0,5.5,24 --at 0,11,-10 "
-                           "--fov 47 --fov-axis x --size 1000,1400 --near 1 --far 100", &out), 0)
+  ASSERT_EQ(
+      runCommand(apertureBinary() + " camera --describe --eye 0,5.5,24 --at 0,11,-10 "
+                                    "--fov 47 --fov-axis x --size 1000,1400 --near 1 --far 100",
+                 &out),
+      0)
       << out;
-  for (const char* text : {"e = (0, 5.5, 24)", "fov horizontal 47 deg", "vertical 62.6608",
-                           "frustum", "far top-left"})
+  for (const char* text :
+       {"e = (0, 5.5, 24)", "fov horizontal 47 deg", "vertical 62.6608", "frustum", "far top-left"})
     EXPECT_NE(out.find(text), std::string::npos) << text << "\n" << out;
-  EXPECT_NE(runCommand(apertureBinary() + " camera --describe --eye 0,0,1 --at 0,0,0 --up 0,0,1", &out), 0);
+  EXPECT_NE(
+      runCommand(apertureBinary() + " camera --describe --eye 0,0,1 --at 0,0,0 --up 0,0,1", &out),
+      0);
   EXPECT_NE(out.find("parallel"), std::string::npos) << out;
 }

@@ -1,7 +1,7 @@
 // Convention converters against hand-computed cases, and the --describe text.
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "cameras/base.h"
 #include "cameras/conventions.h"
@@ -45,8 +45,7 @@ TEST(Conventions, BlenderSensorFit) {
   expectPlane(fromBlender(50, 36, 24, BlenderSensorFit::Auto, 1920, 1080), 0.72, 0.405);
   expectPlane(fromBlender(50, 36, 24, BlenderSensorFit::Auto, 1080, 1920), 0.405, 0.72);
   expectPlane(fromBlender(50, 36, 24, BlenderSensorFit::Horizontal, 1080, 1920), 0.72, 1.28);
-  expectPlane(fromBlender(50, 36, 24, BlenderSensorFit::Vertical, 1920, 1080), 0.48 * 16 / 9,
-              0.48);
+  expectPlane(fromBlender(50, 36, 24, BlenderSensorFit::Vertical, 1920, 1080), 0.48 * 16 / 9, 0.48);
   EXPECT_EQ(parseBlenderSensorFit("VERTICAL"), BlenderSensorFit::Vertical);
   EXPECT_THROW(parseBlenderSensorFit("FILL"), Error);
   EXPECT_THROW(fromBlender(0, 36, 24, BlenderSensorFit::Auto, 10, 10), Error);
@@ -70,7 +69,7 @@ TEST(Conventions, OpenCVCameraProjectsLikeOpenCV) {
   p.eye = {0.5, -1.0, 2.0};
   p.dir = glm::dvec3(0.2, 0.1, -1.0);
   applyImagePlane(fromOpenCV(fx, fy, cx, cy, 640, 480, 0.7), p);
-  const auto cam = makeFrameCamera(p);
+  const auto cam = makeCameraModel(p);
   const CameraFrame f = cam->frame();
   for (const glm::dvec3 cvPoint : {glm::dvec3(0.3, -0.2, 4.0), glm::dvec3(-1.0, 0.7, 2.5)}) {
     // OpenCV camera: x right (U), y down (−V), z forward (−W).
@@ -105,9 +104,8 @@ TEST(CameraDescribe, PrintsFrameConventionsAndCorners) {
   p.at = glm::dvec3(0, 1, 0);
   p.fovDeg = 60;
   const std::string text = describeCamera(p);
-  for (const char* key : {"e = (0, 1, 5)", "W = (0, 0, 1)", "viewport", "fov horizontal",
-                          "pbrt-v4", "Mitsuba", "35 mm", "OpenCV", "view volume: frustum",
-                          "far top-left"})
+  for (const char* key : {"e = (0, 1, 5)", "W = (0, 0, 1)", "viewport", "fov horizontal", "pbrt-v4",
+                          "Mitsuba", "35 mm", "OpenCV", "view volume: frustum", "far top-left"})
     EXPECT_NE(text.find(key), std::string::npos) << key << "\n" << text;
   CameraParams o = p;
   o.type = "orthographic";

@@ -1,4 +1,4 @@
-#include "cameras/parallel.h"
+#include "cameras/parallel_projection.h"
 
 #include <cmath>
 
@@ -31,8 +31,7 @@ ViewVolume ParallelCamera::viewVolume(double nearDist, double farDist) const {
   const bool ortho = shearU_ == 0 && shearV_ == 0;
   return ViewVolume::planar(ortho ? ViewVolume::Kind::Box : ViewVolume::Kind::Parallelepiped,
                             frame_.e, frame_.u, frame_.v, frame_.w, nearDist, farDist,
-                            {uLo(), shearU_}, {uHi(), shearU_}, {vLo(), shearV_},
-                            {vHi(), shearV_});
+                            {uLo(), shearU_}, {uHi(), shearU_}, {vLo(), shearV_}, {vHi(), shearV_});
 }
 
 glm::dmat4 ParallelCamera::ndcFromCamera() const {

@@ -1,4 +1,4 @@
-#include "apps/frame.h"
+#include "apps/view.h"
 
 #include <filesystem>
 
@@ -12,7 +12,7 @@ RenderedView renderView(const Scene& scene, const CameraParams& params,
   const auto camera = makeCamera(params, scene.renderOrigin());
   RenderedView view;
   view.fb = Framebuffer(params.width, params.height, aovs);
-  view.stats = renderFrame(scene, *camera, settings, view.fb);
+  view.stats = renderImage(scene, *camera, settings, view.fb);
   view.camera = camera->describe();
   return view;
 }
@@ -27,8 +27,8 @@ ExrMetadata viewMetadata(const RenderedView& view, const std::vector<std::string
   meta.strings = {{"aperture.meshes", meshes},
                   {"aperture.aovs", aovListString(aovs)},
                   {"aperture.bvhQuality", bvhQualityName(quality)},
-                  {"aperture.placement", placement == Placement::WorldSpace ? "world-space"
-                                                                            : "camera-relative"}};
+                  {"aperture.placement",
+                   placement == Placement::WorldSpace ? "world-space" : "camera-relative"}};
   return meta;
 }
 

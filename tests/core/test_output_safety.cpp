@@ -1,6 +1,7 @@
 // Output safety of the real `aperture` binary: a full disk (file-size limit, or a 1 MB tmpfs
 // where mounting is permitted) and SIGKILL in the middle of writing never leave a partial EXR
 // under the final name, and the previous file survives.
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/mount.h>
 #include <sys/wait.h>
@@ -14,8 +15,6 @@
 #include <random>
 #include <sstream>
 #include <thread>
-
-#include <gtest/gtest.h>
 
 #include "core/exr.h"
 #include "tests/support.h"
@@ -60,8 +59,8 @@ TEST(OutputSafety, FileSizeLimitIsACleanErrorAndKeepsThePreviousFile) {
   ASSERT_FALSE(before.empty());
   std::string out;
   // ulimit -f counts 1024-byte blocks: files may not grow past 256 KB.
-  const int rc = runCommand("ulimit -f 256; exec " + apertureBinary() + kLargeRender + " --out " +
-                                exr, &out);
+  const int rc =
+      runCommand("ulimit -f 256; exec " + apertureBinary() + kLargeRender + " --out " + exr, &out);
   EXPECT_EQ(rc, 1) << "exit code (not a signal such as SIGXFSZ): " << out;
   EXPECT_NE(out.find("cannot write '" + exr + "'"), std::string::npos) << out;
   EXPECT_NE(out.find(std::strerror(EFBIG)), std::string::npos) << out;
@@ -71,9 +70,12 @@ TEST(OutputSafety, FileSizeLimitIsACleanErrorAndKeepsThePreviousFile) {
   // The bench summary JSON and the PNG preview go through the same path.
   const std::string json = dir + "/b.json";
   test::writeFile(json, "{\"previous\": true}\n");
-  EXPECT_EQ(runCommand("ulimit -f 0; exec " + apertureBinary() +
-                           " bench --quiet --size 16,16 --frames 1 --warmup 0 --builds 1 --json " +
-                           json, &out), 1) << out;
+  EXPECT_EQ(
+      runCommand("ulimit -f 0; exec " + apertureBinary() +
+                     " bench --quiet --size 16,16 --frames 1 --warmup 0 --builds 1 --json " + json,
+                 &out),
+      1)
+      << out;
   EXPECT_NE(out.find("cannot write '" + json + "'"), std::string::npos) << out;
   EXPECT_EQ(readBytes(json), "{\"previous\": true}\n");
   EXPECT_EQ(othersIn(dir, "x.exr"), std::vector<std::string>{"b.json"});
@@ -131,8 +133,8 @@ TEST(OutputSafety, SigkillDuringTheWriteLeavesThePreviousOrACompleteFile) {
   ASSERT_TRUE(isCompleteExr(exr));
   // 1024x1024, every AOV, uncompressed: ~59 MB, so the write takes a while.
   const std::vector<std::string> args = {apertureBinary(), "render", "--quiet", "--size",
-                                         "1024,1024", "--aov", "all", "--compression", "none",
-                                         "--out", exr};
+                                         "1024,1024",      "--aov",  "all",     "--compression",
+                                         "none",           "--out",  exr};
   std::mt19937 rng(12345);
   int killedMidWrite = 0;
   for (int round = 0; round < 6; ++round) {
@@ -163,7 +165,8 @@ TEST(OutputSafety, SigkillDuringTheWriteLeavesThePreviousOrACompleteFile) {
     // The final name holds the previous file byte for byte, or a complete new one.
     const std::string now = readBytes(exr);
     if (now != before) {
-      EXPECT_TRUE(isCompleteExr(exr)) << "round " << round << ": a partial EXR under the final name";
+      EXPECT_TRUE(isCompleteExr(exr))
+          << "round " << round << ": a partial EXR under the final name";
       const Framebuffer fb = readExr(exr);
       EXPECT_EQ(fb.width, 1024);
     }

@@ -1,10 +1,10 @@
 // Frame-loop tests: closed-form values on analytic scenes, and bit-identical output for every
 // packet width, tile size and thread count.
-#include <cmath>
-#include <cstring>
-
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+
+#include <cmath>
+#include <cstring>
 
 #include "cameras/registry.h"
 #include "core/error.h"
@@ -74,7 +74,7 @@ Framebuffer render(const Scene& scene, const CameraParams& p, AovMask aovs, int 
   rs.packetWidth = packet;
   rs.tileSize = tile;
   rs.spp = p.spp;
-  renderFrame(scene, *cam, rs, fb);
+  renderImage(scene, *cam, rs, fb);
   return fb;
 }
 
@@ -241,13 +241,15 @@ TEST(RenderSamples, WithoutColorOnlySampleZeroIsTracedAndGeometryIsUnchanged) {
   RenderSettings rs;
   rs.spp = 16;
   Framebuffer depthOnly(40, 30, kAovDepth), withColor(40, 30, kAovDepth | kAovColor);
-  const RenderStats a = renderFrame(scene, *cam, rs, depthOnly);
-  const RenderStats b = renderFrame(scene, *cam, rs, withColor);
-  EXPECT_EQ(a.raysTraced, 40u * 30u);       // one ray a pixel: sample 0
+  const RenderStats a = renderImage(scene, *cam, rs, depthOnly);
+  const RenderStats b = renderImage(scene, *cam, rs, withColor);
+  EXPECT_EQ(a.raysTraced, 40u * 30u);        // one ray a pixel: sample 0
   EXPECT_EQ(b.raysTraced, 16u * 40u * 30u);  // color averages all 16
-  EXPECT_EQ(test::differingAovs(depthOnly, [&] {
-              Framebuffer d(40, 30, kAovDepth);
-              d.depth = withColor.depth;
-              return d;
-            }()), "");
+  EXPECT_EQ(test::differingAovs(depthOnly,
+                                [&] {
+                                  Framebuffer d(40, 30, kAovDepth);
+                                  d.depth = withColor.depth;
+                                  return d;
+                                }()),
+            "");
 }

@@ -1,0 +1,57 @@
+#include "tests/numerics_support.h"
+
+#include <cmath>
+
+#include "cameras/registry.h"
+
+namespace aperture::test {
+
+Device& numericsDevice() {
+  static Device d;
+  return d;
+}
+
+Loaded load(const std::string& spec, const LoadOptions& lo, const BuildOptions& bo) {
+  Loaded l;
+  l.mesh = std::make_unique<Mesh>(loadMesh(spec, lo));
+  l.scene = std::make_unique<Scene>(numericsDevice(), std::vector<const Mesh*>{l.mesh.get()}, bo);
+  return l;
+}
+
+Framebuffer render(const Scene& scene, const CameraParams& p, AovMask aovs, RenderStats* stats) {
+  const auto cam = makeCamera(p, scene.renderOrigin());
+  Framebuffer fb(p.width, p.height, aovs);
+  RenderSettings rs;
+  rs.spp = p.spp;
+  const RenderStats s = renderImage(scene, *cam, rs, fb);
+  if (stats) *stats = s;
+  return fb;
+}
+
+CameraParams lookAt(glm::dvec3 eye, glm::dvec3 at, int w, int h) {
+  CameraParams p;
+  p.eye = eye;
+  p.at = at;
+  p.width = w;
+  p.height = h;
+  p.fovDeg = 40;
+  return p;
+}
+
+double relErr(double got, double want) { return std::abs(got - want) / std::abs(want); }
+
+Agreement compare(const Framebuffer& a, const Framebuffer& ref) {
+  Agreement g;
+  size_t same = 0;
+  for (size_t i = 0; i < ref.pixelCount(); ++i) {
+    if (a.primId[i] != ref.primId[i]) continue;
+    ++same;
+    if (ref.primId[i] == kInvalidId) continue;
+    g.maxZ = std::max(g.maxZ, relErr(a.depth[i], ref.depth[i]));
+    g.maxT = std::max(g.maxT, relErr(a.distance[i], ref.distance[i]));
+  }
+  g.primIdShare = double(same) / double(ref.pixelCount());
+  return g;
+}
+
+}  // namespace aperture::test

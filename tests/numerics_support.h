@@ -1,0 +1,43 @@
+#pragma once
+// Helpers of the numerics tests (tests/core/test_numerics_*.cpp, tests/cameras/test_numerics_*):
+// one shared device, a mesh with its scene, renders, and agreement of two renders.
+#include <memory>
+#include <string>
+
+#include "cameras/params.h"
+#include "core/framebuffer.h"
+#include "core/mesh.h"
+#include "core/render.h"
+#include "core/scene.h"
+
+namespace aperture::test {
+
+inline constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+/// One Embree device for all numerics tests.
+Device& numericsDevice();
+
+/// A loaded mesh and the scene over it (the mesh must outlive the scene).
+struct Loaded {
+  std::unique_ptr<Mesh> mesh;
+  std::unique_ptr<Scene> scene;
+};
+Loaded load(const std::string& spec, const LoadOptions& lo = {}, const BuildOptions& bo = {});
+
+/// Renders `p` (its size and spp) into a fresh framebuffer of `aovs`.
+Framebuffer render(const Scene& scene, const CameraParams& p, AovMask aovs,
+                   RenderStats* stats = nullptr);
+
+/// A 40° perspective camera at `eye` looking at `at`, w x h pixels.
+CameraParams lookAt(glm::dvec3 eye, glm::dvec3 at, int w, int h);
+
+double relErr(double got, double want);
+
+/// Agreement of two renders: share of pixels with equal primID and the largest relative Z / T
+/// error over the pixels both hit on the same triangle.
+struct Agreement {
+  double primIdShare = 0, maxZ = 0, maxT = 0;
+};
+Agreement compare(const Framebuffer& a, const Framebuffer& ref);
+
+}  // namespace aperture::test
