@@ -18,7 +18,8 @@
 
 #include "apps/commands.h"
 #include "apps/job.h"
-#include "apps/options.h"
+#include "apps/render_options.h"
+#include "apps/scene_setup.h"
 #include "apps/view.h"
 #include "cameras/culling.h"
 #include "core/atomic_file.h"

@@ -10,8 +10,11 @@
 #include <utility>
 #include <vector>
 
+#include "apps/camera_flags.h"
 #include "apps/commands.h"
-#include "apps/options.h"
+#include "apps/presets.h"
+#include "apps/render_options.h"
+#include "apps/scene_setup.h"
 #include "cameras/registry.h"
 #include "core/atomic_file.h"
 #include "core/baseline.h"
@@ -23,7 +26,7 @@ namespace {
 
 struct BenchArgs {
   SceneOptions scene;
-  CameraOptions camera;
+  CameraFlags camera;
   RenderOptions render;
   int frames = 10, warmup = 3, builds = 3;
   bool baseline = false, quiet = false;
@@ -83,7 +86,10 @@ void printSummary(const char* label, const Summary& s, int frames) {
 
 int runBench(const BenchArgs& a) {
   const AovMask aovs = parseAovList(a.render.aovs);
-  const RenderSettings settings = a.render.settings(a.camera.spp);
+  const ParamSet given = a.camera.given();
+  const CameraParams unframed =
+      resolveCommandCamera(given, a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0));
+  const RenderSettings settings = a.render.settings(unframed.spp);
   if (a.frames < 1 || a.frames > 100000)
     throw Error(cat("--frames ", a.frames, " must be in [1, 100000]"));
   if (a.warmup < 0) throw Error(cat("--warmup ", a.warmup, " must be >= 0"));
@@ -91,12 +97,13 @@ int runBench(const BenchArgs& a) {
   if (!a.sweep.empty() && a.sweep != "packet" && a.sweep != "threads" && a.sweep != "quality" &&
       a.sweep != "aovs")
     throw Error(cat("--sweep: '", a.sweep, "' is not one of packet, threads, quality, aovs"));
-  checkMemoryBudget(a.scene, parseImageSize(a.camera.size), aovs);
+  checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs);
 
   ThreadLimit threads(a.render.threads);
   Device device;
   LoadedScene loaded = loadSceneMeshes(a.scene, a.quiet);
-  const CameraParams params = a.camera.toParams(loaded.worldLo, loaded.worldHi);
+  const CameraParams params =
+      resolveCommandCamera(given, a.camera.defaults(), loaded.worldLo, loaded.worldHi);
   buildLoadedScene(device, loaded, a.scene, a.quiet, {params});
   const auto camera = makeCamera(params, loaded.scene->renderOrigin());
   const BuildOptions build = a.scene.buildOptions();
@@ -266,11 +273,13 @@ int runBench(const BenchArgs& a) {
 
 Command addBenchCommand(CLI::App& app) {
   auto args = std::make_shared<BenchArgs>();
-  args->camera.size = "1920,1080";
   CLI::App* sub = app.add_subcommand(
       "bench", "Measure Mrays/s (median of timed frames after warm-up), build time, load speed");
   addSceneOptions(*sub, args->scene);
-  addCameraOptions(*sub, args->camera);
+  CameraParams benchDefaults;
+  benchDefaults.width = 1920;
+  benchDefaults.height = 1080;
+  args->camera.add(*sub, benchDefaults);
   addRenderOptions(*sub, args->render);
   sub->add_option("--frames", args->frames, "Timed frames")->capture_default_str();
   sub->add_option("--warmup", args->warmup, "Untimed warm-up frames")->capture_default_str();

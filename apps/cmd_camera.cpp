@@ -2,8 +2,8 @@
 // volume of a camera given with the same flags as render, without loading any mesh.
 #include <cstdio>
 
+#include "apps/camera_flags.h"
 #include "apps/commands.h"
-#include "apps/options.h"
 #include "cameras/describe.h"
 #include "cameras/registry.h"
 #include "core/error.h"
@@ -13,16 +13,18 @@ namespace aperture::app {
 namespace {
 
 struct CameraArgs {
-  CameraOptions camera;
+  CameraFlags camera;
   bool describe = false;
   double nearDist = -1, farDist = -1;
 };
 
 int runCamera(const CameraArgs& a) {
-  if (a.camera.eye.empty())
+  const ParamSet given = a.camera.given();
+  if (!given.has("eye"))
     throw Error("camera: --eye is required (there is no scene to frame automatically)");
   if (!a.describe) throw Error("camera: nothing to do (use --describe)");
-  const CameraParams params = a.camera.toParams(glm::dvec3(0.0), glm::dvec3(0.0));
+  const CameraParams params =
+      resolveCommandCamera(given, a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0));
   makeCamera(params);  // validates the parameters with the renderer's own errors
   std::fputs(describeCamera(params, a.nearDist, a.farDist).c_str(), stdout);
   return 0;
@@ -34,7 +36,7 @@ Command addCameraCommand(CLI::App& app) {
   auto args = std::make_shared<CameraArgs>();
   CLI::App* sub = app.add_subcommand(
       "camera", "Describe a camera: frame, parameters in every convention, view volume");
-  addCameraOptions(*sub, args->camera);
+  args->camera.add(*sub);
   sub->add_flag("--describe", args->describe, "Print the description");
   sub->add_option("--near", args->nearDist,
                   "Near distance of the printed view volume (scene units)");

@@ -3,8 +3,11 @@
 #include <filesystem>
 #include <vector>
 
+#include "apps/camera_flags.h"
 #include "apps/commands.h"
-#include "apps/options.h"
+#include "apps/presets.h"
+#include "apps/render_options.h"
+#include "apps/scene_setup.h"
 #include "apps/view.h"
 #include "cameras/registry.h"
 #include "core/error.h"
@@ -17,7 +20,7 @@ namespace {
 
 struct RenderArgs {
   SceneOptions scene;
-  CameraOptions camera;
+  CameraFlags camera;
   RenderOptions render;
   std::string out = "out/render.exr", preview, compression = "zip", preset;
   bool half = false, quiet = false;
@@ -29,16 +32,19 @@ int runRender(const RenderArgs& a) {
   ExrOptions exr;
   exr.compression = parseExrCompression(a.compression);
   exr.halfColor = a.half;
-  const RenderSettings settings = a.render.settings(a.camera.spp);
-  const glm::ivec2 size = parseImageSize(a.camera.size);
-  checkMemoryBudget(a.scene, size, aovs, a.preview.empty() ? 0 : 4);
+  const ParamSet given = a.camera.given();
+  const CameraParams unframed =
+      resolveCommandCamera(given, a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0));
+  const RenderSettings settings = a.render.settings(unframed.spp);
+  checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs, a.preview.empty() ? 0 : 4);
   if (std::filesystem::is_directory(a.out)) throw Error(cat("--out: '", a.out, "' is a directory"));
-  if (!a.camera.eye.empty()) makeCamera(a.camera.toParams(glm::dvec3(0.0), glm::dvec3(0.0)));
+  if (given.has("eye")) makeCamera(unframed);
 
   ThreadLimit threads(a.render.threads);
   Device device;
   LoadedScene loaded = loadSceneMeshes(a.scene, a.quiet);
-  const CameraParams params = a.camera.toParams(loaded.worldLo, loaded.worldHi);
+  const CameraParams params =
+      resolveCommandCamera(given, a.camera.defaults(), loaded.worldLo, loaded.worldHi);
   buildLoadedScene(device, loaded, a.scene, a.quiet, {params});
 
   const RenderedView view = renderView(*loaded.scene, params, settings, aovs);
@@ -70,7 +76,7 @@ Command addRenderCommand(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   CLI::App* sub = app.add_subcommand("render", "Render one frame to a multi-channel EXR");
   addSceneOptions(*sub, args->scene);
-  addCameraOptions(*sub, args->camera);
+  args->camera.add(*sub);
   addRenderOptions(*sub, args->render);
   sub->add_option("--out", args->out, "Output EXR path (written atomically)")
       ->capture_default_str();

@@ -4,8 +4,10 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "apps/camera_flags.h"
 #include "apps/commands.h"
-#include "apps/options.h"
+#include "apps/render_options.h"
+#include "apps/scene_setup.h"
 #include "apps/tradeoff.h"
 #include "cameras/registry.h"
 #include "core/atomic_file.h"
@@ -19,7 +21,7 @@ namespace fs = std::filesystem;
 
 struct TradeoffArgs {
   SceneOptions scene;
-  CameraOptions camera;
+  CameraFlags camera;
   RenderOptions render;
   std::string outDir = "out/tradeoff", name = "tradeoff", compression = "zip";
   int referenceSpp = 0, frames = 3, warmup = 1, writes = 3;
@@ -29,7 +31,9 @@ struct TradeoffArgs {
 int runTradeoff(const TradeoffArgs& a) {
   TradeoffConfig c;
   c.scene = a.scene;
-  c.base = a.render.settings(a.camera.spp);
+  const ParamSet given = a.camera.given();
+  c.base = a.render.settings(
+      resolveCommandCamera(given, a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0)).spp);
   c.baseExr.compression = parseExrCompression(a.compression);
   c.baseExr.halfColor = a.half;
   c.quick = a.quick;
@@ -59,7 +63,7 @@ int runTradeoff(const TradeoffArgs& a) {
     lo = s.worldLo;
     hi = s.worldHi;
   }
-  c.camera = a.camera.toParams(lo, hi);
+  c.camera = resolveCommandCamera(given, a.camera.defaults(), lo, hi);
   makeCamera(c.camera);  // a bad camera fails before the study starts
 
   fs::create_directories(a.outDir);
@@ -92,13 +96,15 @@ int runTradeoff(const TradeoffArgs& a) {
 
 Command addTradeoffCommand(CLI::App& app) {
   auto args = std::make_shared<TradeoffArgs>();
-  args->camera.size = "480,270";
   CLI::App* sub = app.add_subcommand(
       "tradeoff",
       "Sweep the speed knobs one at a time (BVH quality/robust/compact, packet, spp, placement, "
       "EXR half/compression, tile) and measure each against a reference: CSV + Markdown");
   addSceneOptions(*sub, args->scene);
-  addCameraOptions(*sub, args->camera);
+  CameraParams studyDefaults;
+  studyDefaults.width = 480;
+  studyDefaults.height = 270;
+  args->camera.add(*sub, studyDefaults);
   addRenderOptions(*sub, args->render);
   sub->add_option("--reference-spp", args->referenceSpp,
                   "Samples per pixel of the reference (robust, high quality, camera-relative); "

@@ -12,7 +12,9 @@
 #include <set>
 #include <sstream>
 
-#include "apps/options.h"
+#include "apps/job_camera.h"
+#include "apps/job_json.h"
+#include "apps/presets.h"
 #include "cameras/registry.h"
 #include "core/error.h"
 #include "core/units.h"
@@ -26,127 +28,6 @@ namespace {
 
 constexpr int kMaxDepth = 32;
 constexpr std::uintmax_t kMaxJobBytes = 16u << 20;
-
-/// A JSON object with a fixed set of known keys, read through typed getters whose errors
-/// name the file and the JSON path ("cameras[2].eye").
-class Object {
- public:
-  Object(const std::string& file, std::string path, const json& j,
-         std::initializer_list<const char*> known)
-      : file_(file), path_(std::move(path)), j_(j) {
-    if (!j.is_object()) fail(path_, cat("expected an object, got ", typeName(j)));
-    for (const auto& item : j.items()) {
-      const bool ok =
-          std::any_of(known.begin(), known.end(), [&](const char* k) { return item.key() == k; });
-      if (ok) continue;
-      std::string list;
-      for (const char* k : known) list += std::string(list.empty() ? "" : ", ") + k;
-      fail(keyPath(item.key()), cat("unknown key (known: ", list, ")"));
-    }
-  }
-
-  [[noreturn]] void fail(const std::string& where, const std::string& what) const {
-    throw Error(cat(file_, ": ", where.empty() ? "(top level)" : where, ": ", what));
-  }
-  std::string keyPath(const std::string& key) const {
-    return path_.empty() ? key : path_ + "." + key;
-  }
-  const std::string& path() const { return path_; }
-  const std::string& file() const { return file_; }
-  bool has(const char* key) const { return j_.contains(key); }
-  const json* find(const char* key) const {
-    auto it = j_.find(key);
-    return it == j_.end() ? nullptr : &*it;
-  }
-  const json& required(const char* key) const {
-    const json* v = find(key);
-    if (!v) fail(keyPath(key), "required key is missing");
-    return *v;
-  }
-
-  static std::string typeName(const json& v) {
-    if (v.is_number_integer()) return "an integer";
-    if (v.is_number()) return "a number";
-    if (v.is_string()) return "a string";
-    if (v.is_boolean()) return "a boolean";
-    if (v.is_array()) return "an array";
-    if (v.is_object()) return "an object";
-    return "null";
-  }
-
-  double toNumber(const std::string& where, const json& v) const {
-    if (!v.is_number()) fail(where, cat("expected a number, got ", typeName(v)));
-    const double x = v.get<double>();
-    if (!std::isfinite(x)) fail(where, "expected a finite number");
-    return x;
-  }
-  int toInt(const std::string& where, const json& v) const {
-    if (v.is_number_unsigned()) {
-      if (v.get<uint64_t>() > uint64_t(INT_MAX)) fail(where, "integer out of range");
-      return int(v.get<uint64_t>());
-    }
-    if (!v.is_number_integer()) fail(where, cat("expected an integer, got ", typeName(v)));
-    const int64_t x = v.get<int64_t>();
-    if (x < INT_MIN || x > INT_MAX) fail(where, "integer out of range");
-    return int(x);
-  }
-  std::vector<double> toNumbers(const std::string& where, const json& v, size_t n) const {
-    if (!v.is_array() || v.size() != n)
-      fail(where, cat("expected an array of ", n, " numbers, got ", typeName(v)));
-    std::vector<double> out;
-    for (size_t k = 0; k < n; ++k) out.push_back(toNumber(cat(where, "[", k, "]"), v[k]));
-    return out;
-  }
-
-  std::optional<double> number(const char* key) const {
-    const json* v = find(key);
-    if (!v) return std::nullopt;
-    return toNumber(keyPath(key), *v);
-  }
-  double number(const char* key, double def) const { return number(key).value_or(def); }
-  std::optional<int> integer(const char* key) const {
-    const json* v = find(key);
-    if (!v) return std::nullopt;
-    return toInt(keyPath(key), *v);
-  }
-  int integer(const char* key, int def) const { return integer(key).value_or(def); }
-  bool boolean(const char* key, bool def) const {
-    const json* v = find(key);
-    if (!v) return def;
-    if (!v->is_boolean()) fail(keyPath(key), cat("expected true or false, got ", typeName(*v)));
-    return v->get<bool>();
-  }
-  std::optional<std::string> string(const char* key) const {
-    const json* v = find(key);
-    if (!v) return std::nullopt;
-    if (!v->is_string()) fail(keyPath(key), cat("expected a string, got ", typeName(*v)));
-    return v->get<std::string>();
-  }
-  std::optional<glm::dvec3> vec3(const char* key) const {
-    const json* v = find(key);
-    if (!v) return std::nullopt;
-    auto x = toNumbers(keyPath(key), *v, 3);
-    return glm::dvec3(x[0], x[1], x[2]);
-  }
-  std::optional<glm::dvec2> vec2(const char* key) const {
-    const json* v = find(key);
-    if (!v) return std::nullopt;
-    auto x = toNumbers(keyPath(key), *v, 2);
-    return glm::dvec2(x[0], x[1]);
-  }
-  const json& array(const char* key) const {
-    const json& v = required(key);
-    if (!v.is_array()) fail(keyPath(key), cat("expected an array, got ", typeName(v)));
-    return v;
-  }
-
- private:
-  const std::string& file_;
-  std::string path_;
-  const json& j_;
-};
-
-std::string indexPath(const std::string& path, size_t k) { return cat(path, "[", k, "]"); }
 
 glm::dmat4 rotationDeg(const glm::dvec3& axis, double deg) {
   return glm::rotate(glm::dmat4(1.0), deg * kPi / 180.0, glm::normalize(axis));
@@ -214,167 +95,7 @@ std::string resolve(const std::string& baseDir, const std::string& p) {
   return (fs::path(baseDir) / p).lexically_normal().string();
 }
 
-/// Fields of a camera entry that are CameraParams fields (every camera flag of the CLI).
-void readCameraFields(const Object& c, CameraParams& p) {
-  if (auto t = c.string("type")) p.type = *t;
-  if (auto v = c.vec3("up")) p.up = *v;
-  if (auto v = c.number("fov")) p.fovDeg = *v;
-  if (auto v = c.string("fov_axis")) {
-    if (*v == "x")
-      p.fovAxis = FovAxis::X;
-    else if (*v == "y")
-      p.fovAxis = FovAxis::Y;
-    else if (*v == "diagonal")
-      p.fovAxis = FovAxis::Diagonal;
-    else
-      c.fail(c.keyPath("fov_axis"), cat("'", *v, "' is not one of x, y, diagonal"));
-  }
-  if (auto v = c.number("d")) p.d = *v;
-  if (auto v = c.vec2("viewport")) p.viewport = *v;
-  if (auto v = c.number("focal_length")) p.focalLengthMm = *v;
-  if (auto v = c.vec2("sensor")) p.sensorMm = *v;
-  if (auto v = c.vec2("shift")) p.shift = *v;
-  p.architectural = c.boolean("architectural", false);
-  if (auto v = c.vec3("oblique_dir")) p.obliqueDir = *v;
-  if (auto v = c.vec2("oblique_angles")) p.obliqueAnglesDeg = *v;
-  p.apertureRadius = c.number("aperture", 0.0);
-  if (auto v = c.number("focus")) p.focusDistance = *v;
-  if (auto v = c.vec2("lon")) p.longitudeRangeDeg = *v;
-  if (auto v = c.vec2("lat")) p.latitudeRangeDeg = *v;
-  p.fisheyeFovDeg = c.number("fisheye_fov", 180.0);
-  if (p.d && !p.viewport)
-    c.fail(c.keyPath("d"), "d needs viewport (the viewport at that distance)");
-}
-
-/// The image-plane defaults of `aperture render`: viewport without d means d = 1, and with
-/// none of fov, viewport and focal length the fov is 45 degrees.
-void finishImagePlane(CameraParams& p) {
-  if (p.viewport && !p.d) p.d = 1.0;
-  if (!p.fovDeg && !p.viewport && !p.focalLengthMm) p.fovDeg = 45.0;
-}
-
-const std::initializer_list<const char*> kCameraKeys = {"name",
-                                                        "type",
-                                                        "eye",
-                                                        "at",
-                                                        "dir",
-                                                        "up",
-                                                        "fov",
-                                                        "fov_axis",
-                                                        "d",
-                                                        "viewport",
-                                                        "focal_length",
-                                                        "sensor",
-                                                        "shift",
-                                                        "architectural",
-                                                        "oblique_dir",
-                                                        "oblique_angles",
-                                                        "aperture",
-                                                        "focus",
-                                                        "lon",
-                                                        "lat",
-                                                        "fisheye_fov",
-                                                        "orbit",
-                                                        "keyframes",
-                                                        "frames"};
-
-bool validName(const std::string& name) {
-  if (name.empty() || name.size() > 128 || name == "." || name == "..") return false;
-  return std::all_of(name.begin(), name.end(), [](char ch) {
-    return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-' || ch == '.';
-  });
-}
-
-OrbitPath parseOrbit(const Object& c, const CameraParams& base) {
-  const Object o(c.file(), c.keyPath("orbit"), c.required("orbit"),
-                 {"centre", "radius", "height", "elevation", "start", "sweep"});
-  OrbitPath orbit;
-  orbit.centre = o.vec3("centre").value_or(glm::dvec3(0.0));
-  if (!o.has("radius")) o.fail(o.keyPath("radius"), "required key is missing");
-  orbit.radius = *o.number("radius");
-  if (!(orbit.radius > 0)) o.fail(o.keyPath("radius"), cat(orbit.radius, ": must be > 0"));
-  orbit.height = o.number("height");
-  orbit.elevationDeg = o.number("elevation");
-  if (orbit.height && orbit.elevationDeg) o.fail(o.path(), "give height or elevation, not both");
-  if (orbit.elevationDeg && !(std::abs(*orbit.elevationDeg) < 90))
-    o.fail(o.keyPath("elevation"), cat(*orbit.elevationDeg, ": must be in (-90, 90) degrees"));
-  orbit.startDeg = o.number("start", 0.0);
-  orbit.sweepDeg = o.number("sweep", 360.0);
-  orbit.up = base.up;
-  if (glm::length(orbit.up) < 1e-12) c.fail(c.keyPath("up"), "up has zero length");
-  return orbit;
-}
-
-std::vector<Keyframe> parseKeyframes(const Object& c, const CameraParams& base) {
-  const json& list = c.array("keyframes");
-  const std::string where = c.keyPath("keyframes");
-  if (list.empty()) c.fail(where, "needs at least one keyframe");
-  std::vector<Keyframe> keys;
-  size_t withFov = 0;
-  for (size_t k = 0; k < list.size(); ++k) {
-    const Object e(c.file(), indexPath(where, k), list[k], {"frame", "eye", "at", "up", "fov"});
-    Keyframe key;
-    if (!e.has("frame")) e.fail(e.keyPath("frame"), "required key is missing");
-    key.frame = *e.integer("frame");
-    if (key.frame < 0) e.fail(e.keyPath("frame"), cat(key.frame, ": must be >= 0"));
-    if (!keys.empty() && key.frame <= keys.back().frame)
-      e.fail(e.keyPath("frame"), cat(key.frame, ": keyframes must ascend strictly by frame"));
-    if (!e.has("eye")) e.fail(e.keyPath("eye"), "required key is missing");
-    if (!e.has("at")) e.fail(e.keyPath("at"), "required key is missing");
-    key.eye = *e.vec3("eye");
-    key.at = *e.vec3("at");
-    key.up = e.vec3("up").value_or(base.up);
-    key.fovDeg = e.number("fov");
-    if (!key.fovDeg) key.fovDeg = base.fovDeg;
-    if (key.fovDeg) ++withFov;
-    keys.push_back(key);
-  }
-  if (withFov != 0 && withFov != keys.size())
-    c.fail(where, "either every keyframe has a fov (or the camera gives one) or none has");
-  return keys;
-}
-
 }  // namespace
-
-glm::dvec3 orbitEye(const OrbitPath& orbit, int k) {
-  const glm::dvec3 a = glm::normalize(orbit.up);
-  glm::dvec3 ref(0, 0, 1);
-  if (std::abs(glm::dot(ref, a)) > 0.999) ref = glm::dvec3(1, 0, 0);
-  const glm::dvec3 e1 = glm::normalize(ref - glm::dot(ref, a) * a);
-  const glm::dvec3 e2 = glm::cross(a, e1);
-  const double theta =
-      (orbit.startDeg + orbit.sweepDeg * double(k) / double(orbit.frames)) * kPi / 180.0;
-  const glm::dvec3 around = std::cos(theta) * e1 + std::sin(theta) * e2;
-  if (orbit.elevationDeg) {
-    const double phi = *orbit.elevationDeg * kPi / 180.0;
-    return orbit.centre + orbit.radius * (std::cos(phi) * around + std::sin(phi) * a);
-  }
-  return orbit.centre + orbit.radius * around + orbit.height.value_or(0.0) * a;
-}
-
-Keyframe interpolateKeyframes(const std::vector<Keyframe>& keys, int f) {
-  if (f <= keys.front().frame) {
-    Keyframe k = keys.front();
-    k.frame = f;
-    return k;
-  }
-  for (size_t i = 0; i + 1 < keys.size(); ++i) {
-    const Keyframe& a = keys[i];
-    const Keyframe& b = keys[i + 1];
-    if (f > b.frame) continue;
-    const double t = double(f - a.frame) / double(b.frame - a.frame);
-    Keyframe k;
-    k.frame = f;
-    k.eye = (1 - t) * a.eye + t * b.eye;
-    k.at = (1 - t) * a.at + t * b.at;
-    k.up = (1 - t) * a.up + t * b.up;
-    if (a.fovDeg && b.fovDeg) k.fovDeg = (1 - t) * *a.fovDeg + t * *b.fovDeg;
-    return k;
-  }
-  Keyframe k = keys.back();
-  k.frame = f;
-  return k;
-}
 
 std::string expandOutputPattern(const std::string& pattern, const std::string& camera, int frame) {
   std::string out;
@@ -414,77 +135,81 @@ std::string expandOutputPattern(const std::string& pattern, const std::string& c
   return out;
 }
 
-Job parseJobText(const std::string& text, const std::string& name, const std::string& baseDir) {
-  json root;
+namespace {
+
+json parseJsonText(const std::string& text, const std::string& name) {
   try {
     json::parser_callback_t limitDepth = [&](int depth, json::parse_event_t, json&) {
       if (depth > kMaxDepth) throw Error(cat(name, ": nested deeper than ", kMaxDepth, " levels"));
       return true;
     };
-    root = json::parse(text, limitDepth);
+    return json::parse(text, limitDepth);
   } catch (const json::exception& e) {
     throw Error(cat(name, ": not valid JSON: ", e.what()));
   }
+}
 
-  const Object top(name, "", root,
-                   {"scene", "cameras", "aovs", "size", "spp", "output", "preview", "compression",
-                    "half", "performance", "preset"});
-  Job job;
-  job.path = name;
-  // A preset supplies the defaults of spp, compression, half, bvh_quality and robust; keys
-  // given explicitly win, as flags do on the command line.
+/// "preset": the defaults of spp, compression, half, bvh_quality and robust; keys given
+/// explicitly win, as flags do on the command line.
+const Preset* readPreset(const Object& top, Job& job) {
+  const auto presetName = top.string("preset");
+  if (!presetName) return nullptr;
   const Preset* preset = nullptr;
-  if (const auto presetName = top.string("preset")) {
-    try {
-      preset = &findPreset(*presetName);
-    } catch (const Error& e) {
-      top.fail("preset", e.what());
-    }
-    job.build.quality = parseBvhQuality(preset->bvhQuality);
-    job.build.robust = preset->robust;
+  try {
+    preset = &findPreset(*presetName);
+  } catch (const Error& e) {
+    top.fail("preset", e.what());
   }
+  job.build.quality = parseBvhQuality(preset->bvhQuality);
+  job.build.robust = preset->robust;
+  return preset;
+}
 
-  // Image and output settings.
-  if (const json* a = top.find("aovs")) {
-    std::string list;
-    if (a->is_string()) {
-      list = a->get<std::string>();
-    } else if (a->is_array()) {
-      for (size_t k = 0; k < a->size(); ++k) {
-        if (!(*a)[k].is_string())
-          top.fail(indexPath("aovs", k), cat("expected a string, got ", Object::typeName((*a)[k])));
-        list += (list.empty() ? "" : ",") + (*a)[k].get<std::string>();
-      }
-    } else {
-      top.fail("aovs", cat("expected a string or an array of strings, got ", Object::typeName(*a)));
+/// "aovs": a comma-separated string or an array of names; default color,depth.
+AovMask readAovs(const Object& top) {
+  const json* a = top.find("aovs");
+  if (!a) return parseAovList("color,depth");
+  std::string list;
+  if (a->is_string()) {
+    list = a->get<std::string>();
+  } else if (a->is_array()) {
+    for (size_t k = 0; k < a->size(); ++k) {
+      if (!(*a)[k].is_string())
+        top.fail(indexPath("aovs", k), cat("expected a string, got ", Object::typeName((*a)[k])));
+      list += (list.empty() ? "" : ",") + (*a)[k].get<std::string>();
     }
-    try {
-      job.aovs = parseAovList(list);
-    } catch (const Error& e) {
-      top.fail("aovs", e.what());
-    }
-    if (job.aovs == 0) top.fail("aovs", "no AOV requested");
   } else {
-    job.aovs = parseAovList("color,depth");
+    top.fail("aovs", cat("expected a string or an array of strings, got ", Object::typeName(*a)));
   }
-  job.width = 960;
-  job.height = 540;
-  if (const json* s = top.find("size")) {
-    if (!s->is_array() || s->size() != 2)
-      top.fail("size", cat("expected [width, height], got ", Object::typeName(*s)));
-    job.width = top.toInt("size[0]", (*s)[0]);
-    job.height = top.toInt("size[1]", (*s)[1]);
-    constexpr int kMaxSide = 65536;
-    constexpr double kMaxPixels = 1 << 28;
-    if (job.width < 1 || job.height < 1 || job.width > kMaxSide || job.height > kMaxSide ||
-        double(job.width) * double(job.height) > kMaxPixels)
-      top.fail("size", cat("[", job.width, ", ", job.height,
-                           "]: width and height must be in [1, 65536] with at most ", kMaxPixels,
-                           " pixels"));
+  AovMask aovs = 0;
+  try {
+    aovs = parseAovList(list);
+  } catch (const Error& e) {
+    top.fail("aovs", e.what());
   }
-  job.render.spp = top.integer("spp", preset ? preset->spp : 1);
-  if (job.render.spp < 1 || job.render.spp > 65536)
-    top.fail("spp", cat(job.render.spp, ": must be in [1, 65536]"));
+  if (aovs == 0) top.fail("aovs", "no AOV requested");
+  return aovs;
+}
+
+/// Top-level "size" and "spp": the defaults of every camera (a camera may set its own),
+/// checked by the camera schema.
+CameraParams readCameraDefaults(const Object& top, const Preset* preset) {
+  ParamSet given;
+  for (const char* key : {"size", "spp"})
+    if (const json* v = top.find(key)) {
+      const ParamSpec& spec = *findCameraParamSpec(key);
+      given.set(spec, paramFromJson(top, spec, *v), key);
+    }
+  CameraParams defaults;
+  if (preset) defaults.spp = preset->spp;
+  try {
+    return resolveCameraParams(given, defaults);
+  } catch (const Error& e) {
+    throw Error(cat(top.file(), ": ", e.what()));
+  }
+}
+
+void readOutputSettings(const Object& top, const Preset* preset, Job& job) {
   if (!top.has("output")) top.fail("output", "required key is missing");
   job.outputPattern = *top.string("output");
   job.previewPattern = top.string("preview").value_or("");
@@ -495,18 +220,14 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
     top.fail("compression", e.what());
   }
   job.exr.halfColor = top.boolean("half", preset ? preset->halfColor : false);
+}
 
-  // Performance.
+void readPerformance(const Object& top, Job& job) {
   if (top.has("performance")) {
-    const Object p(name, "performance", top.required("performance"),
+    const Object p(top.file(), "performance", top.required("performance"),
                    {"packet", "tile", "threads", "bvh_quality", "robust", "compact", "cull"});
     job.render.packetWidth = p.integer("packet", 16);
-    const int w = job.render.packetWidth;
-    if (w != 1 && w != 4 && w != 8 && w != 16)
-      p.fail(p.keyPath("packet"), cat(w, ": must be 1, 4, 8 or 16"));
     job.render.tileSize = p.integer("tile", 32);
-    if (job.render.tileSize < 4 || job.render.tileSize > 4096 || job.render.tileSize % 4)
-      p.fail(p.keyPath("tile"), cat(job.render.tileSize, ": must be a multiple of 4 in [4, 4096]"));
     job.threads = p.integer("threads", 0);
     if (job.threads < 0 || job.threads > 4096)
       p.fail(p.keyPath("threads"), cat(job.threads, ": must be in [0, 4096] (0 = all cores)"));
@@ -525,10 +246,33 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
   } catch (const Error& e) {
     top.fail("performance", e.what());
   }
+}
 
-  // Scene: every file must exist before anything is loaded.
+JobMesh readMesh(const Object& m, const std::string& baseDir) {
+  if (!m.has("path")) m.fail(m.keyPath("path"), "required key is missing");
+  JobMesh mesh;
+  const std::string given = *m.string("path");
+  if (given.empty()) m.fail(m.keyPath("path"), "empty path");
+  mesh.spec = isProcedural(given) ? given : resolve(baseDir, given);
+  if (!isProcedural(given)) {
+    std::error_code ec;
+    if (fs::is_directory(mesh.spec, ec))
+      m.fail(m.keyPath("path"), cat("'", mesh.spec, "': is a directory, not a mesh file"));
+    if (!fs::is_regular_file(mesh.spec, ec))
+      m.fail(m.keyPath("path"),
+             cat("'", mesh.spec,
+                 "': ", fs::exists(mesh.spec, ec) ? "not a regular file" : "no such file"));
+  }
+  if (m.has("transform") && m.has("matrix")) m.fail(m.path(), "give transform or matrix, not both");
+  if (m.has("transform")) mesh.worldFromMesh = parseTransform(m, "transform");
+  if (m.has("matrix")) mesh.worldFromMesh = parseMatrix(m, "matrix");
+  return mesh;
+}
+
+/// "scene": every mesh file must exist before anything is loaded.
+void readScene(const Object& top, const std::string& baseDir, Job& job) {
   if (!top.has("scene")) top.fail("scene", "required key is missing");
-  const Object scene(name, "scene", top.required("scene"), {"meshes", "placement"});
+  const Object scene(top.file(), "scene", top.required("scene"), {"meshes", "placement"});
   const std::string placement = scene.string("placement").value_or("camera-relative");
   if (placement == "world-space")
     job.placement = Placement::WorldSpace;
@@ -538,133 +282,49 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
   const json& meshes = scene.array("meshes");
   if (meshes.empty()) scene.fail("scene.meshes", "needs at least one mesh");
   for (size_t k = 0; k < meshes.size(); ++k) {
-    const Object m(name, indexPath("scene.meshes", k), meshes[k], {"path", "transform", "matrix"});
-    if (!m.has("path")) m.fail(m.keyPath("path"), "required key is missing");
-    JobMesh mesh;
-    const std::string given = *m.string("path");
-    if (given.empty()) m.fail(m.keyPath("path"), "empty path");
-    mesh.spec = isProcedural(given) ? given : resolve(baseDir, given);
-    if (!isProcedural(given)) {
-      std::error_code ec;
-      if (fs::is_directory(mesh.spec, ec))
-        m.fail(m.keyPath("path"), cat("'", mesh.spec, "': is a directory, not a mesh file"));
-      if (!fs::is_regular_file(mesh.spec, ec))
-        m.fail(m.keyPath("path"),
-               cat("'", mesh.spec,
-                   "': ", fs::exists(mesh.spec, ec) ? "not a regular file" : "no such file"));
-    }
-    if (m.has("transform") && m.has("matrix"))
-      m.fail(m.path(), "give transform or matrix, not both");
-    if (m.has("transform")) mesh.worldFromMesh = parseTransform(m, "transform");
-    if (m.has("matrix")) mesh.worldFromMesh = parseMatrix(m, "matrix");
-    job.meshes.push_back(mesh);
+    const Object m(top.file(), indexPath("scene.meshes", k), meshes[k],
+                   {"path", "transform", "matrix"});
+    job.meshes.push_back(readMesh(m, baseDir));
   }
+}
 
-  // Cameras: each entry expands into its frames; every frame's camera is constructed.
+std::string expandFor(const Object& top, const char* key, const std::string& pattern,
+                      const std::string& baseDir, const std::string& camera, int frame) {
+  try {
+    return resolve(baseDir, expandOutputPattern(pattern, camera, frame));
+  } catch (const Error& e) {
+    top.fail(key, e.what());
+  }
+}
+
+/// "cameras": each entry expands into its images, in job order.
+void readCameras(const Object& top, const CameraParams& defaults, const std::string& baseDir,
+                 Job& job) {
   if (!top.has("cameras")) top.fail("cameras", "required key is missing");
   const json& cameras = top.array("cameras");
   if (cameras.empty()) top.fail("cameras", "needs at least one camera");
   std::set<std::string> names;
   for (size_t ci = 0; ci < cameras.size(); ++ci) {
-    const Object c(name, indexPath("cameras", ci), cameras[ci], kCameraKeys);
-    if (!c.has("name")) c.fail(c.keyPath("name"), "required key is missing");
-    const std::string camName = *c.string("name");
-    if (!validName(camName))
-      c.fail(c.keyPath("name"), cat("'", camName, "': use 1-128 letters, digits, '_', '-', '.'"));
-    if (!names.insert(camName).second)
-      c.fail(c.keyPath("name"), cat("'", camName, "': a camera of that name already exists"));
-
-    CameraParams base;
-    base.width = job.width;
-    base.height = job.height;
-    base.spp = job.render.spp;
-    readCameraFields(c, base);
-    const bool orbit = c.has("orbit"), keyed = c.has("keyframes");
-    if (orbit && keyed) c.fail(c.path(), "give orbit or keyframes, not both");
-    if (orbit || keyed) {
-      for (const char* k : {"eye", "at", "dir"})
-        if (c.has(k))
-          c.fail(c.keyPath(k), cat("not allowed with ", orbit ? "orbit" : "keyframes",
-                                   " (the path sets the eye and the look-at point)"));
-    } else {
-      if (c.has("frames"))
-        c.fail(c.keyPath("frames"), "only a camera with orbit or keyframes has frames");
-      if (!c.has("eye"))
-        c.fail(c.keyPath("eye"), "required key is missing (or give orbit or keyframes)");
-      if (c.has("at") == c.has("dir")) c.fail(c.path(), "give exactly one of at and dir");
-    }
-
-    // The per-frame parameters, in frame order.
-    std::vector<std::pair<int, CameraParams>> frames;
-    auto frameCount = [&](int def) {
-      const int n = c.integer("frames", def);
-      if (n < 1 || size_t(n) > kMaxJobImages)
-        c.fail(c.keyPath("frames"), cat(n, ": must be in [1, ", kMaxJobImages, "]"));
-      if (job.images.size() + size_t(n) > kMaxJobImages)
-        c.fail(c.keyPath("frames"), cat("the job would have more than ", kMaxJobImages, " frames"));
-      return n;
-    };
-    if (orbit) {
-      OrbitPath path = parseOrbit(c, base);
-      if (!c.has("frames")) c.fail(c.keyPath("frames"), "required key is missing (orbit frames)");
-      path.frames = frameCount(1);
-      for (int f = 0; f < path.frames; ++f) {
-        CameraParams p = base;
-        p.eye = orbitEye(path, f);
-        p.at = path.centre;
-        frames.emplace_back(f, p);
-      }
-    } else if (keyed) {
-      const std::vector<Keyframe> keys = parseKeyframes(c, base);
-      const int last = keys.back().frame;
-      if (last == INT_MAX) c.fail(c.keyPath("keyframes"), "frame number too large");
-      const int n = frameCount(last + 1);
-      for (int f = 0; f < n; ++f) {
-        const Keyframe k = interpolateKeyframes(keys, f);
-        CameraParams p = base;
-        p.eye = k.eye;
-        p.at = k.at;
-        p.up = k.up;
-        if (k.fovDeg) p.fovDeg = k.fovDeg;
-        frames.emplace_back(f, p);
-      }
-    } else {
-      CameraParams p = base;
-      p.eye = *c.vec3("eye");
-      p.at = c.vec3("at");
-      p.dir = c.vec3("dir");
-      frames.emplace_back(0, p);
-    }
-
-    for (auto& [f, p] : frames) {
-      finishImagePlane(p);
-      try {
-        makeCamera(p);
-      } catch (const Error& e) {
-        c.fail(c.path(), cat("camera '", camName, "' frame ", f, ": ", e.what()));
-      }
-      JobImage jf;
-      jf.index = job.images.size();
-      jf.camera = camName;
-      jf.frame = f;
-      jf.params = p;
-      try {
-        jf.output = resolve(baseDir, expandOutputPattern(job.outputPattern, camName, f));
-      } catch (const Error& e) {
-        top.fail("output", e.what());
-      }
-      if (!job.previewPattern.empty()) {
-        try {
-          jf.preview = resolve(baseDir, expandOutputPattern(job.previewPattern, camName, f));
-        } catch (const Error& e) {
-          top.fail("preview", e.what());
-        }
-      }
-      job.images.push_back(std::move(jf));
+    const Object c(top.file(), indexPath("cameras", ci), cameras[ci], jobCameraKeys());
+    const JobCamera cam = parseJobCamera(c, defaults, kMaxJobImages - job.images.size());
+    if (!names.insert(cam.name).second)
+      c.fail(c.keyPath("name"), cat("'", cam.name, "': a camera of that name already exists"));
+    for (const auto& [f, p] : cam.frames) {
+      JobImage image;
+      image.index = job.images.size();
+      image.camera = cam.name;
+      image.frame = f;
+      image.params = p;
+      image.output = expandFor(top, "output", job.outputPattern, baseDir, cam.name, f);
+      if (!job.previewPattern.empty())
+        image.preview = expandFor(top, "preview", job.previewPattern, baseDir, cam.name, f);
+      job.images.push_back(std::move(image));
     }
   }
+}
 
-  // Outputs: EXR names, one file per frame, never a directory.
+/// Outputs: EXR names, one file per image, never a directory.
+void checkOutputs(const Object& top, const Job& job) {
   auto lower = [](std::string s) {
     for (char& ch : s) ch = char(std::tolower(static_cast<unsigned char>(ch)));
     return s;
@@ -685,12 +345,38 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
       if (fs::is_directory(*out, ec)) top.fail(key, cat("'", *out, "' is a directory"));
     }
   }
-  const size_t brace = job.outputPattern.find('{');
-  const std::string fixed = job.outputPattern.substr(0, brace);
+}
+
+/// The output pattern's directory up to the first placeholder, resolved.
+std::string outputDirectoryOf(const std::string& pattern, const std::string& baseDir) {
+  const std::string fixed = pattern.substr(0, pattern.find('{'));
   const size_t slash = fixed.rfind('/');
-  job.outputDirectory =
+  const std::string dir =
       resolve(baseDir, slash == std::string::npos ? "." : fixed.substr(0, slash + 1));
-  if (job.outputDirectory.empty()) job.outputDirectory = ".";
+  return dir.empty() ? "." : dir;
+}
+
+}  // namespace
+
+Job parseJobText(const std::string& text, const std::string& name, const std::string& baseDir) {
+  const json root = parseJsonText(text, name);
+  const Object top(name, "", root,
+                   {"scene", "cameras", "aovs", "size", "spp", "output", "preview", "compression",
+                    "half", "performance", "preset"});
+  Job job;
+  job.path = name;
+  const Preset* preset = readPreset(top, job);
+  job.aovs = readAovs(top);
+  const CameraParams defaults = readCameraDefaults(top, preset);
+  job.width = defaults.width;
+  job.height = defaults.height;
+  job.render.spp = defaults.spp;
+  readOutputSettings(top, preset, job);
+  readPerformance(top, job);
+  readScene(top, baseDir, job);
+  readCameras(top, defaults, baseDir, job);
+  checkOutputs(top, job);
+  job.outputDirectory = outputDirectoryOf(job.outputPattern, baseDir);
   return job;
 }
 

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "apps/camera_paths.h"
 #include "cameras/params.h"
 #include "core/exr.h"
 #include "core/framebuffer.h"
@@ -66,31 +67,5 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
 /// Expands {camera}, {frame} and {frame:0Nd} (N in 1..20) in `pattern`. Throws Error for
 /// any other brace.
 std::string expandOutputPattern(const std::string& pattern, const std::string& camera, int frame);
-
-/// A turntable path: see docs/batch.md for the formula.
-struct OrbitPath {
-  glm::dvec3 centre{0.0};
-  double radius = 1;                   ///< scene units (> 0)
-  std::optional<double> height;        ///< offset along up, scene units
-  std::optional<double> elevationDeg;  ///< angle above the orbit plane, degrees
-  double startDeg = 0;                 ///< azimuth of frame 0, degrees
-  double sweepDeg = 360;               ///< azimuth covered by `frames` frames, degrees
-  int frames = 1;
-  glm::dvec3 up{0.0, 1.0, 0.0};
-};
-
-/// Eye position of frame k of an orbit.
-glm::dvec3 orbitEye(const OrbitPath& orbit, int k);
-
-/// One keyframe of a keyframed path.
-struct Keyframe {
-  int frame = 0;
-  glm::dvec3 eye{0.0}, at{0.0}, up{0.0, 1.0, 0.0};
-  std::optional<double> fovDeg;
-};
-
-/// The keyframe values at frame f: linear interpolation between the keyframes around f,
-/// held constant before the first and after the last. Keyframes ascend strictly by frame.
-Keyframe interpolateKeyframes(const std::vector<Keyframe>& keys, int f);
 
 }  // namespace aperture::app

@@ -5,7 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "apps/options.h"
+#include "apps/render_options.h"
+#include "apps/scene_setup.h"
 #include "cameras/params.h"
 #include "core/exr.h"
 #include "core/mesh.h"

@@ -12,7 +12,9 @@ RenderedView renderView(const Scene& scene, const CameraParams& params,
   const auto camera = makeCamera(params, scene.renderOrigin());
   RenderedView view;
   view.fb = Framebuffer(params.width, params.height, aovs);
-  view.stats = renderImage(scene, *camera, settings, view.fb);
+  RenderSettings forCamera = settings;
+  forCamera.spp = params.spp;  // a job camera may set its own spp
+  view.stats = renderImage(scene, *camera, forCamera, view.fb);
   view.camera = camera->describe();
   return view;
 }

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "cameras/conventions.h"
+#include "cameras/models.h"
 #include "core/error.h"
 #include "core/sampling.h"
 #include "core/units.h"
@@ -12,52 +14,127 @@ namespace {
 double radians(double deg) { return deg * kPi / 180.0; }
 }  // namespace
 
+namespace {
+
+using K = ParamKind;
+const ParamRange kPositive{0.0, std::nullopt, true, false};
+
+ParamAccess sizeAccess() {
+  return {[](const CameraParams& p) -> std::optional<ParamValue> {
+            return ParamValue(glm::ivec2(p.width, p.height));
+          },
+          [](CameraParams& p, const ParamValue& v) {
+            const glm::ivec2 s = std::get<glm::ivec2>(v);
+            p.width = s.x;
+            p.height = s.y;
+          }};
+}
+
+const ParamSpec kType{"type",    K::Choice,
+                      "",        "Camera model",
+                      nullptr,   {},
+                      {},        {},
+                      {},        fieldAccess<&CameraParams::type>(),
+                      "--camera"};
+const ParamSpec kSize{
+    "size",  K::Size,        "pixels", "Image size W,H (or WxH), at most 2^28 pixels",
+    nullptr, {1.0, 65536.0}, {},       {},
+    {},      sizeAccess()};
+const ParamSpec kSpp{"spp",   K::Integer,
+                     "",      "Samples per pixel (stratified; 1 = pixel centres)",
+                     nullptr, {1.0, 65536.0},
+                     {},      {},
+                     {},      fieldAccess<&CameraParams::spp>()};
+const ParamSpec kEye{"eye",
+                     K::Vec3,
+                     "scene units",
+                     "Eye position e",
+                     "render, bench: frames the scene; job files: required unless a path "
+                     "(orbit, keyframes) sets it",
+                     {},
+                     {},
+                     {},
+                     {},
+                     fieldAccess<&CameraParams::eye>()};
+const ParamSpec kAt{"at",
+                    K::Vec3,
+                    "scene units",
+                    "Look-at point",
+                    "the scene's centre (render, bench; the origin for `camera`)",
+                    {},
+                    {},
+                    {"dir"},
+                    {},
+                    fieldAccess<&CameraParams::at>()};
+const ParamSpec kDir{"dir", K::Vec3, "", "View direction (any length)",    nullptr, {},
+                     {},    {"at"},  {}, fieldAccess<&CameraParams::dir>()};
+const ParamSpec kUp{"up",    K::Vec3,
+                    "",      "Up vector (any length, not parallel to the view)",
+                    nullptr, {},
+                    {},      {},
+                    {},      fieldAccess<&CameraParams::up>()};
+const ParamSpec kD{"d",
+                   K::Number,
+                   "scene units",
+                   "Image-plane distance d (with viewport)",
+                   "1 when viewport is given",
+                   kPositive,
+                   {},
+                   {},
+                   {"viewport"},
+                   fieldAccess<&CameraParams::d>()};
+const ParamSpec kViewport{"viewport",
+                          K::Vec2,
+                          "scene units",
+                          "Viewport VW,VH on the image plane",
+                          "none (perspective: from fov; parallel cameras need it)",
+                          kPositive,
+                          {},
+                          {"fov", "focal_length"},
+                          {},
+                          fieldAccess<&CameraParams::viewport>()};
+
+}  // namespace
+
+const std::vector<const ParamSpec*>& commonParamSpecs() {
+  static const std::vector<const ParamSpec*> v = {&kType, &kSize, &kSpp, &kEye, &kAt, &kDir, &kUp};
+  return v;
+}
+const ParamSpec& distanceParamSpec() { return kD; }
+const ParamSpec& viewportParamSpec() { return kViewport; }
+
+std::vector<const ParamSpec*> joinParamSpecs(
+    std::initializer_list<std::vector<const ParamSpec*>> groups) {
+  std::vector<const ParamSpec*> all;
+  for (const auto& g : groups) all.insert(all.end(), g.begin(), g.end());
+  return all;
+}
+
+double focusDistanceOf(const CameraParams& p) {
+  if (p.focusDistance) return *p.focusDistance;
+  return p.at ? glm::length(*p.at - p.eye) : 1.0;
+}
+
 void resolveImagePlane(const CameraParams& p, double& d, double& vw, double& vh) {
-  if (p.width <= 0 || p.height <= 0)
-    throw Error(cat("camera: image size ", p.width, "x", p.height, " must be positive"));
-  const double aspect = double(p.width) / double(p.height);
   d = p.d.value_or(1.0);
-  requireFinite(d, "image-plane distance d");
-  if (!(d > 0)) throw Error(cat("camera: image-plane distance d = ", d, " must be > 0"));
   if (p.viewport) {
     vw = p.viewport->x;
     vh = p.viewport->y;
   } else if (p.focalLengthMm) {
-    const double f = *p.focalLengthMm;
-    requireFinite(f, "focal length");
-    if (!(f > 0)) throw Error(cat("camera: focal length ", f, " mm must be > 0"));
-    if (!(p.sensorMm.x > 0 && p.sensorMm.y > 0))
-      throw Error(cat("camera: sensor ", p.sensorMm.x, "x", p.sensorMm.y, " mm must be > 0"));
     // Crop the sensor to the image's aspect ratio (largest centred window that fits).
+    const double aspect = double(p.width) / double(p.height);
     double cropW = p.sensorMm.x, cropH = p.sensorMm.y;
     if (cropW / cropH > aspect)
       cropW = cropH * aspect;
     else
       cropH = cropW / aspect;
-    vw = d * cropW / f;
-    vh = d * cropH / f;
+    vw = d * cropW / *p.focalLengthMm;
+    vh = d * cropH / *p.focalLengthMm;
   } else {
-    const double fov = p.fovDeg.value_or(45.0);
-    requireFinite(fov, "fov");
-    if (!(fov > 0 && fov < 180))
-      throw Error(cat("camera: fov ", fov, " degrees must be in (0, 180)"));
-    const double extent = 2.0 * d * std::tan(radians(fov) / 2.0);
-    switch (p.fovAxis) {
-      case FovAxis::X:
-        vw = extent;
-        vh = extent / aspect;
-        break;
-      case FovAxis::Y:
-        vh = extent;
-        vw = extent * aspect;
-        break;
-      case FovAxis::Diagonal: {
-        const double diag = std::hypot(double(p.width), double(p.height));
-        vw = extent * p.width / diag;
-        vh = extent * p.height / diag;
-        break;
-      }
-    }
+    const glm::dvec2 v =
+        viewportOfFov(p.fovDeg.value_or(kDefaultFovDeg), p.fovAxis, p.width, p.height, d);
+    vw = v.x;
+    vh = v.y;
   }
   requireFinite(vw, "viewport width");
   requireFinite(vh, "viewport height");
@@ -75,15 +152,12 @@ CameraFrame frameFromParams(const CameraParams& p) {
 
 CameraBase::CameraBase(const CameraParams& p, const glm::dvec3& renderOrigin, const char* typeName)
     : params_(p), renderOrigin_(renderOrigin), type_(typeName) {
-  if (p.spp < 1) throw Error(cat("camera: spp ", p.spp, " must be >= 1"));
   requireFinite(renderOrigin, "render origin");
   frame_ = frameFromParams(p);
   resolveImagePlane(p, d_, vw_, vh_);
   width_ = p.width;
   height_ = p.height;
   spp_ = p.spp;
-  if (!std::isfinite(p.shift.x) || !std::isfinite(p.shift.y))
-    throw Error(cat("camera: shift (", p.shift.x, ",", p.shift.y, ") is not finite"));
   shift_ = p.shift;
   if (p.architectural) {
     // Keep the image plane parallel to up. With Y = normalize(up) and the requested view

@@ -16,11 +16,9 @@ void checkImage(int width, int height, double d) {
   if (!(d > 0 && std::isfinite(d))) throw Error(cat("conventions: d = ", d, " must be > 0"));
 }
 
-/// Extent on the image plane at distance d spanned by a full angle fovDeg in (0, 180).
-double extentOfFov(double fovDeg, double d) {
+void checkFov(double fovDeg) {
   if (!(fovDeg > 0 && fovDeg < 180))
     throw Error(cat("conventions: fov ", fovDeg, " degrees must be in (0, 180)"));
-  return 2.0 * d * std::tan(0.5 * fovDeg * kRadPerDeg);
 }
 
 double fullAngleDeg(double extent, double d) {
@@ -34,19 +32,27 @@ std::string lower(std::string s) {
 
 }  // namespace
 
+glm::dvec2 viewportOfFov(double fovDeg, FovAxis axis, int width, int height, double d) {
+  const double extent = 2.0 * d * std::tan(fovDeg * kPi / 180.0 / 2.0);
+  const double aspect = double(width) / double(height);
+  switch (axis) {
+    case FovAxis::X:
+      return {extent, extent / aspect};
+    case FovAxis::Y:
+      return {extent * aspect, extent};
+    case FovAxis::Diagonal:
+      break;
+  }
+  const double diag = std::hypot(double(width), double(height));
+  return {extent * width / diag, extent * height / diag};
+}
+
 ImagePlane fromPbrt(double fovDeg, int width, int height, double d) {
   checkImage(width, height, d);
-  const double extent = extentOfFov(fovDeg, d), aspect = double(width) / height;
-  ImagePlane p;
-  p.d = d;
-  if (width >= height) {
-    p.vh = extent;
-    p.vw = extent * aspect;
-  } else {
-    p.vw = extent;
-    p.vh = extent / aspect;
-  }
-  return p;
+  checkFov(fovDeg);
+  const glm::dvec2 v =
+      viewportOfFov(fovDeg, width >= height ? FovAxis::Y : FovAxis::X, width, height, d);
+  return {d, v.x, v.y, glm::dvec2(0.0)};
 }
 
 MitsubaFovAxis parseMitsubaFovAxis(const std::string& name) {
@@ -62,29 +68,16 @@ MitsubaFovAxis parseMitsubaFovAxis(const std::string& name) {
 
 ImagePlane fromMitsuba(double fovDeg, MitsubaFovAxis axis, int width, int height, double d) {
   checkImage(width, height, d);
-  const double extent = extentOfFov(fovDeg, d), aspect = double(width) / height;
+  checkFov(fovDeg);
   if (axis == MitsubaFovAxis::Smaller)
     axis = width <= height ? MitsubaFovAxis::X : MitsubaFovAxis::Y;
   if (axis == MitsubaFovAxis::Larger)
     axis = width >= height ? MitsubaFovAxis::X : MitsubaFovAxis::Y;
-  ImagePlane p;
-  p.d = d;
-  switch (axis) {
-    case MitsubaFovAxis::X:
-      p.vw = extent;
-      p.vh = extent / aspect;
-      break;
-    case MitsubaFovAxis::Y:
-      p.vh = extent;
-      p.vw = extent * aspect;
-      break;
-    default: {
-      const double diag = std::hypot(double(width), double(height));
-      p.vw = extent * width / diag;
-      p.vh = extent * height / diag;
-    }
-  }
-  return p;
+  const FovAxis a = axis == MitsubaFovAxis::X   ? FovAxis::X
+                    : axis == MitsubaFovAxis::Y ? FovAxis::Y
+                                                : FovAxis::Diagonal;
+  const glm::dvec2 v = viewportOfFov(fovDeg, a, width, height, d);
+  return {d, v.x, v.y, glm::dvec2(0.0)};
 }
 
 BlenderSensorFit parseBlenderSensorFit(const std::string& name) {

@@ -16,6 +16,11 @@ struct ImagePlane {
   glm::dvec2 shift{0.0};
 };
 
+/// The viewport (vw, vh) at distance d of a full field of view fovDeg spanning `axis` of a
+/// width x height image: vw or vh (or the diagonal) is 2·d·tan(fov/2), the other follows the
+/// image's aspect ratio. The one fov-axis conversion (resolveImagePlane and the converters).
+glm::dvec2 viewportOfFov(double fovDeg, FovAxis axis, int width, int height, double d);
+
 /// pbrt-v4 `perspective`: "fov" (degrees) spans the shorter image axis.
 ImagePlane fromPbrt(double fovDeg, int width, int height, double d = 1);
 

@@ -74,11 +74,29 @@ class EquirectCamera final : public PacketCamera<EquirectCamera> {
   double lon0_ = 0, lonPerPixel_ = 0, lat1_ = 0, latPerPixel_ = 0;  // radians
 };
 
-}  // namespace
+const ParamSpec kLon{"lon",     ParamKind::Vec2,
+                     "degrees", "Longitude range MIN,MAX (columns)",
+                     nullptr,   {-360.0, 360.0},
+                     {},        {},
+                     {},        fieldAccess<&CameraParams::longitudeRangeDeg>()};
+const ParamSpec kLat{"lat",     ParamKind::Vec2,
+                     "degrees", "Latitude range MIN,MAX (rows)",
+                     nullptr,   {-90.0, 90.0},
+                     {},        {},
+                     {},        fieldAccess<&CameraParams::latitudeRangeDeg>()};
 
 std::unique_ptr<CameraBase> makeEquirectCamera(const CameraParams& p,
                                                const glm::dvec3& renderOrigin) {
   return std::make_unique<EquirectCamera>(p, renderOrigin);
+}
+
+}  // namespace
+
+const CameraModel& equirectModel() {
+  static const CameraModel m{"equirect", "panorama: longitude along the columns, latitude down",
+                             makeEquirectCamera,
+                             joinParamSpecs({commonParamSpecs(), {&kLon, &kLat}})};
+  return m;
 }
 
 }  // namespace aperture

@@ -23,9 +23,6 @@ class FisheyeCamera final : public PacketCamera<FisheyeCamera> {
   FisheyeCamera(const CameraParams& p, const glm::dvec3& renderOrigin)
       : PacketCamera(p, renderOrigin, "fisheye") {
     rejectShift();
-    if (!(p.fisheyeFovDeg > 0 && p.fisheyeFovDeg <= 360))
-      throw Error(
-          cat("camera: fisheye field of view ", p.fisheyeFovDeg, " degrees must be in (0, 360]"));
     halfFov_ = 0.5 * p.fisheyeFovDeg * kRadPerDeg;
     radius_ = 0.5 * std::min(width_, height_);
     cx_ = 0.5 * width_;
@@ -77,11 +74,29 @@ class FisheyeCamera final : public PacketCamera<FisheyeCamera> {
   double halfFov_ = 0, radius_ = 1, cx_ = 0, cy_ = 0;
 };
 
-}  // namespace
+const ParamSpec kFisheyeFov{"fisheye_fov",
+                            ParamKind::Number,
+                            "degrees",
+                            "Full field of view of the image circle",
+                            nullptr,
+                            {0.0, 360.0, true, false},
+                            {},
+                            {},
+                            {},
+                            fieldAccess<&CameraParams::fisheyeFovDeg>()};
 
 std::unique_ptr<CameraBase> makeFisheyeCamera(const CameraParams& p,
                                               const glm::dvec3& renderOrigin) {
   return std::make_unique<FisheyeCamera>(p, renderOrigin);
+}
+
+}  // namespace
+
+const CameraModel& fisheyeModel() {
+  static const CameraModel m{"fisheye", "equidistant fisheye: angle from the axis ~ radius",
+                             makeFisheyeCamera,
+                             joinParamSpecs({commonParamSpecs(), {&kFisheyeFov}})};
+  return m;
 }
 
 }  // namespace aperture

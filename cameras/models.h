@@ -1,23 +1,34 @@
 #pragma once
-// Factories of the individual camera models (one module each); see registry.cpp.
+// The camera models (one module each) and the parameter declarations they share; the
+// registry (registry.cpp) lists the models.
+#include <initializer_list>
 #include <memory>
+#include <vector>
 
 #include "cameras/base.h"
+#include "cameras/param_schema.h"
+#include "cameras/registry.h"
 
 namespace aperture {
 
-std::unique_ptr<CameraBase> makePerspectiveCamera(const CameraParams& p,
-                                                  const glm::dvec3& renderOrigin);
-std::unique_ptr<CameraBase> makeOrthographicCamera(const CameraParams& p,
-                                                   const glm::dvec3& renderOrigin);
-std::unique_ptr<CameraBase> makeObliqueCamera(const CameraParams& p,
-                                              const glm::dvec3& renderOrigin);
-std::unique_ptr<CameraBase> makeThinLensCamera(const CameraParams& p,
-                                               const glm::dvec3& renderOrigin);
-std::unique_ptr<CameraBase> makeEquirectCamera(const CameraParams& p,
-                                               const glm::dvec3& renderOrigin);
-std::unique_ptr<CameraBase> makeFisheyeCamera(const CameraParams& p,
-                                              const glm::dvec3& renderOrigin);
+const CameraModel& perspectiveModel();
+const CameraModel& thinLensModel();
+const CameraModel& orthographicModel();
+const CameraModel& obliqueModel();
+const CameraModel& equirectModel();
+const CameraModel& fisheyeModel();
+
+/// type, size, spp, eye, at, dir, up: read by every model (declared in base.cpp).
+const std::vector<const ParamSpec*>& commonParamSpecs();
+/// The image-plane window of the planar models: d and viewport (declared in base.cpp).
+const ParamSpec& distanceParamSpec();
+const ParamSpec& viewportParamSpec();
+/// fov, fov_axis, focal_length, sensor, shift, architectural (declared in perspective.cpp).
+const std::vector<const ParamSpec*>& perspectiveParamSpecs();
+
+/// The concatenation of spec lists (a model's parameters from shared groups).
+std::vector<const ParamSpec*> joinParamSpecs(
+    std::initializer_list<std::vector<const ParamSpec*>> groups);
 
 /// The common unit direction of an oblique camera (errors for a missing, zero, backwards or
 /// too-steep direction: 89° or more from −W).

@@ -10,8 +10,6 @@
 namespace aperture {
 
 glm::dvec3 obliqueDirection(const CameraParams& p, const CameraFrame& frame) {
-  if (p.obliqueDir && p.obliqueAnglesDeg)
-    throw Error("camera: give either --oblique-dir or --oblique-angles, not both");
   glm::dvec3 dir;
   if (p.obliqueDir) {
     requireFinite(*p.obliqueDir, "oblique direction");
@@ -21,11 +19,7 @@ glm::dvec3 obliqueDirection(const CameraParams& p, const CameraFrame& frame) {
   } else if (p.obliqueAnglesDeg) {
     // Shear angles: AX turns the direction towards +U, AY towards +V:
     // dir = normalize(−W + tan(AX)·U + tan(AY)·V).
-    const glm::dvec2 a = *p.obliqueAnglesDeg;
-    if (!std::isfinite(a.x) || !std::isfinite(a.y) || !(std::abs(a.x) < 89.0) ||
-        !(std::abs(a.y) < 89.0))
-      throw Error(cat("camera: oblique angles (", a.x, ",", a.y,
-                      ") degrees must each be finite and below 89 in magnitude"));
+    const glm::dvec2 a = *p.obliqueAnglesDeg;  // each in (−89°, 89°): the schema's range
     const glm::dvec3 g =
         -frame.w + std::tan(a.x * kRadPerDeg) * frame.u + std::tan(a.y * kRadPerDeg) * frame.v;
     dir = g / glm::length(g);
@@ -40,10 +34,43 @@ glm::dvec3 obliqueDirection(const CameraParams& p, const CameraFrame& frame) {
   return dir;
 }
 
+namespace {
+
+const ParamSpec kObliqueDir{"oblique_dir",
+                            ParamKind::Vec3,
+                            "",
+                            "Common ray direction X,Y,Z (world space, any length)",
+                            "none: give oblique_dir or oblique_angles",
+                            {},
+                            {},
+                            {"oblique_angles"},
+                            {},
+                            fieldAccess<&CameraParams::obliqueDir>()};
+const ParamSpec kObliqueAngles{"oblique_angles",
+                               ParamKind::Vec2,
+                               "degrees",
+                               "Shear angles AX,AY of the rays towards +U and +V",
+                               "none: give oblique_dir or oblique_angles",
+                               {-89.0, 89.0, true, true},
+                               {},
+                               {"oblique_dir"},
+                               {},
+                               fieldAccess<&CameraParams::obliqueAnglesDeg>()};
+
 std::unique_ptr<CameraBase> makeObliqueCamera(const CameraParams& p,
                                               const glm::dvec3& renderOrigin) {
   const CameraFrame frame = frameFromParams(p);
   return std::make_unique<ParallelCamera>(p, renderOrigin, "oblique", obliqueDirection(p, frame));
+}
+
+}  // namespace
+
+const CameraModel& obliqueModel() {
+  static const CameraModel m{
+      "oblique", "parallel rays along a common direction that differs from the view axis",
+      makeObliqueCamera,
+      joinParamSpecs({commonParamSpecs(), {&viewportParamSpec(), &kObliqueDir, &kObliqueAngles}})};
+  return m;
 }
 
 }  // namespace aperture

@@ -1,7 +1,10 @@
 #pragma once
-// Camera parameters as the user gives them (command line, job file). The lecture's own
-// parameters (e, U, V, W, d, vw, vh) are the ground truth; the other conventions are
-// converted into them by resolveImagePlane().
+// Camera parameters, resolved: what a camera model is built from. The lecture's own parameters
+// (e, U, V, W, d, vw, vh) are the ground truth; the other conventions are converted into them
+// by resolveImagePlane(). Every field is declared for users once, in the parameter schema
+// (cameras/param_schema.h): its name, unit, default, range, conflicts and help. Front ends
+// (command line, job files, Python) fill a ParamSet and resolve it into this struct; a field
+// the user need not give is std::optional when "not given" means something else than a value.
 #include <glm/glm.hpp>
 #include <optional>
 #include <string>
@@ -10,18 +13,23 @@ namespace aperture {
 
 enum class FovAxis { X, Y, Diagonal };
 
+/// Field of view when none of fov, viewport and focal length is given: 45 degrees vertical.
+inline constexpr double kDefaultFovDeg = 45.0;
+
 struct CameraParams {
-  std::string type = "perspective";  ///< perspective orthographic oblique thinlens equirect fisheye
-  int width = 640, height = 480;     ///< image size, pixels
+  std::string type = "perspective";  ///< a registered model: see cameraTypeNames()
+  int width = 960, height = 540;     ///< image size, pixels
   int spp = 1;                       ///< samples per pixel; 1 = pixel centres exactly
 
-  // Frame (world space, scene units). Exactly one of `at` and `dir` is set.
+  // Frame (world space, scene units). At most one of `at` and `dir` is set; with neither the
+  // camera looks at the world origin.
   glm::dvec3 eye{0.0, 0.0, 5.0};
   std::optional<glm::dvec3> at;   ///< look-at point
   std::optional<glm::dvec3> dir;  ///< view direction (any length > 0)
   glm::dvec3 up{0.0, 1.0, 0.0};
 
-  // Image plane. Priority: explicit d + viewport; else focal length + sensor; else fov.
+  // Image plane. At most one of: viewport (with d, default 1), focal length (with sensor),
+  // fov (on fovAxis); with none, kDefaultFovDeg vertical.
   std::optional<double> d;              ///< image-plane distance, scene units (> 0)
   std::optional<glm::dvec2> viewport;   ///< vw, vh on the image plane, scene units (> 0)
   std::optional<double> fovDeg;         ///< field of view, degrees, in (0, 180)
@@ -39,12 +47,17 @@ struct CameraParams {
 
   // Thin lens.
   double apertureRadius = 0.0;  ///< lens radius, scene units (0 = pinhole)
-  double focusDistance = 1.0;   ///< distance of the in-focus plane along −W, scene units
+  /// Distance of the in-focus plane along −W, scene units; not given: |at − eye| with a
+  /// look-at point, else 1 (see focusDistanceOf()).
+  std::optional<double> focusDistance;
 
   // Panoramas.
   glm::dvec2 longitudeRangeDeg{-180.0, 180.0};  ///< equirect horizontal extent, degrees
   glm::dvec2 latitudeRangeDeg{-90.0, 90.0};     ///< equirect vertical extent, degrees
   double fisheyeFovDeg = 180.0;                 ///< fisheye full field of view, (0, 360]
 };
+
+/// The thin lens's focus distance: given, else |at − eye| with a look-at point, else 1.
+double focusDistanceOf(const CameraParams& p);
 
 }  // namespace aperture

@@ -145,11 +145,94 @@ void PerspectiveCamera::describeExtra(CameraDescription& c) const {
   }
 }
 
+namespace {
+
+using K = ParamKind;
+const ParamRange kPositive{0.0, std::nullopt, true, false};
+
+ParamAccess fovAxisAccess() {
+  return {[](const CameraParams& p) -> std::optional<ParamValue> {
+            return ParamValue(std::string(p.fovAxis == FovAxis::X   ? "x"
+                                          : p.fovAxis == FovAxis::Y ? "y"
+                                                                    : "diagonal"));
+          },
+          [](CameraParams& p, const ParamValue& v) {
+            const std::string& a = std::get<std::string>(v);
+            p.fovAxis = a == "x" ? FovAxis::X : a == "y" ? FovAxis::Y : FovAxis::Diagonal;
+          }};
+}
+
+const ParamSpec kFov{"fov",
+                     K::Number,
+                     "degrees",
+                     "Field of view",
+                     "45 vertical, when neither viewport nor focal_length is given",
+                     {0.0, 180.0, true, true},
+                     {},
+                     {"focal_length", "viewport"},
+                     {},
+                     fieldAccess<&CameraParams::fovDeg>()};
+const ParamSpec kFovAxis{
+    "fov_axis", K::Choice,      "", "The extent fov spans", nullptr, {}, {"x", "y", "diagonal"}, {},
+    {},         fovAxisAccess()};
+const ParamSpec kFocalLength{"focal_length",
+                             K::Number,
+                             "mm",
+                             "35 mm-style focal length",
+                             nullptr,
+                             kPositive,
+                             {},
+                             {"fov", "viewport"},
+                             {},
+                             fieldAccess<&CameraParams::focalLengthMm>()};
+const ParamSpec kSensor{"sensor",
+                        K::Vec2,
+                        "mm",
+                        "Sensor W,H for focal_length (the image crops it to its aspect)",
+                        nullptr,
+                        kPositive,
+                        {},
+                        {},
+                        {"focal_length"},
+                        fieldAccess<&CameraParams::sensorMm>()};
+const ParamSpec kShift{
+    "shift", K::Vec2, "viewports", "Lens shift SX,SY (0.5 = half a viewport)", nullptr, {},
+    {},      {},      {},          fieldAccess<&CameraParams::shift>()};
+const ParamSpec kArchitectural{
+    "architectural",
+    K::Flag,
+    "",
+    "Keep the image plane parallel to up (verticals stay parallel; the tilt becomes a shift)",
+    nullptr,
+    {},
+    {},
+    {},
+    {},
+    fieldAccess<&CameraParams::architectural>()};
+
 std::unique_ptr<CameraBase> makePerspectiveCamera(const CameraParams& p,
                                                   const glm::dvec3& renderOrigin) {
   if (p.apertureRadius != 0)
     throw Error("camera: --aperture needs --camera thinlens (perspective is a pinhole)");
   return std::make_unique<PerspectiveCamera>(p, renderOrigin, "perspective", 0.0, 1.0);
+}
+
+}  // namespace
+
+const std::vector<const ParamSpec*>& perspectiveParamSpecs() {
+  static const std::vector<const ParamSpec*> v = {&kFov,    &kFovAxis, &kFocalLength,
+                                                  &kSensor, &kShift,   &kArchitectural};
+  return v;
+}
+
+const CameraModel& perspectiveModel() {
+  static const CameraModel m{"perspective",
+                             "pinhole: rays from e through the image plane at distance d",
+                             makePerspectiveCamera,
+                             joinParamSpecs({commonParamSpecs(),
+                                             {&distanceParamSpec(), &viewportParamSpec()},
+                                             perspectiveParamSpecs()})};
+  return m;
 }
 
 }  // namespace aperture

@@ -1,28 +1,40 @@
 #include "cameras/registry.h"
 
+#include <algorithm>
+
 #include "cameras/models.h"
 #include "core/error.h"
+#include "core/spelling.h"
 
 namespace aperture {
 
-namespace {
-using Factory = std::unique_ptr<CameraBase> (*)(const CameraParams&, const glm::dvec3&);
-struct Entry {
-  const char* name;
-  Factory make;
-};
-// Explicit registration: every model is listed here.
-const Entry kCameras[] = {
-    {"perspective", makePerspectiveCamera}, {"orthographic", makeOrthographicCamera},
-    {"oblique", makeObliqueCamera},         {"thinlens", makeThinLensCamera},
-    {"equirect", makeEquirectCamera},       {"fisheye", makeFisheyeCamera},
-};
-}  // namespace
+bool CameraModel::accepts(const std::string& paramName) const {
+  return std::any_of(params.begin(), params.end(),
+                     [&](const ParamSpec* s) { return paramName == s->name; });
+}
+
+const std::vector<const CameraModel*>& cameraModels() {
+  // Explicit registration: every model is listed here.
+  static const std::vector<const CameraModel*> models = {
+      &perspectiveModel(), &orthographicModel(), &obliqueModel(),
+      &thinLensModel(),    &equirectModel(),     &fisheyeModel(),
+  };
+  return models;
+}
 
 std::vector<std::string> cameraTypeNames() {
   std::vector<std::string> names;
-  for (const auto& e : kCameras) names.emplace_back(e.name);
+  for (const CameraModel* m : cameraModels()) names.emplace_back(m->name);
   return names;
+}
+
+const CameraModel& findCameraModel(const std::string& type) {
+  for (const CameraModel* m : cameraModels())
+    if (type == m->name) return *m;
+  std::string known;
+  for (const std::string& n : cameraTypeNames()) known += (known.empty() ? "" : ", ") + n;
+  throw Error(cat("unknown camera type '", type, "' (known: ", known, ")",
+                  didYouMean(type, cameraTypeNames())));
 }
 
 std::unique_ptr<Camera> makeCamera(const CameraParams& params, const glm::dvec3& renderOrigin) {
@@ -31,11 +43,9 @@ std::unique_ptr<Camera> makeCamera(const CameraParams& params, const glm::dvec3&
 
 std::unique_ptr<CameraBase> makeCameraModel(const CameraParams& params,
                                             const glm::dvec3& renderOrigin) {
-  for (const auto& e : kCameras)
-    if (params.type == e.name) return e.make(params, renderOrigin);
-  std::string known;
-  for (const auto& e : kCameras) known += std::string(known.empty() ? "" : ", ") + e.name;
-  throw Error(cat("unknown camera type '", params.type, "' (known: ", known, ")"));
+  const CameraModel& model = findCameraModel(params.type);
+  checkCameraParamRanges(params);
+  return model.make(params, renderOrigin);
 }
 
 }  // namespace aperture

@@ -1,27 +1,44 @@
 #pragma once
-// Maps camera type names to factories (explicit registration; see STYLE.md §4).
+// The camera models by name (explicit registration; see STYLE.md §4), each with the
+// parameters it reads.
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "cameras/param_schema.h"
 #include "cameras/params.h"
 #include "core/camera.h"
 
 namespace aperture {
 
+class CameraBase;
+
+/// One registered model: its name, a one-line summary, its factory and every parameter it
+/// reads (common ones included), as declared by its module.
+struct CameraModel {
+  const char* name;
+  const char* summary;
+  std::unique_ptr<CameraBase> (*make)(const CameraParams&, const glm::dvec3& renderOrigin);
+  std::vector<const ParamSpec*> params;
+  bool accepts(const std::string& paramName) const;
+};
+
+/// Every model, in registration order.
+const std::vector<const CameraModel*>& cameraModels();
+/// The model named `type`; throws Error listing the known ones (with "did you mean").
+const CameraModel& findCameraModel(const std::string& type);
+/// Known type names, in registration order.
+std::vector<std::string> cameraTypeNames();
+
 /// Builds the camera named by params.type. `renderOrigin` is the scene anchor: ray origins
-/// are emitted relative to it (computed in double). Throws Error for an unknown type (listing
-/// the known ones) and for degenerate parameters (up parallel to the view direction, zero or
-/// non-finite vectors, d <= 0, viewport <= 0, fov outside (0, 180), ...).
+/// are emitted relative to it (computed in double). Throws Error for an unknown type and for
+/// bad parameters (checkCameraParamRanges, then the model's own checks: up parallel to the
+/// view direction, zero vectors, ...).
 std::unique_ptr<Camera> makeCamera(const CameraParams& params,
                                    const glm::dvec3& renderOrigin = glm::dvec3(0.0));
 
-class CameraBase;
 /// The same, with the model's full interface (scalar ray(), project(), viewVolume()).
 std::unique_ptr<CameraBase> makeCameraModel(const CameraParams& params,
                                             const glm::dvec3& renderOrigin = glm::dvec3(0.0));
-
-/// Known type names, in registration order.
-std::vector<std::string> cameraTypeNames();
 
 }  // namespace aperture

@@ -8,16 +8,46 @@
 
 namespace aperture {
 
+namespace {
+
+const ParamSpec kAperture{"aperture",
+                          ParamKind::Number,
+                          "scene units",
+                          "Lens radius (0: pinhole)",
+                          nullptr,
+                          {0.0, std::nullopt},
+                          {},
+                          {},
+                          {},
+                          fieldAccess<&CameraParams::apertureRadius>()};
+const ParamSpec kFocus{"focus",
+                       ParamKind::Number,
+                       "scene units",
+                       "Distance of the in-focus plane along the view axis",
+                       "|at - eye| with a look-at point, else 1",
+                       {0.0, std::nullopt, true, false},
+                       {},
+                       {},
+                       {},
+                       fieldAccess<&CameraParams::focusDistance>()};
+
 std::unique_ptr<CameraBase> makeThinLensCamera(const CameraParams& p,
                                                const glm::dvec3& renderOrigin) {
-  requireFinite(p.apertureRadius, "aperture radius");
-  requireFinite(p.focusDistance, "focus distance");
-  if (!(p.apertureRadius >= 0))
-    throw Error(cat("camera: aperture radius ", p.apertureRadius, " must be >= 0"));
-  if (!(p.focusDistance > 0))
-    throw Error(cat("camera: focus distance ", p.focusDistance, " must be > 0"));
   return std::make_unique<PerspectiveCamera>(p, renderOrigin, "thinlens", p.apertureRadius,
-                                             p.focusDistance);
+                                             focusDistanceOf(p));
+}
+
+}  // namespace
+
+const CameraModel& thinLensModel() {
+  static const CameraModel m{"thinlens",
+                             "perspective with a lens disk: depth of field, focused at `focus`",
+                             makeThinLensCamera,
+                             joinParamSpecs({commonParamSpecs(),
+                                             {&distanceParamSpec(), &viewportParamSpec()},
+                                             perspectiveParamSpecs(),
+                                             {&kAperture, &kFocus}})};
+  return m;
 }
 
 }  // namespace aperture

@@ -11,7 +11,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "apps/options.h"
+#include "apps/camera_flags.h"
 
 namespace fs = std::filesystem;
 
@@ -139,10 +139,11 @@ std::string Fnv1a::hex() const {
 
 CameraParams cameraParamsFromFlags(const std::string& flags) {
   CLI::App app;
-  app::CameraOptions options;
-  app::addCameraOptions(app, options);
+  app::CameraFlags camera;
+  camera.add(app);
   app.parse(flags, false);
-  return options.toParams(glm::dvec3(0.0), glm::dvec3(0.0));
+  return app::resolveCommandCamera(camera.given(), camera.defaults(), glm::dvec3(0.0),
+                                   glm::dvec3(0.0));
 }
 
 }  // namespace aperture::test

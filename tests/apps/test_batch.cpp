@@ -107,7 +107,8 @@ TEST(JobParse, UnknownKeyNamesFileJsonPathAndKnownKeys) {
   j["cameras"].push_back({{"name", "b"}, {"eye", {0, 0, 5}}, {"at", {0, 0, 0}}});
   j["cameras"].push_back({{"name", "c"}, {"eyee", {0, 0, 5}}, {"at", {0, 0, 0}}});
   const std::string msg = parseError(j);
-  EXPECT_NE(msg.find("job.json: cameras[2].eyee: unknown key (known: name, type, eye"),
+  EXPECT_NE(msg.find("job.json: cameras[2].eyee: unknown key (did you mean 'eye'?) (known: name, "
+                     "orbit, keyframes, frames, type, size, spp, eye"),
             std::string::npos)
       << msg;
   j = baseJob();
@@ -129,7 +130,7 @@ TEST(JobParse, WrongTypesAndRangesNameKeyAndReason) {
     const char* expect;
   };
   const Case cases[] = {
-      {"/size", {-64, 48}, "size: [-64, 48]: width and height must be in [1, 65536]"},
+      {"/size", {-64, 48}, "size: -64x48: each component must be in [1, 65536] pixels"},
       {"/size", "64x48", "size: expected [width, height], got a string"},
       {"/size", {64.5, 48}, "size[0]: expected an integer, got a number"},
       {"/spp", "4", "spp: expected an integer, got a string"},
@@ -137,8 +138,10 @@ TEST(JobParse, WrongTypesAndRangesNameKeyAndReason) {
       {"/half", 1, "half: expected true or false, got an integer"},
       {"/aovs", "colour", "aovs: "},
       {"/compression", "lzma", "compression: "},
-      {"/performance", {{"packet", 3}}, "performance.packet: 3: must be 1, 4, 8 or 16"},
-      {"/performance", {{"tile", 30}}, "performance.tile: 30: must be a multiple of 4"},
+      {"/performance", {{"packet", 3}}, "performance: packet width 3 is not one of 1, 4, 8, 16"},
+      {"/performance",
+       {{"tile", 30}},
+       "performance: tile size 30 must be a multiple of 4 in [4, 4096]"},
       {"/performance", {{"threads", -1}}, "performance.threads: -1: must be in [0, 4096]"},
       {"/performance", {{"bvh_quality", "best"}}, "performance.bvh_quality: "},
       {"/cameras/0/eye", {0, 0}, "cameras[0].eye: expected an array of 3 numbers"},
@@ -184,7 +187,8 @@ TEST(JobParse, DegenerateCamerasAreRejected) {
   EXPECT_NE(msg.find("job.json: cameras[0]: camera 'cam' frame 0: "), std::string::npos) << msg;
   j = baseJob();
   j["cameras"][0]["fov"] = 180;
-  EXPECT_NE(parseError(j).find("camera 'cam' frame 0"), std::string::npos);
+  EXPECT_NE(parseError(j).find("job.json: cameras[0].fov: 180: must be in (0, 180) degrees"),
+            std::string::npos);
   j = baseJob();
   j["cameras"][0]["type"] = "pinhole";
   EXPECT_NE(parseError(j).find("unknown camera type 'pinhole'"), std::string::npos);
@@ -442,7 +446,7 @@ TEST(Batch, InvalidJobsFailBeforeRenderingWithKeyAndReason) {
   check(j, "spp: expected an integer, got a string");
   j = baseJob();
   j["size"] = {64, -48};
-  check(j, "size: [64, -48]: width and height must be in [1, 65536]");
+  check(j, "size: 64x-48: each component must be in [1, 65536] pixels");
   j = baseJob();
   j["scene"]["meshes"].push_back({{"path", "missing.obj"}});
   check(j, "scene.meshes[1].path: '" + dir + "/missing.obj': no such file");

@@ -62,8 +62,8 @@ TEST(Cli, BadFlagValuesNameTheFlagAndValueAndWriteNothing) {
       {"--eye 0,0,5 --at 0,0,0 --up 0,0,1", "parallel"},
       {"--eye 0,0,5 --at 0,0,5", "look-at point equals the eye"},
       {"--up 0,0,0 --eye 1,1,1", "up vector is zero"},
-      {"--fov 180 --eye 0,0,5", "fov 180"},
-      {"--d -1 --viewport 1,1 --eye 0,0,5", "d = -1"},
+      {"--fov 180 --eye 0,0,5", "--fov: 180: must be in (0, 180) degrees"},
+      {"--d -1 --viewport 1,1 --eye 0,0,5", "--d: -1: must be > 0"},
       {"--d 1 --viewport 0,1 --eye 0,0,5", "viewport"},
       {"--size 0,10", "--size"},
       {"--size 100000,100000", "--size"},
@@ -73,7 +73,7 @@ TEST(Cli, BadFlagValuesNameTheFlagAndValueAndWriteNothing) {
       {"--compression lzma", "lzma"},
       {"--bvh-quality ultra", "ultra"},
       {"--mesh /nonexistent/m.ply", "/nonexistent/m.ply"},
-      {"--eye nan,0,1", "non-finite"},
+      {"--eye nan,0,1", "--eye: nan,0,1 is not finite"},
   };
   for (const Case& c : cases) {
     std::string out;

@@ -1,5 +1,6 @@
 #pragma once
-// Option groups shared by the subcommands (render, bench, camera), with their validation.
+// Scene set-up shared by render, bench, tradeoff (and batch): the scene flags, the memory
+// budget, loading meshes into one render space and building the Embree scene.
 #include <CLI/CLI.hpp>
 #include <deque>
 #include <memory>
@@ -11,7 +12,6 @@
 #include "core/cull.h"
 #include "core/framebuffer.h"
 #include "core/mesh.h"
-#include "core/render.h"
 #include "core/scene.h"
 
 namespace aperture::app {
@@ -27,39 +27,12 @@ struct SceneOptions {
   BuildOptions buildOptions() const;
 };
 
-/// Camera flags as text, converted by toParams() with errors that name the flag and value.
-struct CameraOptions {
-  std::string type = "perspective", eye, at, dir, up = "0,1,0", viewport, sensor, fovAxis = "y";
-  std::string shift, obliqueDir, obliqueAngles, lon, lat;
-  double fov = 0, d = 0, focalLength = 0, aperture = 0, focus = 0, fisheyeFov = 180;
-  bool architectural = false;
-  std::string size = "960,540";
-  int spp = 1;
-  /// Builds the parameters; with no --eye the camera frames the scene's bounds (world space).
-  CameraParams toParams(const glm::dvec3& worldLo, const glm::dvec3& worldHi) const;
-};
-
-struct RenderOptions {
-  std::string aovs = "color,depth";
-  int packet = 16, tile = 32, threads = 0;
-  RenderSettings settings(int spp) const;
-};
-
 void addSceneOptions(CLI::App& app, SceneOptions& o);
-void addCameraOptions(CLI::App& app, CameraOptions& o);
-void addRenderOptions(CLI::App& app, RenderOptions& o);
-
-/// Parses and bounds-checks --size: each side in [1, 65536], at most 2^28 pixels.
-glm::ivec2 parseImageSize(const std::string& size);
 
 /// Refuses, before anything is loaded, a job whose meshes, BVH and framebuffers (estimated
 /// from the files' headers and the image size) exceed --max-memory. No-op without the flag.
 void checkMemoryBudget(const SceneOptions& o, glm::ivec2 size, AovMask aovs,
                        uint64_t extraBytesPerPixel = 0);
-
-/// Parses "X,Y,Z" / "A,B" for `flag`; throws Error("--eye: expected X,Y,Z ...").
-glm::dvec3 parseVec3(const std::string& flag, const std::string& text);
-glm::dvec2 parseVec2(const std::string& flag, const std::string& text);
 
 /// Loaded meshes + Embree scene, logged as they are made.
 struct LoadedScene {
@@ -88,34 +61,5 @@ void buildLoadedScene(const Device& device, LoadedScene& s, const SceneOptions& 
 void logCullStats(const CullStats& c, size_t cameras);
 /// loadSceneMeshes then buildLoadedScene without culling.
 LoadedScene loadScene(const Device& device, const SceneOptions& o, bool quiet);
-
-/// A --preset: settings picked from the measured speed/accuracy frontier (bench/TRADEOFF.md).
-struct Preset {
-  const char* name;
-  const char* bvhQuality;
-  bool robust;
-  int spp;
-  bool halfColor;
-  const char* compression;
-};
-/// fast, balanced or exact; throws Error listing the names for anything else.
-const Preset& findPreset(const std::string& name);
-void addPresetOption(CLI::App& app, std::string& preset);
-/// Sets every knob of the preset that the command line did not give explicitly (`sub` is the
-/// parsed subcommand); half/compression may be null where the command writes no EXR.
-void applyPreset(const std::string& name, const CLI::App& sub, SceneOptions& scene,
-                 CameraOptions& camera, bool* halfColor, std::string* compression);
-
-/// Limits TBB (and so Embree's builder) to n threads while alive; n = 0 keeps all cores.
-class ThreadLimit {
- public:
-  explicit ThreadLimit(int n);
-  ~ThreadLimit();
-  int threads() const { return threads_; }
-
- private:
-  std::unique_ptr<struct ThreadLimitImpl> impl_;
-  int threads_;
-};
 
 }  // namespace aperture::app

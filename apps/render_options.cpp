@@ -1,0 +1,45 @@
+#include "apps/render_options.h"
+
+#include <tbb/global_control.h>
+
+#include "core/error.h"
+
+namespace aperture::app {
+
+void addRenderOptions(CLI::App& app, RenderOptions& o) {
+  app.add_option("--aov", o.aovs,
+                 "AOVs to compute: color, depth, distance, normal, position, primid, geomid, all")
+      ->capture_default_str();
+  app.add_option("--packet", o.packet, "Rays per Embree call: 1, 4, 8 or 16")
+      ->capture_default_str();
+  app.add_option("--tile", o.tile, "Tile size in pixels: a multiple of 4 in [4, 4096]")
+      ->capture_default_str();
+  app.add_option("--threads", o.threads, "Worker threads in [0, 4096] (0 = all cores)")
+      ->capture_default_str();
+}
+
+RenderSettings RenderOptions::settings(int spp) const {
+  RenderSettings s;
+  s.packetWidth = packet;
+  s.tileSize = tile;
+  s.spp = spp;
+  validateRenderSettings(s);
+  if (threads < 0 || threads > 4096)
+    throw Error(cat("--threads ", threads, " must be in [0, 4096]"));
+  return s;
+}
+
+struct ThreadLimitImpl {
+  std::unique_ptr<tbb::global_control> control;
+};
+
+ThreadLimit::ThreadLimit(int n) : impl_(std::make_unique<ThreadLimitImpl>()) {
+  if (n > 0)
+    impl_->control = std::make_unique<tbb::global_control>(
+        tbb::global_control::max_allowed_parallelism, size_t(n));
+  threads_ = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+}
+
+ThreadLimit::~ThreadLimit() = default;
+
+}  // namespace aperture::app
