@@ -4,14 +4,41 @@
 
 namespace aperture::app {
 
+namespace {
+/// How --help shows a value: "X,Y,Z", "W,H", "x|y|diagonal".
+std::string valueShape(const ParamSpec& spec) {
+  switch (spec.kind) {
+    case ParamKind::Number:
+      return "NUMBER";
+    case ParamKind::Integer:
+      return "INT";
+    case ParamKind::Vec2:
+      return "A,B";
+    case ParamKind::Vec3:
+      return "X,Y,Z";
+    case ParamKind::Size:
+      return "W,H";
+    case ParamKind::Flag:
+      return "";
+    case ParamKind::Choice:
+      break;
+  }
+  std::string choices;
+  for (const char* c : spec.choices) choices += (choices.empty() ? "" : "|") + std::string(c);
+  return choices.empty() ? "NAME" : choices;
+}
+}  // namespace
+
 void CameraFlags::add(CLI::App& app, const CameraParams& defaults) {
   defaults_ = defaults;
   for (const ParamSpec* spec : allCameraParamSpecs()) {
     slots_.push_back(Slot{spec, nullptr, std::string(), false});
     Slot& slot = slots_.back();
     const std::string help = spec->describeText(defaults);
-    slot.option = spec->kind == ParamKind::Flag ? app.add_flag(spec->flag(), slot.present, help)
-                                                : app.add_option(spec->flag(), slot.text, help);
+    if (spec->kind == ParamKind::Flag)
+      slot.option = app.add_flag(spec->flag(), slot.present, help);
+    else
+      slot.option = app.add_option(spec->flag(), slot.text, help)->type_name(valueShape(*spec));
   }
 }
 

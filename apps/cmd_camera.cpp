@@ -14,11 +14,15 @@ namespace {
 
 struct CameraArgs {
   CameraFlags camera;
-  bool describe = false;
+  bool describe = false, paramsTable = false;
   double nearDist = -1, farDist = -1;
 };
 
 int runCamera(const CameraArgs& a) {
+  if (a.paramsTable) {
+    std::fputs(cameraParamsMarkdown().c_str(), stdout);
+    return 0;
+  }
   const ParamSet given = a.camera.given();
   if (!given.has("eye"))
     throw Error("camera: --eye is required (there is no scene to frame automatically)");
@@ -38,6 +42,8 @@ Command addCameraCommand(CLI::App& app) {
       "camera", "Describe a camera: frame, parameters in every convention, view volume");
   args->camera.add(*sub);
   sub->add_flag("--describe", args->describe, "Print the description");
+  sub->add_flag("--params-table", args->paramsTable,
+                "Print every camera parameter as a Markdown table (docs/cameras.md)");
   sub->add_option("--near", args->nearDist,
                   "Near distance of the printed view volume (scene units)");
   sub->add_option("--far", args->farDist, "Far distance of the printed view volume (scene units)");

@@ -116,8 +116,8 @@ void checkConflictsAndCompanions(const ParamSet& given) {
     for (const char* other : e.spec->conflicts) {
       const ParamSet::Entry* o = given.find(other);
       if (!o) continue;
-      std::string group = flagOf(e.spec->name);
-      for (const char* c : e.spec->conflicts) group += ", " + flagOf(c);
+      std::string group = e.spec->name;
+      for (const char* c : e.spec->conflicts) group += cat(", ", c);
       throw Error(cat(e.source, " and ", o->source, " conflict: give at most one of ", group));
     }
     for (const char* needed : e.spec->needs)
@@ -189,9 +189,12 @@ std::string ParamSpec::describeText(const CameraParams& defaults) const {
   std::string facts;
   auto add = [&](const std::string& f) { facts += (facts.empty() ? "" : "; ") + f; };
   if (*unit) add(unit);
-  if (!choices.empty()) {
+  if (kind == ParamKind::Choice) {
+    // No fixed list: the registered camera models (the `type` parameter).
+    std::vector<std::string> words(choices.begin(), choices.end());
+    if (words.empty()) words = cameraTypeNames();
     std::string list;
-    for (const char* c : choices) list += std::string(list.empty() ? "" : "|") + c;
+    for (const std::string& c : words) list += (list.empty() ? "" : "|") + c;
     add(list);
   }
   if (!range.text().empty()) add("range " + range.text());
@@ -277,8 +280,8 @@ CameraParams resolveCameraParams(const ParamSet& given, CameraParams base) {
   CameraParams p = std::move(base);
   if (const ParamSet::Entry* t = given.find("type")) p.type = std::get<std::string>(t->value);
   checkApplies(given, findCameraModel(p.type));
-  checkConflictsAndCompanions(given);
   for (const ParamSet::Entry& e : given.entries()) checkRange(*e.spec, e.value, e.source);
+  checkConflictsAndCompanions(given);
   for (const ParamSet::Entry& e : given.entries()) e.spec->access.set(p, e.value);
   return p;
 }

@@ -53,7 +53,7 @@ struct ParamSpec {
   /// value of a default-constructed CameraParams, printed from `access.get`.
   const char* defaultRule;
   ParamRange range;
-  std::vector<const char*> choices;    ///< for Choice
+  std::vector<const char*> choices;    ///< for Choice; empty: the registered camera models
   std::vector<const char*> conflicts;  ///< parameters that may not be given with this one
   std::vector<const char*> needs;      ///< parameters that must be given with this one
   ParamAccess access;

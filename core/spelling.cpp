@@ -32,6 +32,12 @@ size_t editDistance(const std::string& a, const std::string& b) {
 
 std::string closestMatch(const std::string& word, const std::vector<std::string>& candidates) {
   const std::string w = lowered(word);
+  // A unique candidate that starts with the word ("diag" for "diagonal").
+  std::string prefixed;
+  size_t prefixes = 0;
+  for (const std::string& c : candidates)
+    if (w.size() >= 2 && lowered(c).rfind(w, 0) == 0) ++prefixes, prefixed = c;
+  if (prefixes == 1) return prefixed;
   const size_t limit = std::max<size_t>(1, w.size() / 3);
   std::string best;
   size_t bestDistance = limit + 1;

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "apps/camera_flags.h"
 
@@ -144,6 +145,13 @@ CameraParams cameraParamsFromFlags(const std::string& flags) {
   app.parse(flags, false);
   return app::resolveCommandCamera(camera.given(), camera.defaults(), glm::dvec3(0.0),
                                    glm::dvec3(0.0));
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
 }
 
 }  // namespace aperture::test

@@ -32,6 +32,8 @@ struct Measured {
 /// Runs `command` through /bin/sh with `exec`, so the resource figures are the command's own.
 Measured runMeasured(const std::string& command);
 
+/// The whole content of a file ("" when it cannot be read).
+std::string readFile(const std::string& path);
 /// Writes a file (binary-safe).
 void writeFile(const std::string& path, const std::string& bytes);
 bool fileExists(const std::string& path);

@@ -532,3 +532,67 @@ TEST(Batch, SigintFinishesTheFrameInFlightAndLeavesOnlyCompleteFiles) {
   }
   EXPECT_EQ(files, ok);
 }
+
+namespace {
+
+// A camera entry may set its own size and spp over the job's; the images follow them.
+TEST(JobParse, ACameraMaySetItsOwnSizeAndSpp) {
+  json j = baseJob();
+  j["cameras"].push_back(
+      {{"name", "big"}, {"eye", {0, 0, 5}}, {"at", {0, 0, 0}}, {"size", {40, 30}}, {"spp", 4}});
+  const Job job = parse(j);
+  ASSERT_EQ(job.images.size(), 2u);
+  EXPECT_EQ(job.images[0].params.width, 32);
+  EXPECT_EQ(job.images[0].params.height, 24);
+  EXPECT_EQ(job.images[0].params.spp, 1);
+  EXPECT_EQ(job.images[1].params.width, 40);
+  EXPECT_EQ(job.images[1].params.height, 30);
+  EXPECT_EQ(job.images[1].params.spp, 4);
+}
+
+// The thin lens focuses at |at − eye| unless told otherwise.
+TEST(JobParse, ThinLensFocusDefaultsToTheLookAtDistance) {
+  json j = baseJob();
+  j["cameras"][0]["type"] = "thinlens";
+  j["cameras"][0]["aperture"] = 0.1;
+  j["cameras"][0]["eye"] = {0, 3, 4};
+  const Job job = parse(j);
+  EXPECT_EQ(focusDistanceOf(job.images[0].params), 5.0);
+  j["cameras"][0]["focus"] = 2.5;
+  EXPECT_EQ(focusDistanceOf(parse(j).images[0].params), 2.5);
+}
+
+// Conflicting keys and keys of another model are refused naming both keys.
+TEST(JobParse, ConflictingCameraKeysNameBothKeys) {
+  json j = baseJob();
+  j["cameras"][0]["focal_length"] = 35;
+  const std::string msg = parseError(j);
+  EXPECT_NE(msg.find("job.json: cameras[0]."), std::string::npos) << msg;
+  EXPECT_NE(msg.find("cameras[0].fov"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("cameras[0].focal_length"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("conflict"), std::string::npos) << msg;
+  j = baseJob();
+  j["cameras"][0]["fisheye_fov"] = 200;
+  EXPECT_NE(parseError(j).find("cameras[0].fisheye_fov: does not apply to a 'perspective'"),
+            std::string::npos)
+      << parseError(j);
+}
+
+TEST(JobParse, BatchImagesHaveTheirCameraSize) {
+  const std::string dir = test::scratchDir();
+  json j = baseJob();
+  j["cameras"].push_back(
+      {{"name", "big"}, {"eye", {0, 0, 5}}, {"at", {0, 0, 0}}, {"size", {40, 30}}});
+  j["aovs"] = "depth";
+  test::writeFile(dir + "/job.json", j.dump());
+  std::string log;
+  ASSERT_EQ(test::runCommand(test::apertureBinary() + " batch --quiet " + dir + "/job.json", &log),
+            0)
+      << log;
+  EXPECT_EQ(readExr(dir + "/out/cam_0000.exr").width, 32);
+  const Framebuffer big = readExr(dir + "/out/big_0000.exr");
+  EXPECT_EQ(big.width, 40);
+  EXPECT_EQ(big.height, 30);
+}
+
+}  // namespace

@@ -289,3 +289,74 @@ TEST(Cli, CameraDescribePrintsFrameConventionsAndVolume) {
       0);
   EXPECT_NE(out.find("parallel"), std::string::npos) << out;
 }
+
+namespace {
+
+// Issue 10 item 2: refused before any work, non-zero exit, every named flag in the message,
+// and no file written (neither the EXR nor the preview).
+TEST(Cli, RefusedCameraParametersNameTheFlagsAndWriteNothing) {
+  const std::string dir = scratchDir(), exr = dir + "/x.exr", png = dir + "/x.png";
+  struct Case {
+    std::string args;
+    std::vector<std::string> expect;
+  } cases[] = {
+      {"--fov 0", {"--fov: 0: must be in (0, 180) degrees"}},
+      {"--fov 180", {"--fov: 180: must be in (0, 180)"}},
+      {"--fov 200", {"--fov: 200"}},
+      {"--fov 30 --focal-length 50", {"--fov", "--focal-length", "conflict"}},
+      {"--fov 30 --viewport 1,1", {"--fov", "--viewport", "conflict"}},
+      {"--focal-length 35 --viewport 1,1", {"--focal-length", "--viewport", "conflict"}},
+      {"--eye 0,0,5 --at 0,0,0 --dir 0,0,-1", {"--at", "--dir", "conflict"}},
+      {"--camera oblique --viewport 1,1 --oblique-dir 0,0,-1 --oblique-angles 1,1",
+       {"--oblique-dir", "--oblique-angles", "conflict"}},
+      {"--d 2", {"--d", "--viewport"}},
+      {"--sensor 24,36", {"--sensor", "--focal-length"}},
+      {"--fisheye-fov 200", {"--fisheye-fov", "does not apply to a 'perspective'"}},
+      {"--camera thinlens --aperture -1", {"--aperture: -1: must be >= 0"}},
+      {"--camera fisheye --fisheye-fov 0", {"--fisheye-fov: 0: must be in (0, 360]"}},
+      {"--camera pinhole", {"--camera", "unknown camera type 'pinhole'"}},
+      {"--size 640x480x3", {"--size"}},
+      {"--spp 0", {"--spp: 0"}},
+  };
+  for (const Case& c : cases) {
+    std::string out;
+    const int rc =
+        runCommand(apertureBinary() + " render --mesh 'procedural:spheres?tris=200000000' --out " +
+                       exr + " --preview " + png + " " + c.args,
+                   &out);
+    EXPECT_TRUE(rc == 1 || rc == 2) << c.args << ": exit " << rc << "\n" << out;
+    for (const std::string& e : c.expect)
+      EXPECT_NE(out.find(e), std::string::npos) << c.args << ": no '" << e << "' in\n" << out;
+    EXPECT_EQ(out.find("loaded"), std::string::npos) << c.args << ": refused after loading";
+    EXPECT_FALSE(test::fileExists(exr)) << c.args;
+    EXPECT_FALSE(test::fileExists(png)) << c.args;
+  }
+}
+
+TEST(Cli, UnknownFlagsAndCommandsGetDidYouMean) {
+  std::string out;
+  EXPECT_EQ(runCommand(apertureBinary() + " render --fvo 30", &out), 2);
+  EXPECT_NE(out.find("unknown flag '--fvo' for 'render' (did you mean '--fov'?)"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(runCommand(apertureBinary() + " bench --focal-lenght 35", &out), 2);
+  EXPECT_NE(out.find("did you mean '--focal-length'?"), std::string::npos) << out;
+  EXPECT_EQ(runCommand(apertureBinary() + " rendr", &out), 2);
+  EXPECT_NE(out.find("did you mean 'render'?"), std::string::npos) << out;
+  EXPECT_EQ(runCommand(apertureBinary() + " render --camera fishey", &out), 1);
+  EXPECT_NE(out.find("did you mean 'fisheye'?"), std::string::npos) << out;
+}
+
+TEST(Cli, SizeAcceptsWxH) {
+  const std::string exr = scratchDir() + "/x.exr";
+  std::string out;
+  ASSERT_EQ(
+      runCommand(apertureBinary() + " render --quiet --size 64x48 --aov depth --out " + exr, &out),
+      0)
+      << out;
+  const Framebuffer fb = readExr(exr);
+  EXPECT_EQ(fb.width, 64);
+  EXPECT_EQ(fb.height, 48);
+}
+
+}  // namespace
