@@ -228,6 +228,15 @@ void CameraBase::samplePosition(int i, int j, int s, double& x, double& y) const
   y = i + sy;
 }
 
+glm::dmat4 CameraBase::ndcFromPlane() const {
+  glm::dmat4 m(1.0);  // GLM: m[column][row]
+  m[0][0] = 1.0 / vw_;
+  m[3][0] = -uLo() / vw_;
+  m[1][1] = -1.0 / vh_;
+  m[3][1] = vHi() / vh_;
+  return m;
+}
+
 CameraDescription CameraBase::describe() const {
   CameraDescription c;
   c.type = type_;
@@ -242,7 +251,9 @@ CameraDescription CameraBase::describe() const {
   c.height = height_;
   c.spp = spp_;
   c.cameraFromWorld = frame_.cameraFromWorld();
-  c.ndcFromWorld = ndcFromCamera() * c.cameraFromWorld;
+  if (const std::optional<glm::dmat4> plane = planeFromCamera())
+    c.ndcFromWorld = ndcFromPlane() * *plane * c.cameraFromWorld;
+  c.pixelAspectRatio = (vw_ / width_) / (vh_ / height_);
   c.extra.emplace_back("shift", cat(shift_.x, ",", shift_.y));
   if (params_.architectural) {
     c.extra.emplace_back("architectural", "1");

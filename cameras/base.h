@@ -82,11 +82,21 @@ class CameraBase : public Camera {
   glm::dvec2 planeToRaster(double u, double v) const {
     return {(u / vw_ - shift_.x + 0.5) * width_, (0.5 - (v / vh_ - shift_.y)) * height_};
   }
+  /// The one NDC map of the planar cameras, as a matrix on homogeneous image-plane coordinates
+  /// (u, v, z, w): OpenEXR's NDC x = (u − uLo) / vw, y = (vHi − v) / vh, so the window's
+  /// top-left corner (uLo, vHi) goes to (0, 0) and its bottom-right corner (uHi, vLo) to
+  /// (1, 1); NDC · (W, H) is planeToRaster. z and w pass through. GLM column vectors.
+  glm::dmat4 ndcFromPlane() const;
 
  protected:
-  /// ndcFromCamera for describe(); identity for non-linear projections.
-  virtual glm::dmat4 ndcFromCamera() const { return glm::dmat4(1.0); }
-  /// Model-specific (name, value) pairs for CameraDescription::extra.
+  /// The model's projection from OpenEXR camera space (CameraDescription::cameraFromWorld) to
+  /// homogeneous image-plane coordinates (u, v, z', w): u / w and v / w are the (u, v) of
+  /// rasterToPlane. Nothing where no 4x4 matrix expresses the projection (panoramas); then
+  /// describe() leaves ndcFromWorld empty.
+  virtual std::optional<glm::dmat4> planeFromCamera() const { return std::nullopt; }
+  /// Model-specific parts of describe(): the (name, value) pairs of CameraDescription::extra,
+  /// and where they differ from the planar defaults, the screen window, the pixel aspect ratio
+  /// and the panorama projection.
   virtual void describeExtra(CameraDescription&) const {}
   /// Throws Error naming the model if a shift or the architectural flag was given.
   void rejectShift() const;

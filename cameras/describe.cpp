@@ -17,6 +17,40 @@ std::string vec(const glm::dvec3& v) {
   std::snprintf(buf, sizeof buf, "(%.9g, %.9g, %.9g)", v.x + 0.0, v.y + 0.0, v.z + 0.0);
   return buf;
 }
+
+/// A 4x4 matrix as the EXR header stores it: Imath rows, applied as p' = p·M. Imath's [i][j]
+/// is GLM's m[i][j] of the column-vector matrix (the transpose, indexed the other way round).
+void printRowVectorMatrix(std::ostream& s, const glm::dmat4& m) {
+  for (int i = 0; i < 4; ++i) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "    [%.9g, %.9g, %.9g, %.9g]\n", m[i][0] + 0.0, m[i][1] + 0.0,
+                  m[i][2] + 0.0, m[i][3] + 0.0);
+    s << buf;
+  }
+}
+
+/// The standard attributes and the projection attributes `aperture render` writes to the EXR.
+void describeExrHeader(std::ostream& s, const CameraDescription& desc) {
+  s << "OpenEXR header:\n  pixelAspectRatio " << desc.pixelAspectRatio << ", screenWindowCenter ("
+    << desc.screenWindowCenter.x + 0.0 << ", " << desc.screenWindowCenter.y + 0.0
+    << "), screenWindowWidth " << desc.screenWindowWidth << "\n";
+  s << "  worldToCamera (p' = p·M; camera space left-handed: +x right, +y up, +z forward):\n";
+  printRowVectorMatrix(s, desc.cameraFromWorld);
+  if (desc.ndcFromWorld) {
+    s << "  worldToNDC (p' = p·M, then divide by w; NDC (0, 0) top-left, (1, 1) bottom-right):\n";
+    printRowVectorMatrix(s, *desc.ndcFromWorld);
+  } else {
+    s << "  worldToNDC: none (a panorama has no projective matrix)\n";
+  }
+  if (const auto& e = desc.equirect)
+    s << "  aperture.equirect.longitudeRange (" << e->longitudeDeg.x << ", " << e->longitudeDeg.y
+      << ") deg, aperture.equirect.latitudeRange (" << e->latitudeDeg.x << ", " << e->latitudeDeg.y
+      << ") deg\n";
+  if (const auto& f = desc.fisheye)
+    s << "  aperture.fisheye.mapping equidistant, aperture.fisheye.fov " << f->fovDeg
+      << " deg, aperture.fisheye.center (" << f->centerPx.x << ", " << f->centerPx.y
+      << ") px, aperture.fisheye.radius " << f->radiusPx << " px\n";
+}
 }  // namespace
 
 std::string describeCamera(const CameraParams& params, double nearDist, double farDist) {
@@ -56,6 +90,7 @@ std::string describeCamera(const CameraParams& params, double nearDist, double f
       << " (pixels, y down, pixel centres at integers)\n";
   }
   for (const auto& [k, v] : desc.extra) s << "  " << k << " = " << v << "\n";
+  describeExrHeader(s, desc);
   const ViewVolume vv = cam->viewVolume(nearDist, farDist);
   s << "view volume: " << vv.kindName() << ", "
     << (vv.kind == ViewVolume::Kind::AllSpace ? "distance" : "depth along -W") << " from "

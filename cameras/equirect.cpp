@@ -64,10 +64,11 @@ class EquirectCamera final : public PacketCamera<EquirectCamera> {
 
  protected:
   void describeExtra(CameraDescription& c) const override {
-    c.extra.emplace_back("longitude_range_deg",
-                         cat(params_.longitudeRangeDeg.x, ",", params_.longitudeRangeDeg.y));
-    c.extra.emplace_back("latitude_range_deg",
-                         cat(params_.latitudeRangeDeg.x, ",", params_.latitudeRangeDeg.y));
+    const glm::dvec2 lon = params_.longitudeRangeDeg, lat = params_.latitudeRangeDeg;
+    c.equirect = EquirectProjection{lon, lat};
+    // Shown with square degrees: a pixel is (lon1 − lon0) / W degrees wide, (lat1 − lat0) / H
+    // degrees high.
+    c.pixelAspectRatio = ((lon.y - lon.x) / width_) / ((lat.y - lat.x) / height_);
   }
 
  private:

@@ -66,8 +66,8 @@ class FisheyeCamera final : public PacketCamera<FisheyeCamera> {
 
  protected:
   void describeExtra(CameraDescription& c) const override {
-    c.extra.emplace_back("fisheye_fov_deg", cat(params_.fisheyeFovDeg));
-    c.extra.emplace_back("fisheye_radius_px", cat(radius_));
+    c.fisheye = FisheyeProjection{params_.fisheyeFovDeg, glm::dvec2(cx_, cy_), radius_};
+    c.pixelAspectRatio = 1.0;  // the angle grows with the distance in pixels, alike on both axes
   }
 
  private:

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "core/camera.h"
 #include "core/error.h"
 
 namespace aperture {
@@ -53,18 +54,6 @@ CameraFrame CameraFrame::fromLookAt(const glm::dvec3& eye, const glm::dvec3& at,
   return fromDirection(eye, at - eye, up);
 }
 
-glm::dmat4 CameraFrame::cameraFromWorld() const {
-  // Rows are U, V, W; translation −R·e. GLM is column-major: m[col][row].
-  glm::dmat4 m(1.0);
-  for (int c = 0; c < 3; ++c) {
-    m[c][0] = u[c];
-    m[c][1] = v[c];
-    m[c][2] = w[c];
-  }
-  m[3][0] = -glm::dot(u, e);
-  m[3][1] = -glm::dot(v, e);
-  m[3][2] = -glm::dot(w, e);
-  return m;
-}
+glm::dmat4 CameraFrame::cameraFromWorld() const { return standardCameraFromWorld(e, u, v, w); }
 
 }  // namespace aperture

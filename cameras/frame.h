@@ -18,7 +18,8 @@ struct CameraFrame {
   /// The same with view = at − eye (error if at == eye).
   static CameraFrame fromLookAt(const glm::dvec3& eye, const glm::dvec3& at, const glm::dvec3& up);
 
-  /// Camera space (origin e, axes U, V, W) from world, column-vector convention.
+  /// OpenEXR's camera space from world (left-handed: x = U, y = V, z = −W, the viewing
+  /// direction), column-vector convention; standardCameraFromWorld() of core/camera.h.
   glm::dmat4 cameraFromWorld() const;
 };
 

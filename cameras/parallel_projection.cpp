@@ -34,18 +34,13 @@ ViewVolume ParallelCamera::viewVolume(double nearDist, double farDist) const {
                             {uLo(), shearU_}, {uHi(), shearU_}, {vLo(), shearV_}, {vHi(), shearV_});
 }
 
-glm::dmat4 ParallelCamera::ndcFromCamera() const {
-  // u = x + su·z and v = y + sv·z (z = −depth), then x_ndc = u / vw − sx + ½,
-  // y_ndc = ½ − (v / vh − sy), z_ndc = depth. GLM: m[column][row].
-  glm::dmat4 m(0.0);
-  m[0][0] = 1.0 / vw_;
-  m[2][0] = shearU_ / vw_;
-  m[3][0] = 0.5 - shift_.x;
-  m[1][1] = -1.0 / vh_;
-  m[2][1] = -shearV_ / vh_;
-  m[3][1] = 0.5 + shift_.y;
-  m[2][2] = -1.0;
-  m[3][3] = 1.0;
+std::optional<glm::dmat4> ParallelCamera::planeFromCamera() const {
+  // Camera space (x, y, z), z the depth: the ray through (u, v) reaches depth z at
+  // x = u + su·z, y = v + sv·z, so u = x − su·z, v = y − sv·z; z' = z (NDC z is Z), w = 1.
+  // GLM: m[column][row].
+  glm::dmat4 m(1.0);
+  m[2][0] = -shearU_;
+  m[2][1] = -shearV_;
   return m;
 }
 

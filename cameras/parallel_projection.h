@@ -28,7 +28,7 @@ class ParallelCamera final : public PacketCamera<ParallelCamera> {
   const glm::dvec3& direction() const { return dir_; }
 
  protected:
-  glm::dmat4 ndcFromCamera() const override;
+  std::optional<glm::dmat4> planeFromCamera() const override;
   void describeExtra(CameraDescription& c) const override;
 
  private:

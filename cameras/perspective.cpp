@@ -123,20 +123,23 @@ ViewVolume PerspectiveCamera::viewVolume(double nearDist, double farDist) const 
                             yLo, yHi);
 }
 
-glm::dmat4 PerspectiveCamera::ndcFromCamera() const {
-  // x_ndc = (d x / −z) / vw − sx + ½ and y_ndc = ½ − ((d y / −z) / vh − sy), after dividing
-  // by w = −z; the third row gives z_ndc = 1 / Z. GLM: m[column][row].
+std::optional<glm::dmat4> PerspectiveCamera::planeFromCamera() const {
+  // Camera space (x, y, z), z the depth: u = d·x / z, v = d·y / z after dividing by w = z;
+  // z' = 1, so NDC z is 1 / Z. GLM: m[column][row].
   glm::dmat4 m(0.0);
-  m[0][0] = d_ / vw_;
-  m[2][0] = shift_.x - 0.5;
-  m[1][1] = -d_ / vh_;
-  m[2][1] = -(0.5 + shift_.y);
+  m[0][0] = d_;
+  m[1][1] = d_;
   m[3][2] = 1.0;
-  m[2][3] = -1.0;
+  m[2][3] = 1.0;
   return m;
 }
 
 void PerspectiveCamera::describeExtra(CameraDescription& c) const {
+  // OpenEXR's screen window: the image window [uLo, uHi] x [vLo, vHi] at distance d, scaled to
+  // the plane z = 1, in camera-space x (right) and y (up). (The Technical Introduction calls
+  // +x the camera's "left"; the worldToCamera definition, followed here, says "right".)
+  c.screenWindowCenter = glm::dvec2(0.5 * (uLo() + uHi()), 0.5 * (vLo() + vHi())) / d_;
+  c.screenWindowWidth = vw_ / d_;
   c.extra.emplace_back("fov_x_deg", cat(2.0 * std::atan(0.5 * vw_ / d_) * kDegPerRad));
   c.extra.emplace_back("fov_y_deg", cat(2.0 * std::atan(0.5 * vh_ / d_) * kDegPerRad));
   if (lensRadius_ > 0 || type_ == "thinlens") {

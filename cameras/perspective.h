@@ -50,7 +50,7 @@ class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
   double focusDistance() const { return focusDistance_; }
 
  protected:
-  glm::dmat4 ndcFromCamera() const override;
+  std::optional<glm::dmat4> planeFromCamera() const override;
   void describeExtra(CameraDescription& c) const override;
 
  private:

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,7 +34,30 @@ struct PacketRequest {
   int sample = 0;              ///< sample index in [0, spp)
 };
 
-/// Everything a file header or --describe needs to reproduce and re-project an image.
+/// The projection of an equirectangular panorama (no 4x4 matrix expresses it). With raster
+/// (x, y) (pixel (i, j) centre at (j + ½, i + ½)) on a W x H image:
+///   lon = lon0 + (x / W)·(lon1 − lon0),  lat = lat1 − (y / H)·(lat1 − lat0)
+///   direction in standard camera space (see CameraDescription) = (cos lat·sin lon, sin lat,
+///   cos lat·cos lon): (lon, lat) = (0, 0) looks along +z, lon = 90° along +x (right).
+struct EquirectProjection {
+  glm::dvec2 longitudeDeg{-180, 180};  ///< (lon0, lon1): longitude of the left and right edges
+  glm::dvec2 latitudeDeg{-90, 90};     ///< (lat0, lat1): latitude of the bottom and top edges
+};
+
+/// The projection of an equidistant fisheye. With raster (x, y), centre (cx, cy) and radius R
+/// in pixels and full field of view F:
+///   a = (x − cx) / R,  b = (cy − y) / R,  ρ = √(a² + b²)  (ρ > 1: no ray)
+///   θ = ρ·F / 2 (the angle from +z),  direction = (sin θ·a/ρ, sin θ·b/ρ, cos θ)
+/// in standard camera space (see CameraDescription).
+struct FisheyeProjection {
+  double fovDeg = 180;       ///< F, degrees, across the circle's diameter
+  glm::dvec2 centerPx{0.0};  ///< (cx, cy), raster (column, row)
+  double radiusPx = 1;       ///< R, pixels
+};
+
+/// Everything a file header or --describe needs to reproduce and re-project an image. The
+/// matrices follow OpenEXR's standard attributes (which take Pixar RenderMan's spaces); GLM
+/// column-vector convention here (p' = M p), written to the EXR transposed (Imath row vectors).
 struct CameraDescription {
   std::string type;     ///< registry name: "perspective", "orthographic", ...
   glm::dvec3 eye{0.0};  ///< e, world space, scene units
@@ -42,15 +66,47 @@ struct CameraDescription {
   double vw = 1, vh = 1;                          ///< viewport size on the image plane, scene units
   int width = 0, height = 0;                      ///< image size, pixels
   int spp = 1;                                    ///< samples per pixel
-  /// Camera space: origin at e, axes (U, V, W). Column-vector convention (p' = M p).
+  /// OpenEXR's worldToCamera: camera space is left-handed with its origin at e, +x right (U),
+  /// +y up (V), +z the viewing direction (−W), so points in front have z > 0 and z is the
+  /// planar depth Z. Built by standardCameraFromWorld() only.
   glm::dmat4 cameraFromWorld{1.0};
-  /// NDC: x = column / width, y = row / height (continuous; pixel (i, j) centre at
-  /// ((j + 0.5) / W, (i + 0.5) / H)), after the homogeneous divide. Identity where the
-  /// projection is not linear (panoramas).
-  glm::dmat4 ndcFromWorld{1.0};
+  /// OpenEXR's worldToNDC: after the homogeneous divide, (0, 0) is the top-left and (1, 1) the
+  /// bottom-right corner of the display window (outer pixel edges), x right, y down: x =
+  /// column / W, y = row / H, pixel (i, j) centre at ((j + ½) / W, (i + ½) / H). Empty for the
+  /// panoramas, whose projection no 4x4 matrix expresses (see equirect, fisheye).
+  std::optional<glm::dmat4> ndcFromWorld;
+  /// OpenEXR's pixelAspectRatio: width over height of a pixel on the image plane (planar
+  /// cameras: (vw / W) / (vh / H); equirect: degrees of longitude over degrees of latitude per
+  /// pixel; fisheye: 1).
+  double pixelAspectRatio = 1;
+  /// OpenEXR's screen window: the image's rectangle on the plane z = 1 of camera space (centre,
+  /// width), for perspective projections. OpenEXR's defaults (0, 0) and 1 for the others, as
+  /// its definition prescribes for images without a perspective projection.
+  glm::dvec2 screenWindowCenter{0.0};
+  double screenWindowWidth = 1;
+  std::optional<EquirectProjection> equirect;  ///< set for the equirect camera only
+  std::optional<FisheyeProjection> fisheye;    ///< set for the fisheye camera only
   /// Extra parameters as (name, value) text pairs: fov, shift, aperture, focus, ...
   std::vector<std::pair<std::string, std::string>> extra;
 };
+
+/// The one definition of OpenEXR's camera space (see CameraDescription::cameraFromWorld) from
+/// the frame e, U (right), V (up), W (backwards): rows U, V, −W and translation (−U·e, −V·e,
+/// W·e). Column-vector GLM convention.
+inline glm::dmat4 standardCameraFromWorld(const glm::dvec3& eye, const glm::dvec3& u,
+                                          const glm::dvec3& v, const glm::dvec3& w) {
+  const glm::dvec3 forward = -w;
+  glm::dmat4 m(1.0);  // GLM: m[column][row]
+  for (int c = 0; c < 3; ++c) {
+    m[c][0] = u[c];
+    m[c][1] = v[c];
+    m[c][2] = forward[c];
+  }
+  m[3][0] = -glm::dot(u, eye);
+  m[3][1] = -glm::dot(v, eye);
+  m[3][2] = -glm::dot(forward, eye);
+  return m;
+}
 
 class Camera {
  public:

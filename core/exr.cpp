@@ -71,6 +71,10 @@ glm::dmat4 toGlm(const Imath::M44d& x) {
 Imath::V3d toImath(const glm::dvec3& v) { return Imath::V3d(v.x, v.y, v.z); }
 glm::dvec3 toGlm(const Imath::V3d& v) { return glm::dvec3(v.x, v.y, v.z); }
 
+/// The only fisheye mapping aperture writes: the angle from the axis is proportional to the
+/// distance from the centre (FisheyeProjection).
+const char* const kFisheyeMapping = "equidistant";
+
 const char* const kColorNames[4] = {"R", "G", "B", "A"};
 const char* const kNormalNames[3] = {"N.X", "N.Y", "N.Z"};
 const char* const kPositionNames[3] = {"P.X", "P.Y", "P.Z"};
@@ -84,14 +88,34 @@ void addChannel(Imf::Header& header, Imf::FrameBuffer& frame, const char* name, 
                                 xStride * size_t(width)));
 }
 
+/// The standard worldToCamera and worldToNDC (float) with their double copies, and the
+/// projection attributes of the panoramas, which have no worldToNDC (README, "EXR channels").
+void addProjectionAttributes(Imf::Header& header, const CameraDescription& cam) {
+  const Imath::M44d worldToCamera = toImath(cam.cameraFromWorld);
+  Imf::addWorldToCamera(header, Imath::M44f(worldToCamera));
+  header.insert("aperture.worldToCamera", Imf::M44dAttribute(worldToCamera));
+  if (cam.ndcFromWorld) {
+    const Imath::M44d worldToNdc = toImath(*cam.ndcFromWorld);
+    Imf::addWorldToNDC(header, Imath::M44f(worldToNdc));
+    header.insert("aperture.worldToNDC", Imf::M44dAttribute(worldToNdc));
+  }
+  if (cam.equirect) {
+    const glm::dvec2 lon = cam.equirect->longitudeDeg, lat = cam.equirect->latitudeDeg;
+    header.insert("aperture.equirect.longitudeRange", Imf::V2dAttribute(Imath::V2d(lon.x, lon.y)));
+    header.insert("aperture.equirect.latitudeRange", Imf::V2dAttribute(Imath::V2d(lat.x, lat.y)));
+  }
+  if (cam.fisheye) {
+    const glm::dvec2 centre = cam.fisheye->centerPx;
+    header.insert("aperture.fisheye.mapping", Imf::StringAttribute(kFisheyeMapping));
+    header.insert("aperture.fisheye.fov", Imf::DoubleAttribute(cam.fisheye->fovDeg));
+    header.insert("aperture.fisheye.center", Imf::V2dAttribute(Imath::V2d(centre.x, centre.y)));
+    header.insert("aperture.fisheye.radius", Imf::DoubleAttribute(cam.fisheye->radiusPx));
+  }
+}
+
 void addHeaderAttributes(Imf::Header& header, const ExrMetadata& meta) {
   const CameraDescription& cam = meta.camera;
-  const Imath::M44d worldToCamera = toImath(cam.cameraFromWorld);
-  const Imath::M44d worldToNdc = toImath(cam.ndcFromWorld);
-  Imf::addWorldToCamera(header, Imath::M44f(worldToCamera));
-  Imf::addWorldToNDC(header, Imath::M44f(worldToNdc));
-  header.insert("aperture.worldToCamera", Imf::M44dAttribute(worldToCamera));
-  header.insert("aperture.worldToNDC", Imf::M44dAttribute(worldToNdc));
+  addProjectionAttributes(header, cam);
   header.insert("aperture.camera.type", Imf::StringAttribute(cam.type));
   header.insert("aperture.camera.eye", Imf::V3dAttribute(toImath(cam.eye)));
   header.insert("aperture.camera.U", Imf::V3dAttribute(toImath(cam.u)));
@@ -107,17 +131,33 @@ void addHeaderAttributes(Imf::Header& header, const ExrMetadata& meta) {
   header.insert("software", Imf::StringAttribute("aperture " APERTURE_VERSION));
 }
 
+/// The header with the display window and the standard screen attributes of `cam`. Throws
+/// Error when the pixel aspect ratio is outside the range OpenEXR accepts.
+Imf::Header standardHeader(const std::string& path, int width, int height,
+                           const CameraDescription& cam) {
+  const double ratio = cam.pixelAspectRatio;
+  // OpenEXR's Header::sanityCheck rejects ratios outside [1e-6, 1e6].
+  if (!(ratio >= 1e-6 && ratio <= 1e6))
+    throw Error(cat("cannot write '", path, "': pixel aspect ratio ", ratio, " (viewport ", cam.vw,
+                    "x", cam.vh, " over ", width, "x", height,
+                    " pixels) is outside OpenEXR's range [1e-6, 1e6]"));
+  const glm::dvec2 c = cam.screenWindowCenter;
+  return Imf::Header(width, height, float(ratio), Imath::V2f(float(c.x), float(c.y)),
+                     float(cam.screenWindowWidth));
+}
+
 template <typename T, typename A>
 const T* findValue(const Imf::Header& header, const char* name) {
   const A* attribute = header.findTypedAttribute<A>(name);
   return attribute ? &attribute->value() : nullptr;
 }
 
-void readHeaderAttributes(const Imf::Header& header, int width, int height, ExrMetadata* meta) {
-  *meta = ExrMetadata();
-  CameraDescription& cam = meta->camera;
-  cam.width = width;
-  cam.height = height;
+/// The standard screen attributes, the matrices (the double copies where present) and the
+/// panorama projection.
+void readProjection(const Imf::Header& header, CameraDescription& cam) {
+  cam.pixelAspectRatio = header.pixelAspectRatio();
+  cam.screenWindowCenter = glm::dvec2(header.screenWindowCenter().x, header.screenWindowCenter().y);
+  cam.screenWindowWidth = header.screenWindowWidth();
   if (auto* m = findValue<Imath::M44d, Imf::M44dAttribute>(header, "aperture.worldToCamera"))
     cam.cameraFromWorld = toGlm(*m);
   else if (Imf::hasWorldToCamera(header))
@@ -126,6 +166,27 @@ void readHeaderAttributes(const Imf::Header& header, int width, int height, ExrM
     cam.ndcFromWorld = toGlm(*m);
   else if (Imf::hasWorldToNDC(header))
     cam.ndcFromWorld = toGlm(Imath::M44d(Imf::worldToNDC(header)));
+  using V2 = Imf::V2dAttribute;
+  auto* lon = findValue<Imath::V2d, V2>(header, "aperture.equirect.longitudeRange");
+  auto* lat = findValue<Imath::V2d, V2>(header, "aperture.equirect.latitudeRange");
+  if (lon && lat)
+    cam.equirect = EquirectProjection{glm::dvec2(lon->x, lon->y), glm::dvec2(lat->x, lat->y)};
+  auto* mapping = findValue<std::string, Imf::StringAttribute>(header, "aperture.fisheye.mapping");
+  auto* fov = findValue<double, Imf::DoubleAttribute>(header, "aperture.fisheye.fov");
+  auto* centre = findValue<Imath::V2d, V2>(header, "aperture.fisheye.center");
+  auto* radius = findValue<double, Imf::DoubleAttribute>(header, "aperture.fisheye.radius");
+  if (mapping && *mapping != kFisheyeMapping)
+    throw Error(cat("aperture.fisheye.mapping '", *mapping, "' is not '", kFisheyeMapping, "'"));
+  if (mapping && fov && centre && radius)
+    cam.fisheye = FisheyeProjection{*fov, glm::dvec2(centre->x, centre->y), *radius};
+}
+
+void readHeaderAttributes(const Imf::Header& header, int width, int height, ExrMetadata* meta) {
+  *meta = ExrMetadata();
+  CameraDescription& cam = meta->camera;
+  cam.width = width;
+  cam.height = height;
+  readProjection(header, cam);
   if (auto* s = findValue<std::string, Imf::StringAttribute>(header, "aperture.camera.type"))
     cam.type = *s;
   const std::pair<const char*, glm::dvec3*> vectors[] = {{"aperture.camera.eye", &cam.eye},
@@ -149,7 +210,8 @@ void readHeaderAttributes(const Imf::Header& header, int width, int height, ExrM
     const auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute());
     if (!s) continue;
     const std::string name = it.name();
-    if (name == "aperture.camera.type" || name == "software") continue;
+    if (name == "aperture.camera.type" || name == "software" || name == "aperture.fisheye.mapping")
+      continue;
     if (name.compare(0, extraPrefix.size(), extraPrefix) == 0)
       cam.extra.emplace_back(name.substr(extraPrefix.size()), s->value());
     else
@@ -186,7 +248,7 @@ void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata&
                       "expected ", n * perPixel));
   };
 
-  Imf::Header header(fb.width, fb.height);
+  Imf::Header header = standardHeader(path, fb.width, fb.height, meta.camera);
   header.compression() = toImf(options.compression);
   addHeaderAttributes(header, meta);
 

@@ -28,11 +28,14 @@ struct ExrMetadata {
 };
 
 /// Writes every allocated AOV of `fb` to `path` with the channel names of the README
-/// (R G B A, Z, T, N.X.., P.X.., primID, geomID). The header carries the camera (type, eye, U,
-/// V, W, d, viewport), the standard worldToCamera and worldToNDC matrices (float, OpenEXR's
-/// row-vector convention) and double versions "aperture.worldToCamera"/"aperture.worldToNDC",
-/// spp and render time. Written to a temporary file in the same directory and renamed:
-/// a failure leaves no file under `path` and any previous file intact. Throws Error.
+/// (R G B A, Z, T, N.X.., P.X.., primID, geomID). The header carries OpenEXR's standard
+/// attributes as CameraDescription defines them (pixelAspectRatio, screenWindowCenter/Width,
+/// worldToCamera, and worldToNDC unless the camera is a panorama; float, Imath row vectors),
+/// double copies "aperture.worldToCamera"/"aperture.worldToNDC", a panorama's projection
+/// ("aperture.equirect.*", "aperture.fisheye.*"), the camera (type, eye, U, V, W, d,
+/// viewport), spp and render time. Written to a temporary file in the same directory and
+/// renamed: a failure leaves no file under `path` and any previous file intact. Throws Error,
+/// also for a pixel aspect ratio outside OpenEXR's [1e-6, 1e6].
 void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata& meta,
               const ExrOptions& options = {});
 

@@ -394,7 +394,8 @@ TEST(PerspectiveShift, DescriptionAndNdcIncludeTheShift) {
   EXPECT_TRUE(found);
   glm::dvec3 org, dir;
   cam->ray(7.25, 31.5, 0.5, 0.5, org, dir);
-  const glm::dvec4 ndc = desc.ndcFromWorld * glm::dvec4(org + 3.0 * dir, 1.0);
+  ASSERT_TRUE(desc.ndcFromWorld.has_value());
+  const glm::dvec4 ndc = *desc.ndcFromWorld * glm::dvec4(org + 3.0 * dir, 1.0);
   EXPECT_NEAR(ndc.x / ndc.w * p.width, 7.25, 1e-9);
   EXPECT_NEAR(ndc.y / ndc.w * p.height, 31.5, 1e-9);
 }

@@ -294,6 +294,9 @@ TEST(Exr, HeaderMetadataRoundTrip) {
   cam.spp = 17;
   cam.cameraFromWorld = testMatrix(0.3);
   cam.ndcFromWorld = testMatrix(-1.7);
+  cam.pixelAspectRatio = 0.8125;  // exact in float, like the screen window below
+  cam.screenWindowCenter = {0.25, -0.375};
+  cam.screenWindowWidth = 1.5;
   cam.extra = {{"fov", "60"}, {"aperture", "0.05"}};
   meta.renderSeconds = 12.375;
   meta.strings = {{"aperture.mesh", "bunny.obj"}, {"aperture.settings", "{\"x\": 1}"}};
@@ -314,6 +317,11 @@ TEST(Exr, HeaderMetadataRoundTrip) {
   EXPECT_EQ(back.camera.spp, 17);
   EXPECT_EQ(back.camera.cameraFromWorld, cam.cameraFromWorld);
   EXPECT_EQ(back.camera.ndcFromWorld, cam.ndcFromWorld);
+  EXPECT_EQ(back.camera.pixelAspectRatio, cam.pixelAspectRatio);
+  EXPECT_EQ(back.camera.screenWindowCenter, cam.screenWindowCenter);
+  EXPECT_EQ(back.camera.screenWindowWidth, cam.screenWindowWidth);
+  EXPECT_FALSE(back.camera.equirect.has_value());
+  EXPECT_FALSE(back.camera.fisheye.has_value());
   // Header attributes are kept sorted by name, so the pairs come back in name order.
   auto sorted = [](std::vector<std::pair<std::string, std::string>> v) {
     std::sort(v.begin(), v.end());
@@ -331,8 +339,11 @@ TEST(Exr, HeaderMetadataRoundTrip) {
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j) {
       EXPECT_EQ(Imf::worldToCamera(h)[i][j], float(cam.cameraFromWorld[i][j]));
-      EXPECT_EQ(Imf::worldToNDC(h)[i][j], float(cam.ndcFromWorld[i][j]));
+      EXPECT_EQ(Imf::worldToNDC(h)[i][j], float((*cam.ndcFromWorld)[i][j]));
     }
+  EXPECT_EQ(h.pixelAspectRatio(), 0.8125f);
+  EXPECT_EQ(h.screenWindowCenter(), Imath::V2f(0.25f, -0.375f));
+  EXPECT_EQ(h.screenWindowWidth(), 1.5f);
   const auto* fov = h.findTypedAttribute<Imf::StringAttribute>("aperture.camera.fov");
   ASSERT_NE(fov, nullptr);
   EXPECT_EQ(fov->value(), "60");
@@ -340,6 +351,59 @@ TEST(Exr, HeaderMetadataRoundTrip) {
   ASSERT_NE(software, nullptr);
   EXPECT_EQ(software->value(), "aperture " APERTURE_VERSION);
   EXPECT_NE(h.findTypedAttribute<Imf::M44dAttribute>("aperture.worldToNDC"), nullptr);
+}
+
+TEST(Exr, PanoramaProjectionRoundTripsWithoutWorldToNdc) {
+  const std::string dir = test::scratchDir();
+  ExrMetadata equirect;
+  equirect.camera.type = "equirect";
+  equirect.camera.equirect = EquirectProjection{{-150.5, 170.25}, {-70, 40.125}};
+  equirect.camera.pixelAspectRatio = 1.25;
+  writeExr(dir + "/e.exr", Framebuffer(8, 4, kAovDepth), equirect);
+  ExrMetadata fisheye;
+  fisheye.camera.type = "fisheye";
+  fisheye.camera.fisheye = FisheyeProjection{200.5, {4.0, 2.5}, 2.0};
+  writeExr(dir + "/f.exr", Framebuffer(8, 5, kAovDepth), fisheye);
+
+  ExrMetadata back;
+  readExr(dir + "/e.exr", &back);
+  EXPECT_FALSE(back.camera.ndcFromWorld.has_value());
+  ASSERT_TRUE(back.camera.equirect.has_value());
+  EXPECT_EQ(back.camera.equirect->longitudeDeg, glm::dvec2(-150.5, 170.25));
+  EXPECT_EQ(back.camera.equirect->latitudeDeg, glm::dvec2(-70, 40.125));
+  EXPECT_EQ(back.camera.pixelAspectRatio, 1.25);
+  EXPECT_FALSE(back.camera.fisheye.has_value());
+  readExr(dir + "/f.exr", &back);
+  EXPECT_FALSE(back.camera.ndcFromWorld.has_value());
+  ASSERT_TRUE(back.camera.fisheye.has_value());
+  EXPECT_EQ(back.camera.fisheye->fovDeg, 200.5);
+  EXPECT_EQ(back.camera.fisheye->centerPx, glm::dvec2(4.0, 2.5));
+  EXPECT_EQ(back.camera.fisheye->radiusPx, 2.0);
+  EXPECT_EQ(back.strings.size(), 0u);  // aperture.fisheye.mapping is not returned as a string
+
+  for (const char* file : {"/e.exr", "/f.exr"}) {
+    Imf::InputFile in((dir + file).c_str());
+    EXPECT_FALSE(Imf::hasWorldToNDC(in.header())) << file;
+    EXPECT_EQ(in.header().findTypedAttribute<Imf::M44dAttribute>("aperture.worldToNDC"), nullptr);
+    EXPECT_TRUE(Imf::hasWorldToCamera(in.header())) << file;
+  }
+}
+
+TEST(Exr, PixelAspectRatioOutsideOpenExrsRangeIsAnErrorNamingTheFile) {
+  const std::string path = test::scratchDir() + "/thin.exr";
+  ExrMetadata meta;
+  meta.camera.pixelAspectRatio = 2e6;
+  try {
+    writeExr(path, Framebuffer(4, 4, kAovDepth), meta);
+    FAIL() << "expected an Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("thin.exr"), std::string::npos) << e.what();
+    EXPECT_NE(
+        std::string(e.what()).find("pixel aspect ratio 2000000 (viewport 1x1 over 4x4 pixels)"),
+        std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(test::fileExists(path));
 }
 
 /// A pinhole camera built by hand: looks from `eye` at `target`, image plane at distance d with
@@ -361,23 +425,15 @@ struct HandCamera {
     c.vh = vh;
     c.width = width;
     c.height = height;
-    glm::dmat4 rotation(1.0);  // rows U, V, W (GLM: m[column][row])
-    for (int k = 0; k < 3; ++k) {
-      rotation[k][0] = u[k];
-      rotation[k][1] = v[k];
-      rotation[k][2] = w[k];
-    }
-    glm::dmat4 translation(1.0);
-    translation[3] = glm::dvec4(-eye, 1.0);
-    c.cameraFromWorld = rotation * translation;
-    // Camera space (x, y, z) -> homogeneous (d x / vw + 0.5 (-z), -d y / vh + 0.5 (-z), 1, -z).
+    c.cameraFromWorld = standardCameraFromWorld(eye, u, v, w);  // z = depth along −W
+    // Camera space (x, y, z) -> homogeneous (d x / vw + 0.5 z, -d y / vh + 0.5 z, 1, z).
     glm::dmat4 projection(0.0);
     projection[0][0] = d / vw;
-    projection[2][0] = -0.5;
+    projection[2][0] = 0.5;
     projection[1][1] = -d / vh;
-    projection[2][1] = -0.5;
+    projection[2][1] = 0.5;
     projection[3][2] = 1.0;
-    projection[2][3] = -1.0;
+    projection[2][3] = 1.0;
     c.ndcFromWorld = projection * c.cameraFromWorld;
     return c;
   }
