@@ -320,8 +320,8 @@ TEST(Batch, ThreeCamerasFourFramesEachEqualRenderBitForBit) {
   const json summary = readJson(dir + "/out/summary.json");
   EXPECT_EQ(summary["bvh_builds"], 1);
   EXPECT_GT(summary["build_seconds"].get<double>(), 0.0);
-  EXPECT_EQ(summary["frames_ok"], 12);
-  ASSERT_EQ(summary["frames"].size(), 12u);
+  EXPECT_EQ(summary["images_ok"], 12);
+  ASSERT_EQ(summary["images"].size(), 12u);
 
   const Job job = app::parseJob(jobPath);
   ASSERT_EQ(job.images.size(), 12u);
@@ -361,7 +361,7 @@ TEST(Batch, ShardsOfThreeUnionToTheFullJobWithNoFrameTwice) {
     const json summary =
         readJson(sharded + "/out/summary.shard-" + std::to_string(k) + "-of-3.json");
     EXPECT_EQ(summary["bvh_builds"], 1);
-    for (const json& f : summary["frames"]) {
+    for (const json& f : summary["images"]) {
       const size_t index = f["index"];
       EXPECT_EQ(index % 3, size_t(k));
       EXPECT_EQ(f["status"], "ok");
@@ -398,15 +398,15 @@ TEST(Batch, UnwritableOutputFailsOnlyThatCameraAndResumeRendersTheRest) {
   writeFile(dir + "/blocked", "a regular file where a directory should be");
   std::string out;
   EXPECT_EQ(runCommand(apertureBinary() + " batch " + quote(jobPath), &out), 1) << out;
-  EXPECT_NE(out.find("2 of 4 frames failed: blocked frame 0, blocked frame 1"), std::string::npos)
+  EXPECT_NE(out.find("2 of 4 images failed: blocked frame 0, blocked frame 1"), std::string::npos)
       << out;
   EXPECT_TRUE(isCompleteExr(dir + "/a/f_0.exr"));
   EXPECT_TRUE(isCompleteExr(dir + "/c/f_0.exr"));
   json summary = readJson(dir + "/summary.json");
-  EXPECT_EQ(summary["frames_failed"], 2);
+  EXPECT_EQ(summary["images_failed"], 2);
   EXPECT_EQ(summary["failed"], json({"blocked frame 0", "blocked frame 1"}));
-  EXPECT_EQ(summary["frames"][1]["status"], "failed");
-  EXPECT_NE(summary["frames"][1]["error"].get<std::string>().find("cannot create directory"),
+  EXPECT_EQ(summary["images"][1]["status"], "failed");
+  EXPECT_NE(summary["images"][1]["error"].get<std::string>().find("cannot create directory"),
             std::string::npos);
 
   // Fix the path; --resume renders only the two missing frames.
@@ -414,10 +414,10 @@ TEST(Batch, UnwritableOutputFailsOnlyThatCameraAndResumeRendersTheRest) {
   const auto before = fs::last_write_time(dir + "/a/f_0.exr");
   ASSERT_EQ(runCommand(apertureBinary() + " batch --resume " + quote(jobPath), &out), 0) << out;
   summary = readJson(dir + "/summary.json");
-  EXPECT_EQ(summary["frames_ok"], 2);
-  EXPECT_EQ(summary["frames_skipped"], 2);
+  EXPECT_EQ(summary["images_ok"], 2);
+  EXPECT_EQ(summary["images_skipped"], 2);
   std::vector<std::string> statuses;
-  for (const json& f : summary["frames"]) statuses.push_back(f["status"]);
+  for (const json& f : summary["images"]) statuses.push_back(f["status"]);
   EXPECT_EQ(statuses, (std::vector<std::string>{"skipped", "ok", "ok", "skipped"}));
   EXPECT_TRUE(isCompleteExr(dir + "/blocked/f_1.exr"));
   EXPECT_EQ(fs::last_write_time(dir + "/a/f_0.exr"), before);
@@ -492,7 +492,7 @@ TEST(Batch, DryRunListsFramesAndWritesNothing) {
                        &out),
             0)
       << out;
-  EXPECT_NE(out.find("12 frames in the job, 6 in this shard, 6 to render"), std::string::npos)
+  EXPECT_NE(out.find("12 images in the job, 6 in this shard, 6 to render"), std::string::npos)
       << out;
   EXPECT_NE(out.find("low_0001.exr"), std::string::npos);
   EXPECT_EQ(out.find("low_0000.exr"), std::string::npos);
@@ -515,7 +515,7 @@ TEST(Batch, SigintFinishesTheFrameInFlightAndLeavesOnlyCompleteFiles) {
                             &out);
   EXPECT_EQ(rc, 130) << out;
   const json summary = readJson(dir + "/out/summary.json");
-  const int ok = summary["frames_ok"], interrupted = summary["frames_interrupted"];
+  const int ok = summary["images_ok"], interrupted = summary["images_interrupted"];
   EXPECT_GT(interrupted, 0);
   EXPECT_EQ(ok + interrupted, 3000);
   int files = 0;
