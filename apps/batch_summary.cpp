@@ -64,6 +64,11 @@ Totals totalsOf(const std::vector<ImageResult>& results) {
 }
 
 nlohmann::json sceneSummary(const BatchRun& run) {
+  if (!run.scene->scene) {  // nothing to render: nothing loaded
+    std::vector<std::string> meshes;
+    for (const JobMesh& m : run.job->meshes) meshes.push_back(m.spec);
+    return {{"meshes", meshes}, {"bvh_builds", 0}};
+  }
   const BuildStats& build = run.scene->scene->stats();
   return {{"meshes", run.scene->names},
           {"load_seconds", run.scene->loadSeconds},
@@ -86,14 +91,17 @@ void printTable(const std::vector<ImageResult>& results) {
 
 void printTotals(const BatchRun& run, const std::vector<ImageResult>& results) {
   const Totals t = totalsOf(results);
+  char bvh[64] = "nothing to render, nothing loaded";
+  if (run.scene->scene)
+    std::snprintf(bvh, sizeof bvh, "BVH built once in %.3f s",
+                  run.scene->scene->stats().buildSeconds);
   std::printf(
       "%zu images ok, %zu failed, %zu skipped, %zu interrupted; %.3f s elapsed (render %.3f s, "
-      "write %.3f s%s), %.1f Mrays/s; BVH built once in %.3f s\n",
+      "write %.3f s%s), %.1f Mrays/s; %s\n",
       countOf(results, ImageStatus::Ok), countOf(results, ImageStatus::Failed),
       countOf(results, ImageStatus::Skipped), countOf(results, ImageStatus::Interrupted),
       run.elapsedSeconds, run.renderSeconds, t.writeSeconds, run.overlap ? ", overlapped" : "",
-      run.elapsedSeconds > 0 ? double(t.rays) / run.elapsedSeconds * 1e-6 : 0.0,
-      run.scene->scene->stats().buildSeconds);
+      run.elapsedSeconds > 0 ? double(t.rays) / run.elapsedSeconds * 1e-6 : 0.0, bvh);
 }
 
 /// Writes the summary; false (after saying why on stderr) when it cannot be written.

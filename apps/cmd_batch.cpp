@@ -208,17 +208,14 @@ double renderImages(BatchPlan& plan, const BatchScene& scene, const BatchArgs& a
   return renderSeconds;
 }
 
-int runBatch(const BatchArgs& a) {
-  BatchPlan plan = planBatch(a);
-  if (a.dryRun) return printDryRun(plan);
-
-  ThreadLimit threads(plan.job.threads);
-  Device device;
+std::vector<CameraParams> camerasToRender(const BatchPlan& plan) {
   std::vector<CameraParams> cameras;
   for (const ImageResult& r : plan.results)
     if (r.status != ImageStatus::Skipped) cameras.push_back(r.image->params);
-  const BatchScene scene = buildBatchScene(device, plan.job, a.quiet, cameras);
+  return cameras;
+}
 
+BatchRun describeRun(const BatchPlan& plan, const BatchArgs& a, const BatchScene& scene) {
   BatchRun run;
   run.job = &plan.job;
   run.shard = &plan.shard;
@@ -226,9 +223,23 @@ int runBatch(const BatchArgs& a) {
   run.resume = a.resume;
   run.overlap = !a.noOverlap;
   run.quiet = a.quiet;
+  run.removedTemporaries = plan.removedTemporaries;
+  return run;
+}
+
+int runBatch(const BatchArgs& a) {
+  BatchPlan plan = planBatch(a);
+  if (a.dryRun) return printDryRun(plan);
+
+  ThreadLimit threads(plan.job.threads);
+  Device device;
+  // With everything up to date, no mesh is loaded and no BVH built.
+  const BatchScene scene = plan.toRender
+                               ? buildBatchScene(device, plan.job, a.quiet, camerasToRender(plan))
+                               : BatchScene();
+  BatchRun run = describeRun(plan, a, scene);
   run.threads = threads.threads();
   run.isa = device.isaName();
-  run.removedTemporaries = plan.removedTemporaries;
   Progress progress(plan.toRender, a.quiet);
   SigintGuard sigint;
   gInterrupted = 0;
