@@ -960,18 +960,32 @@ TEST(BatchShard, MergedSummariesNameTheMissingImages) {
     EXPECT_EQ(m["images"][index]["summary"],
               dir + "/out/summary.shard-" + std::to_string(index % 3) + "-of-3.json");
   }
+}
 
-  // A summary of another job is refused, naming both files.
-  json other = baseJob();
-  other["output"] = "other/{camera}.exr";
-  ASSERT_EQ(batch("--quiet", writeJob(dir + "/merged", other), &out), 0) << out;
+TEST(BatchShard, MergeRefusesSummariesOfDifferentJobs) {
+  const std::string dir = scratchDir();
+  json a = baseJob(), b = baseJob();
+  b["output"] = "other/{camera}.exr";
+  fs::create_directories(dir + "/a");
+  fs::create_directories(dir + "/b");
+  std::string out;
+  ASSERT_EQ(batch("--quiet", writeJob(dir + "/a", a), &out), 0) << out;
+  ASSERT_EQ(batch("--quiet", writeJob(dir + "/b", b), &out), 0) << out;
+  const std::string first = dir + "/a/out/summary.json", second = dir + "/b/other/summary.json";
   EXPECT_EQ(runCommand(apertureBinary() + " batch --merge-summaries " + quote(dir + "/x.json") +
-                           " " + shardSummary(0) + " " + quote(dir + "/merged/other/summary.json"),
+                           " " + quote(first) + " " + quote(second),
                        &out),
             1);
-  EXPECT_NE(out.find("summary.shard-0-of-3.json' and '" + dir +
-                     "/merged/other/summary.json' are summaries of different jobs"),
+  EXPECT_NE(out.find("'" + first + "' and '" + second + "' are summaries of different jobs (\"" +
+                     dir + "/a/job.json\" and \"" + dir + "/b/job.json\")"),
             std::string::npos)
       << out;
   EXPECT_FALSE(fs::exists(dir + "/x.json"));
+  // The same job twice merges (a re-run's summary beside the first).
+  EXPECT_EQ(runCommand(apertureBinary() + " batch --merge-summaries " + quote(dir + "/x.json") +
+                           " " + quote(first) + " " + quote(first),
+                       &out),
+            0)
+      << out;
+  EXPECT_EQ(readJson(dir + "/x.json")["images_ok"], 1);
 }
