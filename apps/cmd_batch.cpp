@@ -1,72 +1,40 @@
-// `aperture batch`: many views of one scene from a job file; the BVH is built once, frames
-// render with all cores while a writer thread encodes the previous frame.
-#include <unistd.h>
-
+// `aperture batch`: many views of one scene from a job file; the BVH is built once, images
+// render with all cores while a writer thread encodes the previous image. This file holds the
+// command line and the run's steps; the pieces live in batch_*.h, shard.h, resume.h and
+// merge_summaries.h.
 #include <algorithm>
-#include <chrono>
-#include <condition_variable>
 #include <csignal>
 #include <cstdio>
-#include <deque>
 #include <filesystem>
-#include <functional>
-#include <map>
-#include <mutex>
-#include <nlohmann/json.hpp>
-#include <optional>
-#include <thread>
+#include <memory>
 
+#include "apps/batch_progress.h"
+#include "apps/batch_result.h"
+#include "apps/batch_scene.h"
+#include "apps/batch_summary.h"
+#include "apps/batch_writer.h"
 #include "apps/commands.h"
 #include "apps/job.h"
+#include "apps/merge_summaries.h"
 #include "apps/render_options.h"
+#include "apps/resume.h"
 #include "apps/scene_setup.h"
+#include "apps/shard.h"
 #include "apps/view.h"
-#include "cameras/culling.h"
-#include "core/atomic_file.h"
 #include "core/error.h"
-#include "core/exr.h"
-#include "core/image.h"
 #include "core/limits.h"
 
 namespace aperture::app {
 
 namespace {
 
-namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
 struct BatchArgs {
-  std::string job, shard, summary;
+  std::vector<std::string> files;  ///< the job, or with --merge-summaries the summaries
+  std::string shard, summary, maxMemory, mergeOut;
   bool resume = false, quiet = false, dryRun = false, noOverlap = false;
-  std::string maxMemory;
 };
 
-struct Shard {
-  size_t k = 0, n = 1;
-};
-
-Shard parseShard(const std::string& text) {
-  Shard s;
-  if (text.empty()) return s;
-  const size_t slash = text.find('/');
-  auto number = [&](const std::string& part, size_t& out) {
-    if (part.empty() || part.size() > 9 ||
-        part.find_first_not_of("0123456789") != std::string::npos)
-      return false;
-    out = std::stoul(part);
-    return true;
-  };
-  if (slash == std::string::npos || !number(text.substr(0, slash), s.k) ||
-      !number(text.substr(slash + 1), s.n) || s.n < 1 || s.k >= s.n)
-    throw Error(cat("--shard: '", text, "' must be K/N with 0 <= K < N (e.g. 0/4)"));
-  return s;
-}
-
-// SIGINT sets this; the frame loop checks it between frames. SA_RESETHAND makes a second
+// SIGINT sets this; the image loop checks it between images. SA_RESETHAND makes a second
 // Ctrl-C kill at once (temporary files may then remain, but never a partial final file).
 volatile std::sig_atomic_t gInterrupted = 0;
 extern "C" void onSigint(int) { gInterrupted = 1; }
@@ -86,454 +54,254 @@ class SigintGuard {
   struct sigaction previous_ {};
 };
 
-enum class Status { Pending, Ok, Failed, Skipped, Interrupted };
-const char* statusName(Status s) {
-  switch (s) {
-    case Status::Pending:
-      return "pending";
-    case Status::Ok:
-      return "ok";
-    case Status::Failed:
-      return "failed";
-    case Status::Skipped:
-      return "skipped";
-    case Status::Interrupted:
-      return "interrupted";
-  }
-  return "?";
-}
-
-struct FrameResult {
-  const JobImage* frame = nullptr;
-  Status status = Status::Pending;
-  std::string error;
-  double renderSeconds = 0, writeSeconds = 0;
-  uint64_t rays = 0;
-  double mrays() const { return renderSeconds > 0 ? double(rays) / renderSeconds * 1e-6 : 0; }
+/// What this run does: the job, its shard and one result per image of the shard.
+struct BatchPlan {
+  Job job;
+  Shard shard;
+  std::vector<ImageResult> results;
+  size_t toRender = 0;
+  std::vector<std::string> removedTemporaries;
 };
 
-std::string frameLabel(const JobImage& f) { return cat(f.camera, " frame ", f.frame); }
-
-std::string hms(double seconds) {
-  const long s = long(seconds + 0.5);
-  char buf[32];
-  if (s >= 3600)
-    std::snprintf(buf, sizeof buf, "%ld:%02ld:%02ld", s / 3600, s / 60 % 60, s % 60);
-  else
-    std::snprintf(buf, sizeof buf, "%ld:%02ld", s / 60, s % 60);
-  return buf;
+/// --max-memory: refuses the job before anything is loaded when its estimate is too large.
+void checkJobMemory(const Job& job, const std::string& maxMemory) {
+  const uint64_t limit = parseMemoryLimit("--max-memory", maxMemory);
+  if (!limit) return;
+  std::vector<std::string> specs;
+  for (const JobMesh& m : job.meshes)
+    if (std::find(specs.begin(), specs.end(), m.spec) == specs.end()) specs.push_back(m.spec);
+  uint64_t pixels = 0;
+  for (const JobImage& f : job.images)
+    pixels = std::max(pixels, uint64_t(f.params.width) * uint64_t(f.params.height));
+  // Two framebuffers live at once: the image being rendered and the one being written.
+  const uint64_t perPixel =
+      framebufferBytesPerPixel(job.aovs) * 2 + (job.previewPattern.empty() ? 0 : 4);
+  checkMemoryLimit(estimateMemory(specs, pixels, 1, 0, perPixel), limit, "--max-memory", maxMemory);
 }
 
-/// Frames done / total, Mrays/s, elapsed and ETA: one updating line on a terminal, a log line
-/// per frame otherwise, nothing with --quiet. Called from the render and writer threads.
-class Progress {
- public:
-  Progress(size_t total, bool quiet)
-      : total_(total), quiet_(quiet), tty_(::isatty(STDERR_FILENO) == 1), start_(Clock::now()) {}
-
-  void rendered(const FrameResult& r) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    rays_ += r.rays;
+/// The outputs and previews of the plan's images (what the temporary sweep looks after).
+std::vector<std::string> plannedFiles(const BatchPlan& plan) {
+  std::vector<std::string> files;
+  for (const ImageResult& r : plan.results) {
+    files.push_back(r.image->output);
+    if (!r.image->preview.empty()) files.push_back(r.image->preview);
   }
-  void finished(const FrameResult& r) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    ++done_;
-    if (quiet_) return;
-    const double elapsed = secondsSince(start_);
-    const double mrays = elapsed > 0 ? double(rays_) / elapsed * 1e-6 : 0;
-    const double eta = done_ ? elapsed / double(done_) * double(total_ - done_) : 0;
-    if (r.status == Status::Failed) {
-      clearLine();
-      std::fprintf(stderr, "aperture: %s failed: %s\n", frameLabel(*r.frame).c_str(),
-                   r.error.c_str());
+  return files;
+}
+
+/// --resume, part 1: removes the temporaries of this shard's files whose process is gone
+/// (listing them only, with --dry-run); keeps those of live processes.
+void sweepTemporaries(BatchPlan& plan, const std::string& summaryPath, const BatchArgs& a) {
+  std::vector<std::string> files = plannedFiles(plan);
+  files.push_back(summaryPath);
+  for (const TemporaryFile& t : findTemporaries(files)) {
+    std::error_code ec;
+    if (!t.alive && !a.dryRun) std::filesystem::remove(t.path, ec);
+    const char* what = t.alive    ? "kept (process running)"
+                       : a.dryRun ? "would remove (process gone)"
+                       : ec       ? "could not remove"
+                                  : "removed (process gone)";
+    if (!t.alive && !a.dryRun && !ec) plan.removedTemporaries.push_back(t.path);
+    if (!a.quiet)
+      std::fprintf(stderr, "aperture: resume: temporary %s of PID %ld: %s%s\n", t.path.c_str(),
+                   t.pid, what, ec ? (": " + ec.message()).c_str() : "");
+  }
+}
+
+/// --resume, part 2: skips the images whose output matches the job; says why the others that
+/// have an output are rendered again.
+void checkOutputs(BatchPlan& plan, bool quiet) {
+  size_t reused = 0, stale = 0, missing = 0;
+  for (ImageResult& r : plan.results) {
+    const OutputCheck check = checkOutput(plan.job, *r.image);
+    if (check.state == OutputCheck::State::Reusable) {
+      r.status = ImageStatus::Skipped;
+      ++reused;
+      continue;
     }
-    if (tty_) {
-      std::fprintf(stderr, "\r\033[K[%zu/%zu frames] %.1f Mrays/s  elapsed %s  ETA %s", done_,
-                   total_, mrays, hms(elapsed).c_str(), hms(eta).c_str());
-      drawn_ = true;
-    } else if (r.status == Status::Ok) {
-      std::fprintf(stderr,
-                   "aperture: [%zu/%zu] %s -> %s (render %.3f s, %.1f Mrays/s; write %.3f s); "
-                   "elapsed %s, ETA %s\n",
-                   done_, total_, frameLabel(*r.frame).c_str(), r.frame->output.c_str(),
-                   r.renderSeconds, r.mrays(), r.writeSeconds, hms(elapsed).c_str(),
-                   hms(eta).c_str());
+    r.staleReason = check.reason;
+    ++(check.state == OutputCheck::State::Stale ? stale : missing);
+    if (!quiet && check.state == OutputCheck::State::Stale)
+      std::fprintf(stderr, "aperture: resume: %s (%s): stale: %s; rendering it again\n",
+                   imageLabel(*r.image).c_str(), r.image->output.c_str(), check.reason.c_str());
+  }
+  if (!quiet)
+    std::fprintf(stderr, "aperture: resume: %zu of %zu images up to date, %zu stale, %zu missing\n",
+                 reused, plan.results.size(), stale, missing);
+}
+
+std::string summaryPathOf(const BatchArgs& a, const BatchPlan& plan) {
+  return a.summary.empty() ? defaultSummaryPath(plan.job, plan.shard) : a.summary;
+}
+
+/// Everything is validated (shard, job file, cameras, mesh files, memory) before anything is
+/// loaded; with --resume, stale temporaries are swept and outputs checked.
+BatchPlan planBatch(const BatchArgs& a) {
+  BatchPlan plan;
+  plan.shard = parseShard(a.shard);
+  plan.job = parseJob(a.files.front());
+  checkJobMemory(plan.job, a.maxMemory);
+  if (!a.quiet && !plan.shard.origin.empty())
+    std::fprintf(stderr, "aperture: shard %zu of %zu from %s\n", plan.shard.k, plan.shard.n,
+                 plan.shard.origin.c_str());
+  if (!a.quiet && a.shard.empty() && !unshardedSchedulerNote().empty())
+    std::fprintf(stderr, "aperture: note: %s\n", unshardedSchedulerNote().c_str());
+  for (const JobImage& image : plan.job.images)
+    if (plan.shard.contains(image.index)) {
+      plan.results.emplace_back();
+      plan.results.back().image = &image;
     }
-    std::fflush(stderr);
+  if (a.resume) {
+    sweepTemporaries(plan, summaryPathOf(a, plan), a);
+    checkOutputs(plan, a.quiet);
   }
-  void end() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (drawn_) std::fprintf(stderr, "\n");
-    drawn_ = false;
-  }
+  for (const ImageResult& r : plan.results) plan.toRender += r.status != ImageStatus::Skipped;
+  return plan;
+}
 
- private:
-  void clearLine() {
-    if (drawn_) std::fprintf(stderr, "\r\033[K");
-  }
-  std::mutex mutex_;
-  size_t total_, done_ = 0;
-  uint64_t rays_ = 0;
-  bool quiet_, tty_, drawn_ = false;
-  Clock::time_point start_;
-};
+int printDryRun(const BatchPlan& plan) {
+  std::printf("%s: %zu images in the job, %zu in this shard, %zu to render\n",
+              plan.job.path.c_str(), plan.job.images.size(), plan.results.size(), plan.toRender);
+  for (const ImageResult& r : plan.results)
+    std::printf("%6zu  %-20s %7d  %-9s %s%s%s\n", r.image->index, r.image->camera.c_str(),
+                r.image->frame, r.status == ImageStatus::Skipped ? "skip" : "render",
+                r.image->output.c_str(),
+                r.staleReason.empty() ? "" : "  stale: ", r.staleReason.c_str());
+  return 0;
+}
 
-/// Encodes and writes rendered frames. Threaded, it holds at most `capacity` frames waiting,
-/// so the renderer blocks instead of piling up framebuffers; unthreaded, write() runs inline.
-class FrameWriter {
- public:
-  struct Task {
-    FrameResult* result;
-    RenderedView view;
+/// Renders the images not skipped, handing each to the writer; returns the render seconds.
+double renderImages(BatchPlan& plan, const BatchScene& scene, const BatchArgs& a,
+                    Progress& progress) {
+  const Job& job = plan.job;
+  double renderSeconds = 0;
+  auto write = [&](ImageWriter::Task& task) {
+    const auto t0 = BatchClock::now();
+    writeImageFiles(
+        *task.result, task.view.fb,
+        viewMetadata(task.view, scene.names, job.aovs, job.build.quality, job.placement), job.exr);
+    task.result->writeSeconds = secondsSince(t0);
+    task.view = RenderedView();
+    progress.finished(*task.result);
   };
-  using WriteFn = std::function<void(Task&)>;
-
-  FrameWriter(WriteFn write, bool threaded, size_t capacity)
-      : write_(std::move(write)), capacity_(capacity) {
-    if (threaded) thread_ = std::thread([this] { loop(); });
-  }
-  ~FrameWriter() { finish(); }
-
-  void push(Task task) {
-    if (!thread_.joinable()) {
-      write_(task);
-      return;
+  ImageWriter writer(write, !a.noOverlap, 1);
+  for (ImageResult& r : plan.results) {
+    if (r.status == ImageStatus::Skipped) continue;
+    if (gInterrupted) {
+      r.status = ImageStatus::Interrupted;
+      continue;
     }
-    std::unique_lock<std::mutex> lock(mutex_);
-    space_.wait(lock, [&] { return queue_.size() < capacity_; });
-    queue_.push_back(std::move(task));
-    ready_.notify_one();
-  }
-
-  /// Writes what is queued and stops the thread.
-  void finish() {
-    if (!thread_.joinable()) return;
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      closed_ = true;
-    }
-    ready_.notify_one();
-    thread_.join();
-  }
-
- private:
-  void loop() {
-    for (;;) {
-      std::unique_lock<std::mutex> lock(mutex_);
-      ready_.wait(lock, [&] { return closed_ || !queue_.empty(); });
-      if (queue_.empty()) return;
-      Task task = std::move(queue_.front());
-      queue_.pop_front();
-      space_.notify_one();
-      lock.unlock();
-      write_(task);
+    try {
+      ensureParentDirectory(r.image->output, "output");
+      RenderedView view = renderView(*scene.scene, r.image->params, job.render, job.aovs);
+      r.renderSeconds = view.stats.seconds;
+      r.rays = view.stats.raysTraced;
+      renderSeconds += view.stats.seconds;
+      progress.rendered(r);
+      writer.push({&r, std::move(view)});
+    } catch (const std::exception& e) {
+      r.status = ImageStatus::Failed;
+      r.error = e.what();
+      progress.finished(r);
     }
   }
-
-  WriteFn write_;
-  size_t capacity_;
-  std::mutex mutex_;
-  std::condition_variable ready_, space_;
-  std::deque<Task> queue_;
-  bool closed_ = false;
-  std::thread thread_;
-};
-
-/// The job's meshes, each file loaded once, and the Embree scene over their placements.
-struct BatchScene {
-  std::deque<Mesh> meshes;
-  std::deque<TriangleSubset> subsets;  ///< with performance.cull
-  std::vector<std::string> names;      ///< one per job mesh entry
-  std::unique_ptr<Scene> scene;
-  double loadSeconds = 0;
-};
-
-/// `cameras`: the frames this run renders (culling keeps what they may see).
-BatchScene buildScene(const Device& device, const Job& job, bool quiet,
-                      const std::vector<CameraParams>& cameras) {
-  BatchScene s;
-  std::map<std::string, size_t> uses;
-  for (const JobMesh& m : job.meshes) ++uses[m.spec];
-  const auto start = Clock::now();
-  // A file used once with a transform has it baked in at load; a file used several times is
-  // loaded untransformed and placed by instances.
-  std::map<std::string, Mesh*> bySpec;
-  for (const JobMesh& m : job.meshes) {
-    if (bySpec.count(m.spec)) continue;
-    LoadOptions lo;
-    lo.placement = job.placement;
-    if (uses[m.spec] == 1) lo.transform = m.worldFromMesh;
-    s.meshes.push_back(loadMesh(m.spec, lo));
-    if (!quiet) logLoadedMesh(s.meshes.back());
-    bySpec[m.spec] = &s.meshes.back();
-  }
-  s.loadSeconds = secondsSince(start);
-
-  std::vector<SceneObject> objects;
-  for (const JobMesh& m : job.meshes) {
-    const bool instanced = uses[m.spec] > 1;
-    objects.push_back(
-        {bySpec[m.spec], instanced ? m.worldFromMesh.value_or(glm::dmat4(1.0)) : glm::dmat4(1.0)});
-    s.names.push_back(m.spec);
-  }
-  // Meshes used once share the render origin (the first object's anchor), so they are
-  // attached directly rather than instanced.
-  const glm::dvec3 origin(objects[0].worldFromMesh * glm::dvec4(objects[0].mesh->anchor, 1.0));
-  for (auto& [spec, mesh] : bySpec)
-    if (uses[spec] == 1) moveAnchor(*mesh, origin);
-  if (job.cull && !cameras.empty()) {
-    const CameraCuller culler = cullerFor(cameras, origin);
-    if (culler.seesEverything) {
-      if (!quiet)
-        std::fprintf(stderr, "aperture: cull: a panorama camera sees all space; nothing culled\n");
-    } else {
-      const CullStats c = cullObjects(objects, culler.test(), s.subsets);
-      if (!quiet) logCullStats(c, cameras.size());
-    }
-  }
-  s.scene = std::make_unique<Scene>(device, objects, job.build);
-  if (!quiet) {
-    const BuildStats& b = s.scene->stats();
-    std::fprintf(stderr,
-                 "aperture: built BVH (%s%s%s): %zu triangles (%zu stored, %zu instances) in "
-                 "%.3f s, Embree memory %.1f MB\n",
-                 bvhQualityName(job.build.quality), job.build.robust ? ", robust" : "",
-                 job.build.compact ? ", compact" : "", b.triangles, b.uniqueTriangles,
-                 s.scene->instanceCount(), b.buildSeconds, b.embreeBytes / 1e6);
-  }
-  return s;
+  writer.finish();
+  return renderSeconds;
 }
 
-std::string defaultSummaryPath(const Job& job, const Shard& shard) {
-  const std::string name =
-      shard.n > 1 ? cat("summary.shard-", shard.k, "-of-", shard.n, ".json") : "summary.json";
-  return (fs::path(job.outputDirectory) / name).lexically_normal().string();
+std::vector<CameraParams> camerasToRender(const BatchPlan& plan) {
+  std::vector<CameraParams> cameras;
+  for (const ImageResult& r : plan.results)
+    if (r.status != ImageStatus::Skipped) cameras.push_back(r.image->params);
+  return cameras;
 }
 
-void printTable(const std::vector<FrameResult>& results) {
-  std::printf("%-20s %7s  %-11s %9s %8s %9s  %s\n", "camera", "frame", "status", "render s",
-              "write s", "Mrays/s", "output");
-  for (const FrameResult& r : results)
-    std::printf("%-20s %7d  %-11s %9.3f %8.3f %9.1f  %s\n", r.frame->camera.c_str(), r.frame->frame,
-                statusName(r.status), r.renderSeconds, r.writeSeconds, r.mrays(),
-                r.frame->output.c_str());
+BatchRun describeRun(const BatchPlan& plan, const BatchArgs& a, const BatchScene& scene) {
+  BatchRun run;
+  run.job = &plan.job;
+  run.shard = &plan.shard;
+  run.scene = &scene;
+  run.resume = a.resume;
+  run.overlap = !a.noOverlap;
+  run.quiet = a.quiet;
+  run.removedTemporaries = plan.removedTemporaries;
+  return run;
 }
 
 int runBatch(const BatchArgs& a) {
-  // Everything is validated (job file, cameras, mesh files) before anything is loaded.
-  const Shard shard = parseShard(a.shard);
-  const Job job = parseJob(a.job);
-  if (const uint64_t limit = parseMemoryLimit("--max-memory", a.maxMemory)) {
-    std::vector<std::string> specs;
-    for (const JobMesh& m : job.meshes)
-      if (std::find(specs.begin(), specs.end(), m.spec) == specs.end()) specs.push_back(m.spec);
-    uint64_t pixels = 0;
-    for (const JobImage& f : job.images)
-      pixels = std::max(pixels, uint64_t(f.params.width) * uint64_t(f.params.height));
-    // Two framebuffers live at once: the frame being rendered and the one being written.
-    const uint64_t perPixel =
-        framebufferBytesPerPixel(job.aovs) * 2 + (job.previewPattern.empty() ? 0 : 4);
-    checkMemoryLimit(estimateMemory(specs, pixels, 1, 0, perPixel), limit, "--max-memory",
-                     a.maxMemory);
-  }
+  BatchPlan plan = planBatch(a);
+  if (a.dryRun) return printDryRun(plan);
 
-  std::vector<FrameResult> results;
-  for (const JobImage& f : job.images)
-    if (f.index % shard.n == shard.k) {
-      results.emplace_back();
-      results.back().frame = &f;
-    }
-  size_t toRender = 0;
-  for (FrameResult& r : results) {
-    if (a.resume && fs::exists(r.frame->output) && isCompleteExr(r.frame->output))
-      r.status = Status::Skipped;
-    else
-      ++toRender;
-  }
-
-  if (a.dryRun) {
-    std::printf("%s: %zu frames in the job, %zu in this shard, %zu to render\n", job.path.c_str(),
-                job.images.size(), results.size(), toRender);
-    for (const FrameResult& r : results)
-      std::printf("%6zu  %-20s %7d  %-9s %s\n", r.frame->index, r.frame->camera.c_str(),
-                  r.frame->frame, r.status == Status::Skipped ? "skip" : "render",
-                  r.frame->output.c_str());
-    return 0;
-  }
-
-  const std::string summaryPath = a.summary.empty() ? defaultSummaryPath(job, shard) : a.summary;
-  ThreadLimit threads(job.threads);
+  ThreadLimit threads(plan.job.threads);
   Device device;
-  std::vector<CameraParams> cameras;
-  for (const FrameResult& r : results)
-    if (r.status != Status::Skipped) cameras.push_back(r.frame->params);
-  const BatchScene scene = buildScene(device, job, a.quiet, cameras);
-  const BuildStats& build = scene.scene->stats();
-
-  Progress progress(toRender, a.quiet);
+  // With everything up to date, no mesh is loaded and no BVH built.
+  const BatchScene scene = plan.toRender
+                               ? buildBatchScene(device, plan.job, a.quiet, camerasToRender(plan))
+                               : BatchScene();
+  BatchRun run = describeRun(plan, a, scene);
+  run.threads = threads.threads();
+  run.isa = device.isaName();
+  Progress progress(plan.toRender, a.quiet);
   SigintGuard sigint;
   gInterrupted = 0;
-  const auto start = Clock::now();
-  double renderSeconds = 0;
-
-  auto write = [&](FrameWriter::Task& task) {
-    FrameResult& r = *task.result;
-    const auto t0 = Clock::now();
-    try {
-      const ExrMetadata meta =
-          viewMetadata(task.view, scene.names, job.aovs, job.build.quality, job.placement);
-      writeExr(r.frame->output, task.view.fb, meta, job.exr);
-      if (!r.frame->preview.empty()) {
-        ensureParentDirectory(r.frame->preview, "preview");
-        writePreview(r.frame->preview, task.view.fb);
-      }
-      r.status = Status::Ok;
-    } catch (const std::exception& e) {
-      r.status = Status::Failed;
-      r.error = e.what();
-    }
-    r.writeSeconds = secondsSince(t0);
-    task.view = RenderedView();
-    progress.finished(r);
-  };
-
-  {
-    FrameWriter writer(write, !a.noOverlap, 1);
-    for (FrameResult& r : results) {
-      if (r.status == Status::Skipped) continue;
-      if (gInterrupted) {
-        r.status = Status::Interrupted;
-        continue;
-      }
-      try {
-        ensureParentDirectory(r.frame->output, "output");
-        RenderedView view = renderView(*scene.scene, r.frame->params, job.render, job.aovs);
-        r.renderSeconds = view.stats.seconds;
-        r.rays = view.stats.raysTraced;
-        renderSeconds += view.stats.seconds;
-        progress.rendered(r);
-        writer.push({&r, std::move(view)});
-      } catch (const std::exception& e) {
-        r.status = Status::Failed;
-        r.error = e.what();
-        progress.finished(r);
-      }
-    }
-    writer.finish();
-  }
+  const auto start = BatchClock::now();
+  run.renderSeconds = renderImages(plan, scene, a, progress);
   progress.end();
-  const double elapsed = secondsSince(start);
-
-  std::vector<std::string> failed, skipped, interrupted;
-  uint64_t rays = 0;
-  double writeSeconds = 0;
-  nlohmann::json frames = nlohmann::json::array();
-  for (const FrameResult& r : results) {
-    rays += r.rays;
-    writeSeconds += r.writeSeconds;
-    if (r.status == Status::Failed) failed.push_back(frameLabel(*r.frame));
-    if (r.status == Status::Skipped) skipped.push_back(r.frame->output);
-    if (r.status == Status::Interrupted) interrupted.push_back(frameLabel(*r.frame));
-    const glm::dvec3& eye = r.frame->params.eye;
-    nlohmann::json f = {{"index", r.frame->index},         {"camera", r.frame->camera},
-                        {"frame", r.frame->frame},         {"output", r.frame->output},
-                        {"status", statusName(r.status)},  {"render_seconds", r.renderSeconds},
-                        {"write_seconds", r.writeSeconds}, {"rays", r.rays},
-                        {"mrays_per_s", r.mrays()},        {"eye", {eye.x, eye.y, eye.z}}};
-    if (!r.frame->preview.empty()) f["preview"] = r.frame->preview;
-    if (!r.error.empty()) f["error"] = r.error;
-    frames.push_back(f);
-  }
-  const size_t ok = size_t(std::count_if(
-      results.begin(), results.end(), [](const FrameResult& r) { return r.status == Status::Ok; }));
-  nlohmann::json summary = {{"job", job.path},
-                            {"aperture_version", APERTURE_VERSION},
-                            {"shard", {{"k", shard.k}, {"n", shard.n}}},
-                            {"resume", a.resume},
-                            {"overlap_writes", !a.noOverlap},
-                            {"frames_in_job", job.images.size()},
-                            {"frames_in_shard", results.size()},
-                            {"frames_ok", ok},
-                            {"frames_failed", failed.size()},
-                            {"frames_skipped", skipped.size()},
-                            {"frames_interrupted", interrupted.size()},
-                            {"failed", failed},
-                            {"skipped", skipped},
-                            {"interrupted", interrupted},
-                            {"meshes", scene.names},
-                            {"load_seconds", scene.loadSeconds},
-                            {"bvh_builds", 1},
-                            {"build_seconds", build.buildSeconds},
-                            {"triangles", build.triangles},
-                            {"unique_triangles", build.uniqueTriangles},
-                            {"instances", scene.scene->instanceCount()},
-                            {"embree_bytes", build.embreeBytes},
-                            {"threads", threads.threads()},
-                            {"isa", device.isaName()},
-                            {"width", job.width},
-                            {"height", job.height},
-                            {"spp", job.render.spp},
-                            {"aovs", aovListString(job.aovs)},
-                            {"elapsed_seconds", elapsed},
-                            {"render_seconds", renderSeconds},
-                            {"write_seconds", writeSeconds},
-                            {"rays", rays},
-                            {"mrays_per_s", elapsed > 0 ? double(rays) / elapsed * 1e-6 : 0.0},
-                            {"frames", frames}};
-
-  if (!a.quiet) {
-    printTable(results);
-    std::printf(
-        "%zu ok, %zu failed, %zu skipped, %zu interrupted; %.3f s elapsed (render %.3f s, "
-        "write %.3f s%s), %.1f Mrays/s; BVH built once in %.3f s\n",
-        ok, failed.size(), skipped.size(), interrupted.size(), elapsed, renderSeconds, writeSeconds,
-        a.noOverlap ? "" : ", overlapped", double(rays) / elapsed * 1e-6, build.buildSeconds);
-  }
-  try {
-    ensureParentDirectory(summaryPath, "--summary");
-    writeTextAtomically(summaryPath, summary.dump(2) + "\n");
-    if (!a.quiet) std::fprintf(stderr, "aperture: wrote %s\n", summaryPath.c_str());
-  } catch (const Error& e) {
-    std::fprintf(stderr, "aperture: error: %s\n", e.what());
-    if (failed.empty() && !gInterrupted) return 1;
-  }
-
-  if (gInterrupted) {
-    std::fprintf(stderr, "aperture: interrupted: %zu frames written, %zu not rendered\n", ok,
-                 interrupted.size());
-    return 130;
-  }
-  if (!failed.empty()) {
-    std::string list;
-    for (const std::string& f : failed) list += (list.empty() ? "" : ", ") + f;
-    std::fprintf(stderr, "aperture: %zu of %zu frames failed: %s\n", failed.size(), results.size(),
-                 list.c_str());
-    return 1;
-  }
-  return 0;
+  run.elapsedSeconds = secondsSince(start);
+  run.interrupted = gInterrupted != 0;
+  return reportBatch(run, plan.results, batchSummary(run, plan.results), summaryPathOf(a, plan));
 }
+
+/// Checks the positional files against the mode; false after a usage message.
+bool checkFiles(const BatchArgs& a) {
+  if (!a.mergeOut.empty() || a.files.size() == 1) return true;
+  std::fprintf(stderr,
+               "aperture batch: give one job file (got %zu files; several only with "
+               "--merge-summaries OUT.json IN...)\n",
+               a.files.size());
+  return false;
+}
+
+const char* const kShardHelp =
+    "Render only the images whose index in the job is K modulo N. K/N (0 <= K < N); 'slurm': a "
+    "Slurm job array, K = (SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN) / SLURM_ARRAY_TASK_STEP, "
+    "N = SLURM_ARRAY_TASK_COUNT; 'k8s/N': a Kubernetes indexed Job of N completions, K = "
+    "JOB_COMPLETION_INDEX. Without --shard the environment is not read: every image renders";
 
 }  // namespace
 
 Command addBatchCommand(CLI::App& app) {
   auto args = std::make_shared<BatchArgs>();
   CLI::App* sub =
-      app.add_subcommand("batch", "Render every frame of a job file (docs/batch.md) over one BVH");
-  sub->add_option("job", args->job, "Job file (JSON)")->required();
-  sub->add_flag("--resume", args->resume, "Skip frames whose output is already a complete EXR");
-  sub->add_option("--shard", args->shard,
-                  "Render only frames whose index in the job is K modulo N (K/N, 0 <= K < N)");
+      app.add_subcommand("batch", "Render every image of a job file (docs/batch.md) over one BVH");
+  sub->add_option("job", args->files,
+                  "Job file (JSON); with --merge-summaries, the summaries to merge")
+      ->required();
+  sub->add_flag("--resume", args->resume,
+                "Skip images whose EXR (and preview) is complete and matches the job; remove "
+                "temporaries of this shard's files left by processes that no longer exist");
+  sub->add_option("--shard", args->shard, kShardHelp);
   sub->add_option("--summary", args->summary,
                   "summary.json path (default: the output directory, summary.json or "
                   "summary.shard-K-of-N.json)");
+  sub->add_option("--merge-summaries", args->mergeOut,
+                  "Merge the shards' summaries given as arguments into OUT.json, list the images "
+                  "none of them has ok; exit 1 when some are missing")
+      ->type_name("OUT.json");
   sub->add_flag("--quiet", args->quiet, "No progress, log lines or summary table");
   sub->add_option("--max-memory", args->maxMemory,
                   "Refuse the job before loading when its estimated memory (meshes, BVH, two "
                   "framebuffers) exceeds BYTES (suffix K, M, G, T) or, with 'auto', MemAvailable");
-  sub->add_flag("--dry-run", args->dryRun, "Validate the job and list the frames; render nothing");
+  sub->add_flag("--dry-run", args->dryRun,
+                "Validate the job and list the images (with --resume: what is stale); render "
+                "nothing");
   sub->add_flag("--no-overlap", args->noOverlap,
-                "Write each frame before rendering the next (to measure what overlap gains)");
-  return [args] { return runBatch(*args); };
+                "Write each image before rendering the next (to measure what overlap gains)");
+  return [args] {
+    if (!checkFiles(*args)) return 2;
+    if (!args->mergeOut.empty()) return mergeSummaries(args->mergeOut, args->files, args->quiet);
+    return runBatch(*args);
+  };
 }
 
 }  // namespace aperture::app

@@ -18,6 +18,9 @@ namespace {
 
 std::atomic<unsigned> temporaryCounter{0};
 
+/// Between NAME and PID in a temporary name.
+constexpr const char* kTemporaryMarker = ".tmp-";
+
 /// Splits "dir/name" into ("dir", "name"); a bare name lives in ".".
 void splitPath(const std::string& path, std::string* dir, std::string* name) {
   const size_t slash = path.find_last_of('/');
@@ -42,13 +45,65 @@ int fsyncPath(const std::string& path, int flags) {
   return err;
 }
 
+/// Reads the decimal digits of `text` from `pos` up to `end` into *value; false unless there
+/// is at least one digit and nothing else (and at most 18 digits, so it fits).
+bool parseDigits(const std::string& text, size_t pos, size_t end, unsigned long long* value) {
+  if (pos >= end || end - pos > 18) return false;
+  *value = 0;
+  for (size_t k = pos; k < end; ++k) {
+    if (text[k] < '0' || text[k] > '9') return false;
+    *value = *value * 10 + unsigned(text[k] - '0');
+  }
+  return true;
+}
+
+/// Parses "PID-N" + suffix starting at `pos` of `fileName`.
+bool parsePidCounterSuffix(const std::string& fileName, size_t pos, TemporaryName* out) {
+  const size_t dash = fileName.find('-', pos);
+  if (dash == std::string::npos) return false;
+  size_t end = dash + 1;
+  while (end < fileName.size() && fileName[end] >= '0' && fileName[end] <= '9') ++end;
+  unsigned long long pid = 0, counter = 0;
+  if (!parseDigits(fileName, pos, dash, &pid) || !parseDigits(fileName, dash + 1, end, &counter))
+    return false;
+  if (end < fileName.size() && fileName[end] != '.') return false;
+  out->pid = long(pid);
+  out->counter = static_cast<unsigned long>(counter);
+  out->suffix = fileName.substr(end);
+  return true;
+}
+
 }  // namespace
+
+std::optional<TemporaryName> parseTemporaryName(const std::string& fileName) {
+  if (fileName.size() < 2 || fileName[0] != '.' || fileName.find('/') != std::string::npos)
+    return std::nullopt;
+  const std::string marker = kTemporaryMarker;
+  // NAME may itself contain the marker, so try every occurrence, the last first.
+  for (size_t at = fileName.rfind(marker); at != std::string::npos && at > 1;
+       at = fileName.rfind(marker, at - 1)) {
+    TemporaryName name;
+    if (!parsePidCounterSuffix(fileName, at + marker.size(), &name)) continue;
+    name.finalName = fileName.substr(1, at - 1);
+    return name;
+  }
+  return std::nullopt;
+}
 
 std::string temporaryPathFor(const std::string& finalPath, const std::string& suffix) {
   std::string dir, name;
   splitPath(finalPath, &dir, &name);
   const std::string prefix = finalPath.find('/') == std::string::npos ? "" : dir + "/";
-  return cat(prefix, ".", name, ".tmp-", ::getpid(), "-", temporaryCounter.fetch_add(1), suffix);
+  const long pid = long(::getpid());
+  const unsigned long counter = temporaryCounter.fetch_add(1);
+  const std::string tmpName = cat(".", name, kTemporaryMarker, pid, "-", counter, suffix);
+  const std::optional<TemporaryName> back = parseTemporaryName(tmpName);
+  if (!back || back->finalName != name || back->pid != pid || back->counter != counter ||
+      back->suffix != suffix)
+    throw Error(cat("cannot write '", finalPath, "': temporary name '", tmpName,
+                    "' does not parse back (suffix '", suffix,
+                    "' must be empty or start with '.')"));
+  return prefix + tmpName;
 }
 
 void writeAtomically(const std::string& finalPath,

@@ -1,6 +1,7 @@
 #pragma once
 // Write-to-temporary-then-rename, so a final name only ever holds a complete file.
 #include <functional>
+#include <optional>
 #include <string>
 
 namespace aperture {
@@ -10,6 +11,19 @@ namespace aperture {
 /// `suffix` keeps an extension visible to writers that pick the format from the name
 /// (".png").
 std::string temporaryPathFor(const std::string& finalPath, const std::string& suffix = "");
+
+/// The parts of a temporary file name made by temporaryPathFor.
+struct TemporaryName {
+  std::string finalName;      ///< NAME: the file name it is renamed to when complete
+  long pid = 0;               ///< PID of the process that made it
+  unsigned long counter = 0;  ///< N
+  std::string suffix;         ///< what follows N: "" or an extension such as ".png"
+};
+
+/// Parses a file name (no directory) of the form ".NAME.tmp-PID-N" + suffix, where the suffix
+/// is empty or starts with '.'; nothing for any other name. temporaryPathFor checks that its
+/// names parse back, so the naming scheme has this one definition.
+std::optional<TemporaryName> parseTemporaryName(const std::string& fileName);
 
 /// Calls write(tmpPath), fsyncs the file, renames it over `finalPath`. If write throws or any
 /// step fails, the temporary file is removed, `finalPath` is untouched, and Error is thrown

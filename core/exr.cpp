@@ -394,4 +394,33 @@ bool isCompleteExr(const std::string& path) {
   }
 }
 
+std::vector<std::string> exrChannelNames(AovMask aovs) {
+  std::vector<std::string> names;
+  if (aovs & kAovColor) names.insert(names.end(), kColorNames, kColorNames + 4);
+  if (aovs & kAovDepth) names.push_back("Z");
+  if (aovs & kAovDistance) names.push_back("T");
+  if (aovs & kAovNormal) names.insert(names.end(), kNormalNames, kNormalNames + 3);
+  if (aovs & kAovPosition) names.insert(names.end(), kPositionNames, kPositionNames + 3);
+  if (aovs & kAovPrimId) names.push_back("primID");
+  if (aovs & kAovGeomId) names.push_back("geomID");
+  return names;
+}
+
+ExrHeader readExrHeader(const std::string& path) {
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imf::Header& header = file.header();
+    const Imath::Box2i window = header.dataWindow();
+    ExrHeader result;
+    result.width = window.max.x - window.min.x + 1;
+    result.height = window.max.y - window.min.y + 1;
+    for (auto it = header.channels().begin(); it != header.channels().end(); ++it)
+      result.channels.emplace_back(it.name());
+    readHeaderAttributes(header, result.width, result.height, &result.meta);
+    return result;
+  } catch (const std::exception& e) {
+    throw Error(cat("cannot read EXR header of '", path, "': ", e.what()));
+  }
+}
+
 }  // namespace aperture

@@ -48,4 +48,19 @@ Framebuffer readExr(const std::string& path, ExrMetadata* meta = nullptr);
 /// True if `path` is a complete, readable EXR (every scanline present); used by --resume.
 bool isCompleteExr(const std::string& path);
 
+/// The channel names writeExr gives the AOVs of `aovs` (R G B A, Z, T, N.X.., P.X.., primID,
+/// geomID), in the order of the AovMask bits.
+std::vector<std::string> exrChannelNames(AovMask aovs);
+
+/// An EXR's header, read without decoding any pixel.
+struct ExrHeader {
+  int width = 0, height = 0;          ///< data window size, pixels
+  std::vector<std::string> channels;  ///< channel names as stored (OpenEXR sorts them by name)
+  ExrMetadata meta;                   ///< as readExr gives it
+};
+
+/// Reads the header of `path`. Throws Error naming the file for an unreadable header; says
+/// nothing about the pixels (see isCompleteExr).
+ExrHeader readExrHeader(const std::string& path);
+
 }  // namespace aperture

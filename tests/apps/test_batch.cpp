@@ -1,17 +1,25 @@
-// Batch rendering: job-file validation, camera paths, and `aperture batch` end to end (frames
-// equal to `aperture render`, shards, failures and --resume, instancing).
+// Batch rendering: job-file validation, camera paths, and `aperture batch` end to end (images
+// equal to `aperture render`, shards (K/N, Slurm, Kubernetes) and merged summaries, failures,
+// --resume (stale outputs, previews, temporaries), instancing).
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 
 #include "apps/job.h"
+#include "apps/shard.h"
 #include "core/error.h"
 #include "core/exr.h"
 #include "tests/support.h"
@@ -324,8 +332,8 @@ TEST(Batch, ThreeCamerasFourFramesEachEqualRenderBitForBit) {
   const json summary = readJson(dir + "/out/summary.json");
   EXPECT_EQ(summary["bvh_builds"], 1);
   EXPECT_GT(summary["build_seconds"].get<double>(), 0.0);
-  EXPECT_EQ(summary["frames_ok"], 12);
-  ASSERT_EQ(summary["frames"].size(), 12u);
+  EXPECT_EQ(summary["images_ok"], 12);
+  ASSERT_EQ(summary["images"].size(), 12u);
 
   const Job job = app::parseJob(jobPath);
   ASSERT_EQ(job.images.size(), 12u);
@@ -365,7 +373,7 @@ TEST(Batch, ShardsOfThreeUnionToTheFullJobWithNoFrameTwice) {
     const json summary =
         readJson(sharded + "/out/summary.shard-" + std::to_string(k) + "-of-3.json");
     EXPECT_EQ(summary["bvh_builds"], 1);
-    for (const json& f : summary["frames"]) {
+    for (const json& f : summary["images"]) {
       const size_t index = f["index"];
       EXPECT_EQ(index % 3, size_t(k));
       EXPECT_EQ(f["status"], "ok");
@@ -402,15 +410,15 @@ TEST(Batch, UnwritableOutputFailsOnlyThatCameraAndResumeRendersTheRest) {
   writeFile(dir + "/blocked", "a regular file where a directory should be");
   std::string out;
   EXPECT_EQ(runCommand(apertureBinary() + " batch " + quote(jobPath), &out), 1) << out;
-  EXPECT_NE(out.find("2 of 4 frames failed: blocked frame 0, blocked frame 1"), std::string::npos)
+  EXPECT_NE(out.find("2 of 4 images failed: blocked frame 0, blocked frame 1"), std::string::npos)
       << out;
   EXPECT_TRUE(isCompleteExr(dir + "/a/f_0.exr"));
   EXPECT_TRUE(isCompleteExr(dir + "/c/f_0.exr"));
   json summary = readJson(dir + "/summary.json");
-  EXPECT_EQ(summary["frames_failed"], 2);
+  EXPECT_EQ(summary["images_failed"], 2);
   EXPECT_EQ(summary["failed"], json({"blocked frame 0", "blocked frame 1"}));
-  EXPECT_EQ(summary["frames"][1]["status"], "failed");
-  EXPECT_NE(summary["frames"][1]["error"].get<std::string>().find("cannot create directory"),
+  EXPECT_EQ(summary["images"][1]["status"], "failed");
+  EXPECT_NE(summary["images"][1]["error"].get<std::string>().find("cannot create directory"),
             std::string::npos);
 
   // Fix the path; --resume renders only the two missing frames.
@@ -418,10 +426,10 @@ TEST(Batch, UnwritableOutputFailsOnlyThatCameraAndResumeRendersTheRest) {
   const auto before = fs::last_write_time(dir + "/a/f_0.exr");
   ASSERT_EQ(runCommand(apertureBinary() + " batch --resume " + quote(jobPath), &out), 0) << out;
   summary = readJson(dir + "/summary.json");
-  EXPECT_EQ(summary["frames_ok"], 2);
-  EXPECT_EQ(summary["frames_skipped"], 2);
+  EXPECT_EQ(summary["images_ok"], 2);
+  EXPECT_EQ(summary["images_skipped"], 2);
   std::vector<std::string> statuses;
-  for (const json& f : summary["frames"]) statuses.push_back(f["status"]);
+  for (const json& f : summary["images"]) statuses.push_back(f["status"]);
   EXPECT_EQ(statuses, (std::vector<std::string>{"skipped", "ok", "ok", "skipped"}));
   EXPECT_TRUE(isCompleteExr(dir + "/blocked/f_1.exr"));
   EXPECT_EQ(fs::last_write_time(dir + "/a/f_0.exr"), before);
@@ -496,7 +504,7 @@ TEST(Batch, DryRunListsFramesAndWritesNothing) {
                        &out),
             0)
       << out;
-  EXPECT_NE(out.find("12 frames in the job, 6 in this shard, 6 to render"), std::string::npos)
+  EXPECT_NE(out.find("12 images in the job, 6 in this shard, 6 to render"), std::string::npos)
       << out;
   EXPECT_NE(out.find("low_0001.exr"), std::string::npos);
   EXPECT_EQ(out.find("low_0000.exr"), std::string::npos);
@@ -519,7 +527,7 @@ TEST(Batch, SigintFinishesTheFrameInFlightAndLeavesOnlyCompleteFiles) {
                             &out);
   EXPECT_EQ(rc, 130) << out;
   const json summary = readJson(dir + "/out/summary.json");
-  const int ok = summary["frames_ok"], interrupted = summary["frames_interrupted"];
+  const int ok = summary["images_ok"], interrupted = summary["images_interrupted"];
   EXPECT_GT(interrupted, 0);
   EXPECT_EQ(ok + interrupted, 3000);
   int files = 0;
@@ -596,3 +604,456 @@ TEST(JobParse, BatchImagesHaveTheirCameraSize) {
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// --resume: outputs are kept only when they match the job; temporaries of dead processes go.
+
+namespace {
+
+/// Five cameras of different models (so every model's describe() must round-trip through the
+/// EXR header for its images to be kept), one with a three-frame orbit; with previews.
+json resumeJob() {
+  return json::parse(R"({
+    "scene": {"meshes": [{"path": "procedural:sphere"}]},
+    "cameras": [
+      {"name": "persp", "eye": [0, 0, 5], "at": [0, 0, 0], "fov": 40},
+      {"name": "ortho", "type": "orthographic", "eye": [0, 1, 5], "at": [0, 0, 0],
+       "viewport": [3, 2]},
+      {"name": "lens", "type": "thinlens", "eye": [1, 0, 5], "at": [0, 0, 0], "fov": 40,
+       "aperture": 0.05, "focus": 5},
+      {"name": "pano", "type": "equirect", "eye": [0, 0, 3], "at": [0, 0, 0]},
+      {"name": "turn", "orbit": {"radius": 5}, "frames": 3, "fov": 40, "shift": [0.1, 0],
+       "architectural": true}
+    ],
+    "size": [32, 24], "spp": 2, "aovs": "color,depth,primid",
+    "output": "out/{camera}_{frame}.exr", "preview": "prev/{camera}_{frame}.png"
+  })");
+}
+
+/// The status of each image in a summary, by index.
+std::map<size_t, std::string> statuses(const json& summary) {
+  std::map<size_t, std::string> s;
+  for (const json& e : summary["images"]) s[e["index"].get<size_t>()] = e["status"];
+  return s;
+}
+
+/// The indices whose status is `status`.
+std::set<size_t> withStatus(const json& summary, const std::string& status) {
+  std::set<size_t> s;
+  for (const auto& [index, st] : statuses(summary))
+    if (st == status) s.insert(index);
+  return s;
+}
+
+/// Runs `aperture batch ARGS JOB`; returns the exit code, output in *out.
+int batch(const std::string& args, const std::string& jobPath, std::string* out) {
+  return runCommand(apertureBinary() + " batch " + args + " " + quote(jobPath), out);
+}
+
+/// The stale reason the summary gives for image `index` ("" if none).
+std::string staleReasonOf(const json& summary, size_t index) {
+  for (const json& e : summary["images"])
+    if (e["index"] == index) return e.value("stale", "");
+  return "";
+}
+
+}  // namespace
+
+TEST(BatchResume, UnchangedOutputsAreAllKeptAndNothingIsLoaded) {
+  const std::string dir = scratchDir();
+  const std::string jobPath = writeJob(dir, resumeJob());
+  std::string out;
+  ASSERT_EQ(batch("--quiet", jobPath, &out), 0) << out;
+  EXPECT_EQ(readJson(dir + "/out/summary.json")["images_ok"], 7);
+  ASSERT_EQ(batch("--resume", jobPath, &out), 0) << out;
+  const json summary = readJson(dir + "/out/summary.json");
+  EXPECT_EQ(withStatus(summary, "skipped").size(), 7u) << out;
+  EXPECT_EQ(summary["images_stale"], 0);
+  EXPECT_EQ(summary["bvh_builds"], 0);
+  EXPECT_EQ(out.find("aperture: loaded"), std::string::npos) << out;
+  EXPECT_NE(out.find("resume: 7 of 7 images up to date, 0 stale, 0 missing"), std::string::npos)
+      << out;
+}
+
+TEST(BatchResume, EachKindOfStaleOutputIsRenderedAgainAndOnlyThat) {
+  const std::string dir = scratchDir();
+  json j = resumeJob();
+  const std::string jobPath = writeJob(dir, j);
+  std::string out;
+  ASSERT_EQ(batch("--quiet", jobPath, &out), 0) << out;
+  const Job job = app::parseJob(jobPath);
+  ASSERT_EQ(job.images.size(), 7u);
+
+  // Index 0: an EXR of another size at its path (the same camera rendered at 40x24).
+  const CameraParams& p0 = job.images[0].params;
+  ASSERT_EQ(runCommand(apertureBinary() + " render --quiet --mesh procedural:sphere --size 40,24" +
+                           " --spp 2 --aov color,depth,primid --eye " + fmt(p0.eye) + " --at " +
+                           fmt(*p0.at) + " --fov 40 --out " + quote(job.images[0].output),
+                       &out),
+            0)
+      << out;
+  // Index 1: the EXR truncated (the header survives, the last scanlines do not).
+  const auto size1 = fs::file_size(job.images[1].output);
+  fs::resize_file(job.images[1].output, size1 - 300);
+  // Index 3: the preview deleted.
+  fs::remove(job.images[3].preview);
+  // Indices 4..6: the orbit's camera changed in the job (a wider field of view).
+  j["cameras"][4]["fov"] = 45;
+  writeJob(dir, j);
+  const auto keptTime = fs::last_write_time(job.images[2].output);
+
+  ASSERT_EQ(batch("--resume", jobPath, &out), 0) << out;
+  const json summary = readJson(dir + "/out/summary.json");
+  EXPECT_EQ(withStatus(summary, "ok"), (std::set<size_t>{0, 1, 3, 4, 5, 6})) << out;
+  EXPECT_EQ(withStatus(summary, "skipped"), (std::set<size_t>{2})) << out;
+  EXPECT_EQ(fs::last_write_time(job.images[2].output), keptTime);
+  EXPECT_EQ(staleReasonOf(summary, 0), "size 40x24, job wants 32x24");
+  EXPECT_NE(staleReasonOf(summary, 1).find("EXR"), std::string::npos) << staleReasonOf(summary, 1);
+  EXPECT_EQ(staleReasonOf(summary, 3), "preview " + job.images[3].preview + " is missing");
+  for (size_t k = 4; k < 7; ++k)
+    EXPECT_EQ(staleReasonOf(summary, k).rfind("camera ", 0), 0u) << staleReasonOf(summary, k);
+  EXPECT_EQ(staleReasonOf(summary, 2), "");
+  EXPECT_NE(out.find("persp frame 0 (" + job.images[0].output +
+                     "): stale: size 40x24, job wants 32x24; rendering it again"),
+            std::string::npos)
+      << out;
+  // What was rendered again now matches: a third run keeps everything.
+  ASSERT_EQ(batch("--resume --quiet", jobPath, &out), 0) << out;
+  EXPECT_EQ(withStatus(readJson(dir + "/out/summary.json"), "skipped").size(), 7u);
+  EXPECT_TRUE(isCompleteExr(job.images[1].output));
+}
+
+TEST(BatchResume, ChangedSizeOrAovsInTheJobRenderEverythingAgain) {
+  const std::string dir = scratchDir();
+  json j = resumeJob();
+  const std::string jobPath = writeJob(dir, j);
+  std::string out;
+  ASSERT_EQ(batch("--quiet", jobPath, &out), 0) << out;
+  j["size"] = {40, 24};
+  writeJob(dir, j);
+  ASSERT_EQ(batch("--resume --quiet", jobPath, &out), 0) << out;
+  json summary = readJson(dir + "/out/summary.json");
+  EXPECT_EQ(withStatus(summary, "ok").size(), 7u);
+  EXPECT_EQ(staleReasonOf(summary, 5), "size 32x24, job wants 40x24");
+  EXPECT_EQ(readExrHeader(app::parseJob(jobPath).images[5].output).width, 40);
+
+  j["aovs"] = "color,depth";  // primID dropped
+  writeJob(dir, j);
+  ASSERT_EQ(batch("--resume --quiet", jobPath, &out), 0) << out;
+  summary = readJson(dir + "/out/summary.json");
+  EXPECT_EQ(withStatus(summary, "ok").size(), 7u);
+  EXPECT_EQ(staleReasonOf(summary, 0), "channels A,B,G,R,Z,primID, job wants A,B,G,R,Z");
+}
+
+TEST(BatchResume, AFailedPreviewFailsTheImageAndResumeRendersItAgain) {
+  const std::string dir = scratchDir();
+  json j = resumeJob();
+  j["preview"] = "prev/{camera}/{frame}.png";
+  const std::string jobPath = writeJob(dir, j);
+  fs::create_directories(dir + "/prev");
+  writeFile(dir + "/prev/ortho", "a regular file where the preview directory should be");
+  std::string out;
+  EXPECT_EQ(batch("", jobPath, &out), 1) << out;
+  EXPECT_NE(out.find("1 of 7 images failed: ortho frame 0"), std::string::npos) << out;
+  json summary = readJson(dir + "/out/summary.json");
+  EXPECT_EQ(summary["images_failed"], 1);
+  EXPECT_EQ(summary["failed"], json({"ortho frame 0"}));
+  EXPECT_EQ(withStatus(summary, "failed"), (std::set<size_t>{1}));
+  EXPECT_NE(summary["images"][1]["error"].get<std::string>().find("preview"), std::string::npos);
+
+  // The EXR is complete, the preview missing: --resume renders that image again, exit 0.
+  const Job job = app::parseJob(jobPath);
+  EXPECT_TRUE(isCompleteExr(job.images[1].output));
+  fs::remove(dir + "/prev/ortho");
+  ASSERT_EQ(batch("--resume --quiet", jobPath, &out), 0) << out;
+  summary = readJson(dir + "/out/summary.json");
+  EXPECT_EQ(withStatus(summary, "ok"), (std::set<size_t>{1}));
+  EXPECT_EQ(withStatus(summary, "skipped").size(), 6u);
+  EXPECT_TRUE(fs::exists(job.images[1].preview));
+}
+
+TEST(BatchResume, TemporariesOfDeadProcessesAreRemovedThoseOfLiveOnesKept) {
+  const std::string dir = scratchDir();
+  const std::string jobPath = writeJob(dir, resumeJob());
+  std::string out;
+  ASSERT_EQ(batch("--quiet", jobPath, &out), 0) << out;
+  // A PID that certainly belonged to a process that has exited: a child reaped here.
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) ::_exit(0);
+  ASSERT_EQ(::waitpid(child, nullptr, 0), child);
+  ASSERT_TRUE(::kill(child, 0) == -1 && errno == ESRCH) << "PID " << child << " was reused";
+  const std::string dead = std::to_string(child), live = std::to_string(::getpid());
+  const std::string deadExr = dir + "/out/.persp_0.exr.tmp-" + dead + "-0";
+  const std::string deadPng = dir + "/prev/.pano_0.png.tmp-" + dead + "-7.png";
+  const std::string deadSummary = dir + "/out/.summary.json.tmp-" + dead + "-3";
+  const std::string liveExr = dir + "/out/.ortho_0.exr.tmp-" + live + "-0";
+  const std::string foreign = dir + "/out/.other.exr.tmp-" + dead + "-0";  // not this job's
+  for (const std::string& p : {deadExr, deadPng, deadSummary, liveExr, foreign})
+    writeFile(p, "partial");
+
+  ASSERT_EQ(batch("--resume", jobPath, &out), 0) << out;
+  EXPECT_FALSE(fs::exists(deadExr));
+  EXPECT_FALSE(fs::exists(deadPng));
+  EXPECT_FALSE(fs::exists(deadSummary));
+  EXPECT_TRUE(fs::exists(liveExr));
+  EXPECT_TRUE(fs::exists(foreign));
+  EXPECT_NE(out.find(deadExr + " of PID " + dead + ": removed (process gone)"), std::string::npos)
+      << out;
+  EXPECT_NE(out.find(liveExr + " of PID " + live + ": kept (process running)"), std::string::npos)
+      << out;
+  const json summary = readJson(dir + "/out/summary.json");
+  std::set<std::string> removed;
+  for (const json& p : summary["stale_temporaries_removed"]) removed.insert(p);
+  EXPECT_EQ(removed, (std::set<std::string>{deadExr, deadPng, deadSummary}));
+  EXPECT_EQ(withStatus(summary, "skipped").size(), 7u);
+  // Without --resume nothing is swept.
+  writeFile(deadExr, "partial");
+  ASSERT_EQ(batch("--quiet", jobPath, &out), 0) << out;
+  EXPECT_TRUE(fs::exists(deadExr));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Shards from a scheduler's environment, and merging the shards' summaries.
+
+namespace {
+
+/// A fake environment for parseShard.
+app::EnvironmentLookup fakeEnvironment(const std::map<std::string, std::string>& vars) {
+  return [vars](const char* name) -> const char* {
+    auto it = vars.find(name);
+    return it == vars.end() ? nullptr : it->second.c_str();
+  };
+}
+
+/// The message parseShard throws ("" if it does not).
+std::string shardError(const std::string& spec, const std::map<std::string, std::string>& vars) {
+  try {
+    app::parseShard(spec, fakeEnvironment(vars));
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+/// Runs every shard of `j` in `dir` with `envFor(k)` before the command and `--shard spec`;
+/// returns how often each image index was rendered ok, and checks each shard's summary name.
+std::map<size_t, int> runShards(const std::string& dir, const json& j, const std::string& spec,
+                                size_t n, const std::function<std::string(size_t)>& envFor) {
+  fs::create_directories(dir);
+  const std::string jobPath = writeJob(dir, j);
+  std::map<size_t, int> rendered;
+  for (size_t k = 0; k < n; ++k) {
+    std::string out;
+    const std::string cmd = "env " + envFor(k) + " " + apertureBinary() +
+                            " batch --quiet --shard " + spec + " " + quote(jobPath);
+    EXPECT_EQ(runCommand(cmd, &out), 0) << cmd << "\n" << out;
+    const std::string summaryPath =
+        dir + "/out/summary.shard-" + std::to_string(k) + "-of-" + std::to_string(n) + ".json";
+    if (!fs::exists(summaryPath)) {
+      ADD_FAILURE() << "no " << summaryPath << " after " << cmd << "\n" << out;
+      continue;
+    }
+    for (size_t index : withStatus(readJson(summaryPath), "ok")) ++rendered[index];
+  }
+  return rendered;
+}
+
+/// "camera frame N" of every image of the job whose index is k modulo n.
+std::vector<std::string> labelsOfShard(const Job& job, size_t k, size_t n) {
+  std::vector<std::string> labels;
+  for (const app::JobImage& image : job.images)
+    if (image.index % n == k)
+      labels.push_back(image.camera + " frame " + std::to_string(image.frame));
+  return labels;
+}
+
+}  // namespace
+
+TEST(BatchShard, SlurmVariablesGiveKAndNOrANamedError) {
+  using Vars = std::map<std::string, std::string>;
+  // --array=1-3: tasks 1, 2, 3 are shards 0, 1, 2 of 3.
+  for (size_t id = 1; id <= 3; ++id) {
+    const app::Shard s =
+        app::parseShard("slurm", fakeEnvironment({{"SLURM_ARRAY_TASK_ID", std::to_string(id)},
+                                                  {"SLURM_ARRAY_TASK_MIN", "1"},
+                                                  {"SLURM_ARRAY_TASK_MAX", "3"},
+                                                  {"SLURM_ARRAY_TASK_COUNT", "3"}}));
+    EXPECT_EQ(s.k, id - 1);
+    EXPECT_EQ(s.n, 3u);
+  }
+  // --array=4-12:4: tasks 4, 8, 12 are shards 0, 1, 2 of 3 (K is not ID - MIN).
+  const Vars stepped = {{"SLURM_ARRAY_TASK_ID", "8"},
+                        {"SLURM_ARRAY_TASK_MIN", "4"},
+                        {"SLURM_ARRAY_TASK_MAX", "12"},
+                        {"SLURM_ARRAY_TASK_STEP", "4"},
+                        {"SLURM_ARRAY_TASK_COUNT", "3"}};
+  EXPECT_EQ(app::parseShard("slurm", fakeEnvironment(stepped)).k, 1u);
+
+  const Vars base = {
+      {"SLURM_ARRAY_TASK_ID", "2"}, {"SLURM_ARRAY_TASK_MIN", "1"}, {"SLURM_ARRAY_TASK_COUNT", "3"}};
+  for (const char* missing :
+       {"SLURM_ARRAY_TASK_ID", "SLURM_ARRAY_TASK_MIN", "SLURM_ARRAY_TASK_COUNT"}) {
+    Vars v = base;
+    v.erase(missing);
+    EXPECT_NE(shardError("slurm", v).find(std::string(missing) + " is not set"), std::string::npos)
+        << shardError("slurm", v);
+  }
+  Vars v = base;
+  v["SLURM_ARRAY_TASK_COUNT"] = "three";
+  EXPECT_NE(shardError("slurm", v).find("SLURM_ARRAY_TASK_COUNT='three' is not a number"),
+            std::string::npos);
+  v = base;
+  v["SLURM_ARRAY_TASK_ID"] = "4";  // past the three tasks 1..3
+  EXPECT_NE(shardError("slurm", v)
+                .find("task 4 is not one of the 3 tasks of the array "
+                      "(SLURM_ARRAY_TASK_ID=4, SLURM_ARRAY_TASK_MIN=1"),
+            std::string::npos)
+      << shardError("slurm", v);
+  v = base;
+  v["SLURM_ARRAY_TASK_ID"] = "0";  // below MIN
+  EXPECT_NE(shardError("slurm", v).find("task 0 is not one of the 3 tasks"), std::string::npos);
+  v = base;
+  v["SLURM_ARRAY_TASK_MAX"] = "9";  // --array=1,2,9: not a range
+  EXPECT_NE(shardError("slurm", v).find("the array is not a range first-last[:step]"),
+            std::string::npos)
+      << shardError("slurm", v);
+}
+
+TEST(BatchShard, KubernetesIndexAndPlainKOverN) {
+  for (size_t index = 0; index < 4; ++index) {
+    const app::Shard s = app::parseShard(
+        "k8s/4", fakeEnvironment({{"JOB_COMPLETION_INDEX", std::to_string(index)}}));
+    EXPECT_EQ(s.k, index);
+    EXPECT_EQ(s.n, 4u);
+  }
+  EXPECT_NE(shardError("k8s/4", {{"JOB_COMPLETION_INDEX", "4"}})
+                .find("JOB_COMPLETION_INDEX=4 is not below N = 4"),
+            std::string::npos);
+  EXPECT_NE(shardError("k8s/4", {}).find("JOB_COMPLETION_INDEX is not set"), std::string::npos);
+  EXPECT_NE(shardError("k8s", {{"JOB_COMPLETION_INDEX", "0"}}).find("k8s/N"), std::string::npos);
+  EXPECT_NE(shardError("k8s/0", {{"JOB_COMPLETION_INDEX", "0"}}).find("k8s/N"), std::string::npos);
+  // K/N does not read the environment.
+  const app::Shard s = app::parseShard("2/5", fakeEnvironment({{"JOB_COMPLETION_INDEX", "0"}}));
+  EXPECT_EQ(s.k, 2u);
+  EXPECT_EQ(s.n, 5u);
+  EXPECT_NE(shardError("5/5", {}).find("--shard: '5/5' must be K/N"), std::string::npos);
+  EXPECT_NE(shardError("slurm/3", {}).find("must be K/N"), std::string::npos);
+}
+
+TEST(BatchShard, SlurmAndKubernetesShardsRenderEveryImageExactlyOnce) {
+  const std::string dir = scratchDir();
+  json j = orbitJob();
+  j["size"] = {24, 16};
+  j["aovs"] = "depth";
+  // Slurm --array=1-3 (MIN 1, COUNT 3): tasks 1, 2, 3.
+  const std::map<size_t, int> slurm = runShards(dir + "/slurm", j, "slurm", 3, [](size_t k) {
+    return "SLURM_ARRAY_TASK_ID=" + std::to_string(k + 1) +
+           " SLURM_ARRAY_TASK_MIN=1 SLURM_ARRAY_TASK_MAX=3 SLURM_ARRAY_TASK_COUNT=3";
+  });
+  // A Kubernetes indexed Job of 5 completions: indices 0..4.
+  const std::map<size_t, int> k8s = runShards(dir + "/k8s", j, "k8s/5", 5, [](size_t k) {
+    return "JOB_COMPLETION_INDEX=" + std::to_string(k);
+  });
+  for (const auto* rendered : {&slurm, &k8s}) {
+    EXPECT_EQ(rendered->size(), 12u);
+    for (const auto& [index, times] : *rendered) {
+      EXPECT_LT(index, 12u);
+      EXPECT_EQ(times, 1) << "image " << index;
+    }
+  }
+  // The Slurm shard with task 2 is shard 1: images 1, 4, 7, 10.
+  const json shard1 = readJson(dir + "/slurm/out/summary.shard-1-of-3.json");
+  EXPECT_EQ(withStatus(shard1, "ok"), (std::set<size_t>{1, 4, 7, 10}));
+  EXPECT_NE(shard1["shard"]["from"].get<std::string>().find("SLURM_ARRAY_TASK_ID=2"),
+            std::string::npos);
+  // Inside an array task without --shard: a note, and every image.
+  std::string out;
+  ASSERT_EQ(runCommand("env SLURM_ARRAY_TASK_ID=2 " + apertureBinary() + " batch --dry-run " +
+                           quote(dir + "/slurm/job.json"),
+                       &out),
+            0);
+  EXPECT_NE(out.find("SLURM_ARRAY_TASK_ID=2 but no --shard"), std::string::npos) << out;
+  EXPECT_NE(out.find("12 images in the job, 12 in this shard"), std::string::npos) << out;
+}
+
+TEST(BatchShard, MergedSummariesNameTheMissingImages) {
+  const std::string dir = scratchDir();
+  json j = orbitJob();
+  j["size"] = {24, 16};
+  j["aovs"] = "depth";
+  runShards(dir, j, "slurm", 3, [](size_t k) {
+    return "SLURM_ARRAY_TASK_ID=" + std::to_string(k + 1) +
+           " SLURM_ARRAY_TASK_MIN=1 SLURM_ARRAY_TASK_COUNT=3";
+  });
+  const Job job = app::parseJob(dir + "/job.json");
+  auto shardSummary = [&](int k) {
+    return quote(dir + "/out/summary.shard-" + std::to_string(k) + "-of-3.json");
+  };
+  const std::string merged = dir + "/merged/all.json";
+  std::string out;
+  // Shards 0 and 2 only: shard 1's images are missing, named from the job file.
+  EXPECT_EQ(runCommand(apertureBinary() + " batch --merge-summaries " + quote(merged) + " " +
+                           shardSummary(0) + " " + shardSummary(2),
+                       &out),
+            1)
+      << out;
+  json m = readJson(merged);
+  const std::vector<std::string> expectMissing = labelsOfShard(job, 1, 3);
+  ASSERT_EQ(expectMissing.size(), 4u);
+  EXPECT_EQ(m["missing"], json(expectMissing));
+  EXPECT_EQ(m["images_missing"], 4);
+  EXPECT_EQ(m["images_ok"], 8);
+  EXPECT_EQ(m["images_in_job"], 12);
+  EXPECT_EQ(m["images"].size(), 12u);
+  EXPECT_EQ(m["images"][1]["status"], "missing");
+  EXPECT_EQ(m["images"][1]["output"], job.images[1].output);
+  EXPECT_NE(out.find("4 of 12 images missing (no summary has them ok): " + expectMissing[0] + ", " +
+                     expectMissing[1]),
+            std::string::npos)
+      << out;
+
+  // All three: complete, exit 0; the entries keep the shard that rendered them.
+  ASSERT_EQ(runCommand(apertureBinary() + " batch --merge-summaries " + quote(merged) + " " +
+                           shardSummary(0) + " " + shardSummary(1) + " " + shardSummary(2),
+                       &out),
+            0)
+      << out;
+  m = readJson(merged);
+  EXPECT_EQ(m["images_missing"], 0);
+  EXPECT_EQ(m["missing"], json::array());
+  EXPECT_EQ(m["images_ok"], 12);
+  for (size_t index = 0; index < 12; ++index) {
+    EXPECT_EQ(m["images"][index]["index"], index);
+    EXPECT_EQ(m["images"][index]["summary"],
+              dir + "/out/summary.shard-" + std::to_string(index % 3) + "-of-3.json");
+  }
+}
+
+TEST(BatchShard, MergeRefusesSummariesOfDifferentJobs) {
+  const std::string dir = scratchDir();
+  json a = baseJob(), b = baseJob();
+  b["output"] = "other/{camera}.exr";
+  fs::create_directories(dir + "/a");
+  fs::create_directories(dir + "/b");
+  std::string out;
+  ASSERT_EQ(batch("--quiet", writeJob(dir + "/a", a), &out), 0) << out;
+  ASSERT_EQ(batch("--quiet", writeJob(dir + "/b", b), &out), 0) << out;
+  const std::string first = dir + "/a/out/summary.json", second = dir + "/b/other/summary.json";
+  EXPECT_EQ(runCommand(apertureBinary() + " batch --merge-summaries " + quote(dir + "/x.json") +
+                           " " + quote(first) + " " + quote(second),
+                       &out),
+            1);
+  EXPECT_NE(out.find("'" + first + "' and '" + second + "' are summaries of different jobs (\"" +
+                     dir + "/a/job.json\" and \"" + dir + "/b/job.json\")"),
+            std::string::npos)
+      << out;
+  EXPECT_FALSE(fs::exists(dir + "/x.json"));
+  // The same job twice merges (a re-run's summary beside the first).
+  EXPECT_EQ(runCommand(apertureBinary() + " batch --merge-summaries " + quote(dir + "/x.json") +
+                           " " + quote(first) + " " + quote(first),
+                       &out),
+            0)
+      << out;
+  EXPECT_EQ(readJson(dir + "/x.json")["images_ok"], 1);
+}

@@ -1,0 +1,189 @@
+#include "apps/batch_summary.h"
+
+#include <cstdio>
+#include <filesystem>
+
+#include "apps/view.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace aperture::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+nlohmann::json imageEntry(const ImageResult& r) {
+  const JobImage& image = *r.image;
+  const glm::dvec3& eye = image.params.eye;
+  nlohmann::json e = {{"index", image.index},
+                      {"camera", image.camera},
+                      {"frame", image.frame},
+                      {"output", image.output},
+                      {"status", imageStatusName(r.status)},
+                      {"render_seconds", r.renderSeconds},
+                      {"write_seconds", r.writeSeconds},
+                      {"rays", r.rays},
+                      {"mrays_per_s", r.mrays()},
+                      {"eye", {eye.x, eye.y, eye.z}}};
+  if (!image.preview.empty()) e["preview"] = image.preview;
+  if (!r.staleReason.empty()) e["stale"] = r.staleReason;
+  if (!r.error.empty()) e["error"] = r.error;
+  return e;
+}
+
+/// Labels ("camera frame N") of the images with `status`; outputs for skipped ones.
+std::vector<std::string> listed(const std::vector<ImageResult>& results, ImageStatus status) {
+  std::vector<std::string> items;
+  for (const ImageResult& r : results)
+    if (r.status == status)
+      items.push_back(status == ImageStatus::Skipped ? r.image->output : imageLabel(*r.image));
+  return items;
+}
+
+size_t countOf(const std::vector<ImageResult>& results, ImageStatus status) {
+  size_t n = 0;
+  for (const ImageResult& r : results) n += r.status == status;
+  return n;
+}
+
+struct Totals {
+  uint64_t rays = 0;
+  double writeSeconds = 0;
+  size_t stale = 0;
+};
+
+Totals totalsOf(const std::vector<ImageResult>& results) {
+  Totals t;
+  for (const ImageResult& r : results) {
+    t.rays += r.rays;
+    t.writeSeconds += r.writeSeconds;
+    t.stale += !r.staleReason.empty();
+  }
+  return t;
+}
+
+nlohmann::json sceneSummary(const BatchRun& run) {
+  if (!run.scene->scene) {  // nothing to render: nothing loaded
+    std::vector<std::string> meshes;
+    for (const JobMesh& m : run.job->meshes) meshes.push_back(m.spec);
+    return {{"meshes", meshes}, {"bvh_builds", 0}};
+  }
+  const BuildStats& build = run.scene->scene->stats();
+  return {{"meshes", run.scene->names},
+          {"load_seconds", run.scene->loadSeconds},
+          {"bvh_builds", 1},
+          {"build_seconds", build.buildSeconds},
+          {"triangles", build.triangles},
+          {"unique_triangles", build.uniqueTriangles},
+          {"instances", run.scene->scene->instanceCount()},
+          {"embree_bytes", build.embreeBytes}};
+}
+
+void printTable(const std::vector<ImageResult>& results) {
+  std::printf("%-20s %7s  %-11s %9s %8s %9s  %s\n", "camera", "frame", "status", "render s",
+              "write s", "Mrays/s", "output");
+  for (const ImageResult& r : results)
+    std::printf("%-20s %7d  %-11s %9.3f %8.3f %9.1f  %s\n", r.image->camera.c_str(), r.image->frame,
+                imageStatusName(r.status), r.renderSeconds, r.writeSeconds, r.mrays(),
+                r.image->output.c_str());
+}
+
+void printTotals(const BatchRun& run, const std::vector<ImageResult>& results) {
+  const Totals t = totalsOf(results);
+  char bvh[64] = "nothing to render, nothing loaded";
+  if (run.scene->scene)
+    std::snprintf(bvh, sizeof bvh, "BVH built once in %.3f s",
+                  run.scene->scene->stats().buildSeconds);
+  std::printf(
+      "%zu images ok, %zu failed, %zu skipped, %zu interrupted; %.3f s elapsed (render %.3f s, "
+      "write %.3f s%s), %.1f Mrays/s; %s\n",
+      countOf(results, ImageStatus::Ok), countOf(results, ImageStatus::Failed),
+      countOf(results, ImageStatus::Skipped), countOf(results, ImageStatus::Interrupted),
+      run.elapsedSeconds, run.renderSeconds, t.writeSeconds, run.overlap ? ", overlapped" : "",
+      run.elapsedSeconds > 0 ? double(t.rays) / run.elapsedSeconds * 1e-6 : 0.0, bvh);
+}
+
+/// Writes the summary; false (after saying why on stderr) when it cannot be written.
+bool writeSummary(const nlohmann::json& summary, const std::string& path, bool quiet) {
+  try {
+    ensureParentDirectory(path, "--summary");
+    writeTextAtomically(path, summary.dump(2) + "\n");
+    if (!quiet) std::fprintf(stderr, "aperture: wrote %s\n", path.c_str());
+    return true;
+  } catch (const Error& e) {
+    std::fprintf(stderr, "aperture: error: %s\n", e.what());
+    return false;
+  }
+}
+
+}  // namespace
+
+std::string defaultSummaryPath(const Job& job, const Shard& shard) {
+  const std::string name =
+      shard.n > 1 ? cat("summary.shard-", shard.k, "-of-", shard.n, ".json") : "summary.json";
+  return (fs::path(job.outputDirectory) / name).lexically_normal().string();
+}
+
+nlohmann::json batchSummary(const BatchRun& run, const std::vector<ImageResult>& results) {
+  const Job& job = *run.job;
+  const Totals t = totalsOf(results);
+  nlohmann::json images = nlohmann::json::array();
+  for (const ImageResult& r : results) images.push_back(imageEntry(r));
+  nlohmann::json s = {
+      {"job", fs::absolute(job.path).lexically_normal().string()},
+      {"aperture_version", APERTURE_VERSION},
+      {"shard", {{"k", run.shard->k}, {"n", run.shard->n}, {"from", run.shard->origin}}},
+      {"resume", run.resume},
+      {"overlap_writes", run.overlap},
+      {"images_in_job", job.images.size()},
+      {"images_in_shard", results.size()},
+      {"images_ok", countOf(results, ImageStatus::Ok)},
+      {"images_failed", countOf(results, ImageStatus::Failed)},
+      {"images_skipped", countOf(results, ImageStatus::Skipped)},
+      {"images_interrupted", countOf(results, ImageStatus::Interrupted)},
+      {"images_stale", t.stale},
+      {"failed", listed(results, ImageStatus::Failed)},
+      {"skipped", listed(results, ImageStatus::Skipped)},
+      {"interrupted", listed(results, ImageStatus::Interrupted)},
+      {"stale_temporaries_removed", run.removedTemporaries},
+      {"threads", run.threads},
+      {"isa", run.isa},
+      {"width", job.width},
+      {"height", job.height},
+      {"spp", job.render.spp},
+      {"aovs", aovListString(job.aovs)},
+      {"elapsed_seconds", run.elapsedSeconds},
+      {"render_seconds", run.renderSeconds},
+      {"write_seconds", t.writeSeconds},
+      {"rays", t.rays},
+      {"mrays_per_s", run.elapsedSeconds > 0 ? double(t.rays) / run.elapsedSeconds * 1e-6 : 0.0}};
+  s.update(sceneSummary(run));
+  s["images"] = images;
+  return s;
+}
+
+int reportBatch(const BatchRun& run, const std::vector<ImageResult>& results,
+                const nlohmann::json& summary, const std::string& summaryPath) {
+  if (!run.quiet) {
+    printTable(results);
+    printTotals(run, results);
+  }
+  const bool written = writeSummary(summary, summaryPath, run.quiet);
+  const std::vector<std::string> failed = listed(results, ImageStatus::Failed);
+  if (run.interrupted) {
+    std::fprintf(stderr, "aperture: interrupted: %zu images written, %zu not rendered\n",
+                 countOf(results, ImageStatus::Ok), countOf(results, ImageStatus::Interrupted));
+    return 130;
+  }
+  if (!failed.empty()) {
+    std::string list;
+    for (const std::string& f : failed) list += (list.empty() ? "" : ", ") + f;
+    std::fprintf(stderr, "aperture: %zu of %zu images failed: %s\n", failed.size(), results.size(),
+                 list.c_str());
+    return 1;
+  }
+  return written ? 0 : 1;
+}
+
+}  // namespace aperture::app

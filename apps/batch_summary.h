@@ -1,0 +1,42 @@
+#pragma once
+// `aperture batch`: what a run reports when it ends: summary.json (written atomically), the
+// table on stdout, the closing lines on stderr and the exit code.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "apps/batch_result.h"
+#include "apps/batch_scene.h"
+#include "apps/job.h"
+#include "apps/shard.h"
+
+namespace aperture::app {
+
+/// The run as a whole, beside its per-image results.
+struct BatchRun {
+  const Job* job = nullptr;
+  const Shard* shard = nullptr;
+  const BatchScene* scene = nullptr;
+  bool resume = false, overlap = true, quiet = false, interrupted = false;
+  int threads = 0;
+  std::string isa;
+  double elapsedSeconds = 0, renderSeconds = 0;
+  std::vector<std::string> removedTemporaries;  ///< by --resume
+};
+
+/// Where summary.json goes without --summary: the job's output directory, named
+/// summary.json, or summary.shard-K-of-N.json for a shard.
+std::string defaultSummaryPath(const Job& job, const Shard& shard);
+
+/// summary.json: the run's totals (images_ok, images_failed, ...; BVH, timings) and one entry
+/// per image ("images"). "frame" in an entry is the frame number along the camera's path.
+nlohmann::json batchSummary(const BatchRun& run, const std::vector<ImageResult>& results);
+
+/// Prints the table (camera, frame, status, timings, output) and the totals line on stdout
+/// unless run.quiet, writes `summary` to `summaryPath` atomically, reports interruption or
+/// failed images on stderr, and returns the exit code: 130 when interrupted, 1 when an image
+/// failed or the summary could not be written, else 0.
+int reportBatch(const BatchRun& run, const std::vector<ImageResult>& results,
+                const nlohmann::json& summary, const std::string& summaryPath);
+
+}  // namespace aperture::app

@@ -1,0 +1,144 @@
+#include "apps/resume.h"
+
+#include <OpenImageIO/imageio.h>
+#include <signal.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <climits>
+#include <filesystem>
+#include <map>
+#include <set>
+
+#include "cameras/registry.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/exr.h"
+
+namespace aperture::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string show(const glm::dvec3& v) { return cat("(", v.x, ", ", v.y, ", ", v.z, ")"); }
+
+std::string joined(const std::vector<std::string>& items) {
+  std::string s;
+  for (const std::string& item : items) s += (s.empty() ? "" : ",") + item;
+  return s;
+}
+
+/// "" when `file` and `job` are equal, else "<what> <file>, job wants <job>".
+template <typename T>
+std::string differs(const char* what, const T& file, const T& job) {
+  return file == job ? "" : cat(what, " ", file, ", job wants ", job);
+}
+
+std::string differsVec(const char* what, const glm::dvec3& file, const glm::dvec3& job) {
+  return file == job ? "" : cat(what, " ", show(file), ", job wants ", show(job));
+}
+
+/// The camera extras as sorted "name=value" items (files return them sorted by name).
+std::vector<std::string> sortedExtras(const CameraDescription& c) {
+  std::vector<std::string> items;
+  for (const auto& [name, value] : c.extra) items.push_back(name + "=" + value);
+  std::sort(items.begin(), items.end());
+  return items;
+}
+
+/// Size, channels and camera of the EXR header against the job; "" when they match.
+std::string headerMismatch(const Job& job, const JobImage& image) {
+  ExrHeader header;
+  try {
+    header = readExrHeader(image.output);
+  } catch (const Error& e) {
+    return cat("unreadable EXR (", e.what(), ")");
+  }
+  const CameraParams& p = image.params;
+  if (header.width != p.width || header.height != p.height)
+    return cat("size ", header.width, "x", header.height, ", job wants ", p.width, "x", p.height);
+  std::vector<std::string> want = exrChannelNames(job.aovs), have = header.channels;
+  std::sort(want.begin(), want.end());
+  std::sort(have.begin(), have.end());
+  if (have != want) return cat("channels ", joined(have), ", job wants ", joined(want));
+  // World-space attributes only, so the scene's render origin plays no part.
+  const CameraDescription wanted = makeCamera(p)->describe();
+  const std::string camera = cameraDifference(header.meta.camera, wanted);
+  return camera.empty() ? "" : "camera " + camera;
+}
+
+/// "" when the preview exists, decodes and has the image's size; else why not.
+std::string previewMismatch(const JobImage& image) {
+  const std::string& path = image.preview;
+  if (!fs::exists(path)) return cat("preview ", path, " is missing");
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) return cat("preview ", path, " is unreadable (", OIIO::geterror(), ")");
+  const OIIO::ImageSpec spec = in->spec();
+  if (spec.width != image.params.width || spec.height != image.params.height)
+    return cat("preview size ", spec.width, "x", spec.height, ", job wants ", image.params.width,
+               "x", image.params.height);
+  std::vector<unsigned char> pixels(spec.image_pixels() * size_t(spec.nchannels));
+  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT8, pixels.data()))
+    return cat("preview ", path, " does not decode (", in->geterror(), ")");
+  return "";
+}
+
+}  // namespace
+
+OutputCheck checkOutput(const Job& job, const JobImage& image) {
+  std::error_code ec;
+  if (!fs::exists(image.output, ec)) return {OutputCheck::State::Missing, ""};
+  std::string reason = headerMismatch(job, image);
+  if (reason.empty() && !isCompleteExr(image.output))
+    reason = "incomplete EXR (truncated: not every scanline decodes)";
+  if (reason.empty() && !image.preview.empty()) reason = previewMismatch(image);
+  if (reason.empty()) return {OutputCheck::State::Reusable, ""};
+  return {OutputCheck::State::Stale, reason};
+}
+
+std::string cameraDifference(const CameraDescription& file, const CameraDescription& job) {
+  const std::string differences[] = {
+      differs("type", file.type, job.type),
+      differsVec("eye", file.eye, job.eye),
+      differsVec("U", file.u, job.u),
+      differsVec("V", file.v, job.v),
+      differsVec("W", file.w, job.w),
+      differs("d", file.d, job.d),
+      differs("viewport", cat(file.vw, "x", file.vh), cat(job.vw, "x", job.vh)),
+      differs("spp", file.spp, job.spp),
+      differs("extras", joined(sortedExtras(file)), joined(sortedExtras(job))),
+  };
+  for (const std::string& d : differences)
+    if (!d.empty()) return d;
+  return "";
+}
+
+bool processAlive(long pid) {
+  if (pid <= 0 || pid > long(INT_MAX)) return false;
+  return !(::kill(pid_t(pid), 0) == -1 && errno == ESRCH);
+}
+
+std::vector<TemporaryFile> findTemporaries(const std::vector<std::string>& finalPaths,
+                                           const std::function<bool(long)>& alive) {
+  std::map<std::string, std::set<std::string>> namesByDirectory;
+  for (const std::string& path : finalPaths) {
+    const fs::path p(path);
+    namesByDirectory[p.parent_path().empty() ? "." : p.parent_path().string()].insert(
+        p.filename().string());
+  }
+  std::vector<TemporaryFile> found;
+  for (const auto& [directory, names] : namesByDirectory) {
+    std::error_code ec;
+    for (fs::directory_iterator it(directory, ec), end; !ec && it != end; it.increment(ec)) {
+      const std::optional<TemporaryName> t = parseTemporaryName(it->path().filename().string());
+      if (t && names.count(t->finalName))
+        found.push_back({it->path().string(), t->pid, alive(t->pid)});
+    }
+  }
+  std::sort(found.begin(), found.end(),
+            [](const TemporaryFile& a, const TemporaryFile& b) { return a.path < b.path; });
+  return found;
+}
+
+}  // namespace aperture::app
