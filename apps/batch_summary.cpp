@@ -66,7 +66,7 @@ Totals totalsOf(const std::vector<ImageResult>& results) {
 nlohmann::json sceneSummary(const BatchRun& run) {
   if (!run.scene->scene) {  // nothing to render: nothing loaded
     std::vector<std::string> meshes;
-    for (const JobMesh& m : run.job->meshes) meshes.push_back(m.spec);
+    for (const MeshPlacement& m : run.job->meshes) meshes.push_back(m.spec);
     return {{"meshes", meshes}, {"bvh_builds", 0}};
   }
   const BuildStats& build = run.scene->scene->stats();

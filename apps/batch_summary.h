@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "apps/batch_result.h"
-#include "apps/batch_scene.h"
 #include "apps/job.h"
+#include "apps/scene_setup.h"
 #include "apps/shard.h"
 
 namespace aperture::app {
@@ -16,7 +16,7 @@ namespace aperture::app {
 struct BatchRun {
   const Job* job = nullptr;
   const Shard* shard = nullptr;
-  const BatchScene* scene = nullptr;
+  const LoadedScene* scene = nullptr;
   bool resume = false, overlap = true, quiet = false, interrupted = false;
   int threads = 0;
   std::string isa;

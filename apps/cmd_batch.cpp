@@ -10,7 +10,6 @@
 
 #include "apps/batch_progress.h"
 #include "apps/batch_result.h"
-#include "apps/batch_scene.h"
 #include "apps/batch_summary.h"
 #include "apps/batch_writer.h"
 #include "apps/commands.h"
@@ -68,7 +67,7 @@ void checkJobMemory(const Job& job, const std::string& maxMemory) {
   const uint64_t limit = parseMemoryLimit("--max-memory", maxMemory);
   if (!limit) return;
   std::vector<std::string> specs;
-  for (const JobMesh& m : job.meshes)
+  for (const MeshPlacement& m : job.meshes)
     if (std::find(specs.begin(), specs.end(), m.spec) == specs.end()) specs.push_back(m.spec);
   uint64_t pixels = 0;
   for (const JobImage& f : job.images)
@@ -171,7 +170,7 @@ int printDryRun(const BatchPlan& plan) {
 }
 
 /// Renders the images not skipped, handing each to the writer; returns the render seconds.
-double renderImages(BatchPlan& plan, const BatchScene& scene, const BatchArgs& a,
+double renderImages(BatchPlan& plan, const LoadedScene& scene, const BatchArgs& a,
                     Progress& progress) {
   const Job& job = plan.job;
   double renderSeconds = 0;
@@ -216,7 +215,7 @@ std::vector<CameraParams> camerasToRender(const BatchPlan& plan) {
   return cameras;
 }
 
-BatchRun describeRun(const BatchPlan& plan, const BatchArgs& a, const BatchScene& scene) {
+BatchRun describeRun(const BatchPlan& plan, const BatchArgs& a, const LoadedScene& scene) {
   BatchRun run;
   run.job = &plan.job;
   run.shard = &plan.shard;
@@ -228,6 +227,14 @@ BatchRun describeRun(const BatchPlan& plan, const BatchArgs& a, const BatchScene
   return run;
 }
 
+/// The job's scene through the one scene set-up; culled for the images this run renders.
+LoadedScene loadBatchScene(const Device& device, const BatchPlan& plan, bool quiet) {
+  const SceneSpec spec = plan.job.sceneSpec();
+  LoadedScene s = loadSceneMeshes(spec, quiet);
+  buildLoadedScene(device, s, spec, quiet, camerasToRender(plan));
+  return s;
+}
+
 int runBatch(const BatchArgs& a) {
   BatchPlan plan = planBatch(a);
   if (a.dryRun) return printDryRun(plan);
@@ -235,9 +242,7 @@ int runBatch(const BatchArgs& a) {
   ThreadLimit threads(plan.job.threads);
   Device device;
   // With everything up to date, no mesh is loaded and no BVH built.
-  const BatchScene scene = plan.toRender
-                               ? buildBatchScene(device, plan.job, a.quiet, camerasToRender(plan))
-                               : BatchScene();
+  const LoadedScene scene = plan.toRender ? loadBatchScene(device, plan, a.quiet) : LoadedScene();
   BatchRun run = describeRun(plan, a, scene);
   run.threads = threads.threads();
   run.isa = device.isaName();

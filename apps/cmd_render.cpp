@@ -42,10 +42,11 @@ int runRender(const RenderArgs& a) {
 
   ThreadLimit threads(a.render.threads);
   Device device;
-  LoadedScene loaded = loadSceneMeshes(a.scene, a.quiet);
+  const SceneSpec sceneSpec = a.scene.spec();
+  LoadedScene loaded = loadSceneMeshes(sceneSpec, a.quiet);
   const CameraParams params =
       resolveCommandCamera(given, a.camera.defaults(), loaded.worldLo, loaded.worldHi);
-  buildLoadedScene(device, loaded, a.scene, a.quiet, {params});
+  buildLoadedScene(device, loaded, sceneSpec, a.quiet, {params});
 
   const RenderedView view = renderView(*loaded.scene, params, settings, aovs);
   const Framebuffer& fb = view.fb;

@@ -59,7 +59,7 @@ int runTradeoff(const TradeoffArgs& a) {
     Device device;
     SceneOptions o = a.scene;
     o.worldSpace = false;
-    const LoadedScene s = loadScene(device, o, true);
+    const LoadedScene s = loadScene(device, o.spec(), true);
     lo = s.worldLo;
     hi = s.worldHi;
   }

@@ -248,9 +248,9 @@ void readPerformance(const Object& top, Job& job) {
   }
 }
 
-JobMesh readMesh(const Object& m, const std::string& baseDir) {
+MeshPlacement readMesh(const Object& m, const std::string& baseDir) {
   if (!m.has("path")) m.fail(m.keyPath("path"), "required key is missing");
-  JobMesh mesh;
+  MeshPlacement mesh;
   const std::string given = *m.string("path");
   if (given.empty()) m.fail(m.keyPath("path"), "empty path");
   mesh.spec = isProcedural(given) ? given : resolve(baseDir, given);

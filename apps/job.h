@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "apps/camera_paths.h"
+#include "apps/scene_setup.h"
 #include "cameras/params.h"
 #include "core/exr.h"
 #include "core/framebuffer.h"
@@ -14,12 +15,6 @@
 #include "core/scene.h"
 
 namespace aperture::app {
-
-/// One entry of scene.meshes.
-struct JobMesh {
-  std::string spec;  ///< file path (resolved against the job's directory) or "procedural:..."
-  std::optional<glm::dmat4> worldFromMesh;  ///< placement; absent = identity
-};
 
 /// One image to render: a camera name, its frame number and everything the camera needs.
 struct JobImage {
@@ -33,9 +28,9 @@ struct JobImage {
 
 /// A parsed and fully validated job.
 struct Job {
-  std::string path;  ///< the job file
-  std::vector<JobMesh> meshes;
-  std::vector<JobImage> images;  ///< in job order: cameras as listed, path frames ascending
+  std::string path;                   ///< the job file
+  std::vector<MeshPlacement> meshes;  ///< scene.meshes, paths resolved against the job
+  std::vector<JobImage> images;       ///< in job order: cameras as listed, path frames ascending
   AovMask aovs = 0;
   int width = 0, height = 0;
   RenderSettings render;  ///< packet, tile, spp
@@ -43,6 +38,8 @@ struct Job {
   BuildOptions build;
   bool cull = false;  ///< performance.cull: BVH over the triangles the frames may see
   Placement placement = Placement::CameraRelative;  ///< scene.placement
+  /// The scene to load and build: meshes, placement, BVH options and culling.
+  SceneSpec sceneSpec() const { return {meshes, placement, build, cull}; }
   ExrOptions exr;
   std::string outputPattern;   ///< as written in the job file
   std::string previewPattern;  ///< as written; "" for none

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 
 #include "cameras/culling.h"
 #include "core/error.h"
@@ -68,44 +69,13 @@ void logLoadedMesh(const Mesh& m) {
                  m.name.c_str(), m.stats.nonFiniteVertices, m.stats.droppedTriangles);
 }
 
-std::vector<Mesh> loadMeshes(const SceneOptions& o, bool quiet) {
-  std::vector<std::string> specs = o.meshes;
-  if (specs.empty()) specs.push_back("procedural:default");
-  std::vector<Mesh> meshes;
-  for (const std::string& spec : specs) {
-    meshes.push_back(loadMesh(spec, o.loadOptions()));
-    if (!quiet) logLoadedMesh(meshes.back());
-  }
-  // Meshes share the first one's anchor (moved in double) so they share one render space.
-  for (size_t k = 1; k < meshes.size(); ++k) moveAnchor(meshes[k], meshes[0].anchor);
-  return meshes;
-}
-
-void moveAnchor(Mesh& m, const glm::dvec3& anchor) {
-  const glm::dvec3 delta = m.anchor - anchor;
-  for (size_t v = 0; v < m.vertexCount; ++v)
-    for (int c = 0; c < 3; ++c)
-      m.positions[3 * v + c] = float(double(m.positions[3 * v + c]) + delta[c]);
-  m.anchor = anchor;
-}
-
-LoadedScene loadSceneMeshes(const SceneOptions& o, bool quiet) {
-  LoadedScene s;
-  const auto start = std::chrono::steady_clock::now();
-  s.meshes = loadMeshes(o, quiet);
-  s.loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  glm::vec3 lo(INFINITY), hi(-INFINITY);
-  for (const Mesh& m : s.meshes) {
-    s.objects.push_back({&m, glm::dmat4(1.0), nullptr});
-    s.fileBytes += m.stats.fileBytes;
-    glm::vec3 a, b;
-    m.bounds(a, b);
-    lo = glm::min(lo, a);
-    hi = glm::max(hi, b);
-  }
-  if (!(lo.x <= hi.x)) lo = hi = glm::vec3(0.0f);
-  s.worldLo = s.meshes[0].anchor + glm::dvec3(lo);
-  s.worldHi = s.meshes[0].anchor + glm::dvec3(hi);
+SceneSpec SceneOptions::spec() const {
+  SceneSpec s;
+  for (const std::string& m : meshes) s.meshes.push_back({m, std::nullopt});
+  if (s.meshes.empty()) s.meshes.push_back({"procedural:default", std::nullopt});
+  s.placement = loadOptions().placement;
+  s.build = buildOptions();
+  s.cull = cull;
   return s;
 }
 
@@ -119,36 +89,126 @@ void logCullStats(const CullStats& c, size_t cameras) {
       c.seconds);
 }
 
-void buildLoadedScene(const Device& device, LoadedScene& s, const SceneOptions& o, bool quiet,
+void moveAnchor(Mesh& m, const glm::dvec3& anchor) {
+  const glm::dvec3 delta = m.anchor - anchor;
+  for (size_t v = 0; v < m.vertexCount; ++v)
+    for (int c = 0; c < 3; ++c)
+      m.positions[3 * v + c] = float(double(m.positions[3 * v + c]) + delta[c]);
+  m.anchor = anchor;
+}
+
+namespace {
+
+/// How many placements use each file.
+std::map<std::string, size_t> usesOf(const SceneSpec& spec) {
+  std::map<std::string, size_t> uses;
+  for (const MeshPlacement& m : spec.meshes) ++uses[m.spec];
+  return uses;
+}
+
+/// Loads each distinct file once (transform baked in when used once).
+std::map<std::string, Mesh*> loadDistinctMeshes(LoadedScene& s, const SceneSpec& spec,
+                                                const std::map<std::string, size_t>& uses,
+                                                bool quiet) {
+  std::map<std::string, Mesh*> bySpec;
+  for (const MeshPlacement& m : spec.meshes) {
+    if (bySpec.count(m.spec)) continue;
+    LoadOptions lo;
+    lo.placement = spec.placement;
+    if (uses.at(m.spec) == 1) lo.transform = m.worldFromMesh;
+    s.meshes.push_back(loadMesh(m.spec, lo));
+    if (!quiet) logLoadedMesh(s.meshes.back());
+    s.fileBytes += s.meshes.back().stats.fileBytes;
+    bySpec[m.spec] = &s.meshes.back();
+  }
+  return bySpec;
+}
+
+/// World bounds: the directly attached meshes share the render origin (their float bounds
+/// are merged, then offset in double); instances add their transformed bounding boxes.
+void computeWorldBounds(LoadedScene& s) {
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  glm::dvec3 wlo(INFINITY), whi(-INFINITY);
+  bool direct = false;
+  for (const SceneObject& o : s.objects) {
+    glm::vec3 a, b;
+    o.mesh->bounds(a, b);
+    if (o.worldFromMesh == glm::dmat4(1.0)) {
+      lo = glm::min(lo, a), hi = glm::max(hi, b), direct = true;
+      continue;
+    }
+    for (int c = 0; c < 8; ++c) {
+      const glm::dvec3 local =
+          o.mesh->anchor + glm::dvec3(c & 1 ? b.x : a.x, c & 2 ? b.y : a.y, c & 4 ? b.z : a.z);
+      const glm::dvec3 w(o.worldFromMesh * glm::dvec4(local, 1.0));
+      wlo = glm::min(wlo, w), whi = glm::max(whi, w);
+    }
+  }
+  if (direct && lo.x <= hi.x) {
+    wlo = glm::min(wlo, s.renderOrigin + glm::dvec3(lo));
+    whi = glm::max(whi, s.renderOrigin + glm::dvec3(hi));
+  }
+  if (!(wlo.x <= whi.x)) wlo = whi = s.renderOrigin;
+  s.worldLo = wlo;
+  s.worldHi = whi;
+}
+
+void logBuild(const SceneSpec& spec, const LoadedScene& s) {
+  const BuildStats& b = s.scene->stats();
+  std::fprintf(stderr,
+               "aperture: built BVH (%s%s%s): %zu triangles (%zu stored, %zu instances) in "
+               "%.3f s, Embree memory %.1f MB (%.1f bytes/triangle)\n",
+               bvhQualityName(spec.build.quality), spec.build.robust ? ", robust" : "",
+               spec.build.compact ? ", compact" : "", b.triangles, b.uniqueTriangles,
+               s.scene->instanceCount(), b.buildSeconds, b.embreeBytes / 1e6,
+               b.triangles ? double(b.embreeBytes) / double(b.triangles) : 0.0);
+}
+
+}  // namespace
+
+LoadedScene loadSceneMeshes(const SceneSpec& spec, bool quiet) {
+  if (spec.meshes.empty()) throw Error("scene: no mesh");
+  LoadedScene s;
+  const auto start = std::chrono::steady_clock::now();
+  const auto uses = usesOf(spec);
+  const std::map<std::string, Mesh*> bySpec = loadDistinctMeshes(s, spec, uses, quiet);
+  s.loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  for (const MeshPlacement& m : spec.meshes) {
+    const bool instanced = uses.at(m.spec) > 1;
+    s.objects.push_back({bySpec.at(m.spec),
+                         instanced ? m.worldFromMesh.value_or(glm::dmat4(1.0)) : glm::dmat4(1.0)});
+    s.names.push_back(m.spec);
+  }
+  // Meshes used once share the render origin (the first object's anchor), so they are
+  // attached directly rather than instanced.
+  const SceneObject& first = s.objects[0];
+  s.renderOrigin = glm::dvec3(first.worldFromMesh * glm::dvec4(first.mesh->anchor, 1.0));
+  for (const auto& [name, mesh] : bySpec)
+    if (uses.at(name) == 1) moveAnchor(*mesh, s.renderOrigin);
+  computeWorldBounds(s);
+  return s;
+}
+
+void buildLoadedScene(const Device& device, LoadedScene& s, const SceneSpec& spec, bool quiet,
                       const std::vector<CameraParams>& cameras) {
-  if (o.cull) {
+  if (spec.cull) {
     if (cameras.empty()) throw Error("--cull: no camera is known to cull for");
-    // Untransformed meshes sharing the first anchor: the render origin is that anchor.
-    const CameraCuller culler = cullerFor(cameras, s.meshes[0].anchor);
+    const CameraCuller culler = cullerFor(cameras, s.renderOrigin);
     if (culler.seesEverything) {
       if (!quiet)
-        std::fprintf(stderr,
-                     "aperture: --cull: a panorama camera sees all space; nothing culled\n");
+        std::fprintf(stderr, "aperture: cull: a panorama camera sees all space; nothing culled\n");
     } else {
       s.cull = cullObjects(s.objects, culler.test(), s.subsets);
       if (!quiet) logCullStats(*s.cull, cameras.size());
     }
   }
-  s.scene = std::make_unique<Scene>(device, s.objects, o.buildOptions());
-  if (!quiet) {
-    const BuildStats& b = s.scene->stats();
-    std::fprintf(stderr,
-                 "aperture: built BVH (%s%s%s): %zu triangles in %.3f s, Embree memory %.1f MB "
-                 "(%.1f bytes/triangle)\n",
-                 bvhQualityName(o.buildOptions().quality), o.robust ? ", robust" : "",
-                 o.compact ? ", compact" : "", b.triangles, b.buildSeconds, b.embreeBytes / 1e6,
-                 b.triangles ? double(b.embreeBytes) / double(b.triangles) : 0.0);
-  }
+  s.scene = std::make_unique<Scene>(device, s.objects, spec.build);
+  if (!quiet) logBuild(spec, s);
 }
 
-LoadedScene loadScene(const Device& device, const SceneOptions& o, bool quiet) {
-  LoadedScene s = loadSceneMeshes(o, quiet);
-  buildLoadedScene(device, s, o, quiet);
+LoadedScene loadScene(const Device& device, const SceneSpec& spec, bool quiet) {
+  LoadedScene s = loadSceneMeshes(spec, quiet);
+  buildLoadedScene(device, s, spec, quiet);
   return s;
 }
 

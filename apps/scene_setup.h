@@ -16,6 +16,21 @@
 
 namespace aperture::app {
 
+/// One mesh of a scene: a file path or procedural spec, placed by an optional transform.
+struct MeshPlacement {
+  std::string spec;                         ///< file path (resolved) or "procedural:..."
+  std::optional<glm::dmat4> worldFromMesh;  ///< placement; absent = identity
+};
+
+/// What a scene is made of and how it is built: the one input of the scene set-up that
+/// render, bench, tradeoff, batch and Python share.
+struct SceneSpec {
+  std::vector<MeshPlacement> meshes;
+  Placement placement = Placement::CameraRelative;
+  BuildOptions build;
+  bool cull = false;  ///< BVH over only the triangles the cameras may see
+};
+
 struct SceneOptions {
   std::vector<std::string> meshes;  ///< empty: the default procedural scene
   std::string quality = "high";
@@ -25,6 +40,8 @@ struct SceneOptions {
   std::string maxMemory;  ///< --max-memory: BYTES[K|M|G|T], auto, or "" for no limit
   LoadOptions loadOptions() const;
   BuildOptions buildOptions() const;
+  /// The scene these flags describe (the procedural default scene without --mesh).
+  SceneSpec spec() const;
 };
 
 void addSceneOptions(CLI::App& app, SceneOptions& o);
@@ -34,32 +51,37 @@ void addSceneOptions(CLI::App& app, SceneOptions& o);
 void checkMemoryBudget(const SceneOptions& o, glm::ivec2 size, AovMask aovs,
                        uint64_t extraBytesPerPixel = 0);
 
-/// Loaded meshes + Embree scene, logged as they are made.
+/// Loaded meshes and the Embree scene over them, logged as they are made.
 struct LoadedScene {
-  std::vector<Mesh> meshes;
-  std::vector<SceneObject> objects;    ///< what the scene is built from (subsets when culled)
-  std::deque<TriangleSubset> subsets;  ///< the culled triangles, when culling
-  std::optional<CullStats> cull;       ///< set when the scene was culled
-  std::unique_ptr<Scene> scene;
-  glm::dvec3 worldLo{0.0}, worldHi{0.0};
+  std::deque<Mesh> meshes;                ///< each distinct file once (stable addresses)
+  std::vector<std::string> names;         ///< one per placement, in order
+  std::vector<SceneObject> objects;       ///< what the scene is built from (subsets when culled)
+  std::deque<TriangleSubset> subsets;     ///< the culled triangles, when culling
+  std::optional<CullStats> cull;          ///< set when the scene was culled
+  std::unique_ptr<Scene> scene;           ///< null until buildLoadedScene
+  glm::dvec3 renderOrigin{0.0};           ///< world position of render space's origin
+  glm::dvec3 worldLo{0.0}, worldHi{0.0};  ///< world bounds of every placement
   double loadSeconds = 0;
   size_t fileBytes = 0;
 };
-std::vector<Mesh> loadMeshes(const SceneOptions& o, bool quiet);
+
+/// Loads the meshes: a file used once is loaded with its transform baked in and shares the
+/// first placement's anchor (one render space); a file used several times is loaded once and
+/// placed by instances. Computes the world bounds; builds no BVH.
+LoadedScene loadSceneMeshes(const SceneSpec& spec, bool quiet);
+/// Builds the BVH. With spec.cull, only the triangles the `cameras` may see go in (Error
+/// when `cameras` is empty); a panorama among them keeps everything.
+void buildLoadedScene(const Device& device, LoadedScene& s, const SceneSpec& spec, bool quiet,
+                      const std::vector<CameraParams>& cameras = {});
+/// loadSceneMeshes then buildLoadedScene without culling.
+LoadedScene loadScene(const Device& device, const SceneSpec& spec, bool quiet);
+
 /// Re-expresses the mesh's positions relative to `anchor` (offset added in double, rounded to
 /// float once), so meshes loaded apart share one render space.
 void moveAnchor(Mesh& m, const glm::dvec3& anchor);
 /// Logs a loaded mesh (triangles, vertices, load time and speed, dropped vertices) to stderr.
 void logLoadedMesh(const Mesh& m);
-/// Loads the meshes and their world bounds (no BVH yet: scene stays null).
-LoadedScene loadSceneMeshes(const SceneOptions& o, bool quiet);
-/// Builds the BVH of loaded meshes. With o.cull, only the triangles the `cameras` may see go
-/// in (Error when o.cull is set and `cameras` is empty); panoramas keep everything.
-void buildLoadedScene(const Device& device, LoadedScene& s, const SceneOptions& o, bool quiet,
-                      const std::vector<CameraParams>& cameras = {});
 /// Logs what culling kept (stderr).
 void logCullStats(const CullStats& c, size_t cameras);
-/// loadSceneMeshes then buildLoadedScene without culling.
-LoadedScene loadScene(const Device& device, const SceneOptions& o, bool quiet);
 
 }  // namespace aperture::app

@@ -52,11 +52,6 @@ const char* placementName(Placement p) {
 }
 
 /// Meshes in one placement with the Embree scenes built over them, by build options.
-struct Loaded {
-  std::vector<Mesh> meshes;
-  std::vector<const Mesh*> pointers;
-};
-
 class Study {
  public:
   explicit Study(const TradeoffConfig& c) : c_(c) {}
@@ -82,21 +77,20 @@ class Study {
   }
 
  private:
-  const Loaded& meshes(Placement p) {
+  /// The meshes loaded once per placement, through the one scene set-up.
+  const LoadedScene& meshes(Placement p) {
     auto& slot = loaded_[p];
     if (!slot) {
-      SceneOptions o = c_.scene;
-      o.worldSpace = p == Placement::WorldSpace;
-      slot = std::make_unique<Loaded>();
-      slot->meshes = loadMeshes(o, c_.quiet);
-      for (const Mesh& m : slot->meshes) slot->pointers.push_back(&m);
+      SceneSpec spec = c_.scene.spec();
+      spec.placement = p;
+      slot = std::make_unique<LoadedScene>(loadSceneMeshes(spec, c_.quiet));
     }
     return *slot;
   }
 
   /// A fresh scene (its build time and memory are this row's).
   std::unique_ptr<Scene> build(Placement p, const BuildOptions& b) {
-    return std::make_unique<Scene>(device_, meshes(p).pointers, b);
+    return std::make_unique<Scene>(device_, meshes(p).objects, b);
   }
 
   std::unique_ptr<Camera> camera(const Scene& scene, int spp) const {
@@ -236,7 +230,7 @@ class Study {
 
   const TradeoffConfig& c_;
   Device device_;
-  std::map<Placement, std::unique_ptr<Loaded>> loaded_;
+  std::map<Placement, std::unique_ptr<LoadedScene>> loaded_;
   std::unique_ptr<Scene> referenceScene_, baseScene_;
   Framebuffer reference_;
   std::map<int, Framebuffer> sameSpp_;
