@@ -19,6 +19,7 @@
 #include "apps/commands.h"
 #include "apps/job.h"
 #include "apps/options.h"
+#include "apps/outputs.h"
 #include "apps/view.h"
 #include "cameras/culling.h"
 #include "core/atomic_file.h"
@@ -368,6 +369,7 @@ int runBatch(const BatchArgs& a) {
     if (r.status != Status::Skipped) cameras.push_back(r.frame->params);
   const BatchScene scene = buildScene(device, job, a.quiet, cameras);
   const BuildStats& build = scene.scene->stats();
+  const PreviewOptions preview = batchPreviewOptions(job, scene.meshes);
 
   Progress progress(toRender, a.quiet);
   SigintGuard sigint;
@@ -381,11 +383,7 @@ int runBatch(const BatchArgs& a) {
     try {
       const ExrMetadata meta =
           viewMetadata(task.view, scene.names, job.aovs, job.build.quality, job.placement);
-      writeExr(r.frame->output, task.view.fb, meta, job.exr);
-      if (!r.frame->preview.empty()) {
-        ensureParentDirectory(r.frame->preview, "preview");
-        writePreview(r.frame->preview, task.view.fb);
-      }
+      writeViewOutputs(task.view, meta, job.exr, r.frame->output, r.frame->preview, preview);
       r.status = Status::Ok;
     } catch (const std::exception& e) {
       r.status = Status::Failed;

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "apps/options.h"
+#include "apps/outputs.h"
 #include "cameras/registry.h"
 #include "core/error.h"
 #include "core/units.h"
@@ -427,8 +428,8 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
   }
 
   const Object top(name, "", root,
-                   {"scene", "cameras", "aovs", "size", "spp", "output", "preview", "compression",
-                    "half", "performance", "preset"});
+                   {"scene", "cameras", "aovs", "size", "spp", "output", "preview", "preview_range",
+                    "compression", "half", "performance", "preset"});
   Job job;
   job.path = name;
   // A preset supplies the defaults of spp, compression, half, bvh_quality and robust; keys
@@ -664,13 +665,24 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
     }
   }
 
-  // Outputs: EXR names, one file per frame, never a directory.
-  auto lower = [](std::string s) {
-    for (char& ch : s) ch = char(std::tolower(static_cast<unsigned char>(ch)));
-    return s;
-  };
-  if (lower(fs::path(job.outputPattern).extension().string()) != ".exr")
-    top.fail("output", cat("'", job.outputPattern, "': the pattern must end in .exr"));
+  // Outputs: checked as `aperture render` checks --out, --preview and --preview-range
+  // (apps/outputs.h); one file per frame.
+  if (const auto range = top.vec2("preview_range")) {
+    try {
+      checkPreviewRange(*range);
+    } catch (const Error& e) {
+      top.fail("preview_range", cat("[", range->x, ", ", range->y, "]: ", e.what()));
+    }
+    if (job.previewPattern.empty()) top.fail("preview_range", "needs a \"preview\" pattern");
+    job.preview.depthRange = *range;
+  }
+  job.outputDirectory = resolve(baseDir, patternDirectory(job.outputPattern));
+  try {
+    checkJobOutputs(job, job.outputDirectory,
+                    resolve(baseDir, patternDirectory(job.previewPattern)));
+  } catch (const Error& e) {
+    throw Error(cat(name, ": ", e.what()));
+  }
   std::map<std::string, const JobImage*> used;
   for (const JobImage& f : job.images) {
     for (const std::string* out : {&f.output, &f.preview}) {
@@ -681,16 +693,8 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
         top.fail(key, cat("camera '", f.camera, "' frame ", f.frame, " and camera '",
                           it->second->camera, "' frame ", it->second->frame, " both write '", *out,
                           "' (use {camera} and {frame} in the pattern)"));
-      std::error_code ec;
-      if (fs::is_directory(*out, ec)) top.fail(key, cat("'", *out, "' is a directory"));
     }
   }
-  const size_t brace = job.outputPattern.find('{');
-  const std::string fixed = job.outputPattern.substr(0, brace);
-  const size_t slash = fixed.rfind('/');
-  job.outputDirectory =
-      resolve(baseDir, slash == std::string::npos ? "." : fixed.substr(0, slash + 1));
-  if (job.outputDirectory.empty()) job.outputDirectory = ".";
   return job;
 }
 
