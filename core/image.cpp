@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <vector>
 
@@ -74,14 +75,21 @@ glm::dvec2 depthRangeOf(const Framebuffer& fb, const PreviewOptions& options) {
   return {lo, hi};
 }
 
+/// `x` with 9 significant digits ("0.45", not cat's "0.45000000000000001").
+std::string shortNumber(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.9g", x);
+  return text;
+}
+
 PreviewImage depthPreview(const Framebuffer& fb, const PreviewOptions& options) {
   const glm::dvec2 range = depthRangeOf(fb, options);
   const double nearZ = range.x, farZ = range.y;
   PreviewImage out{backgroundPixels(fb.pixelCount()),
                    std::isnan(nearZ)
                        ? std::string("depth (Z): no finite depth")
-                       : cat("depth (Z): ", nearZ, " white to ", farZ, " black (",
-                             options.depthRange ? "fixed" : "this image's", " range)")};
+                       : cat("depth (Z): ", shortNumber(nearZ), " white to ", shortNumber(farZ),
+                             " black (", options.depthRange ? "fixed" : "this image's", " range)")};
   for (size_t i = 0; i < fb.pixelCount(); ++i) {
     const double z = fb.depth[i];
     if (!std::isfinite(z)) continue;
