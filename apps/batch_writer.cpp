@@ -6,26 +6,15 @@
 
 namespace aperture::app {
 
-void writeImageFiles(ImageResult& r, const Framebuffer& fb, const ExrMetadata& meta,
-                     const ExrOptions& options) {
+void writeImageFiles(ImageResult& r, const RenderedView& view, const ExrMetadata& meta,
+                     const ExrOptions& options, const PreviewOptions& preview) {
   try {
-    writeExr(r.image->output, fb, meta, options);
+    writeViewOutputs(view, meta, options, r.image->output, r.image->preview, preview);
+    r.status = ImageStatus::Ok;
   } catch (const std::exception& e) {
     r.status = ImageStatus::Failed;
     r.error = e.what();
-    return;
   }
-  if (!r.image->preview.empty()) {
-    try {
-      ensureParentDirectory(r.image->preview, "preview");
-      writePreview(r.image->preview, fb);
-    } catch (const std::exception& e) {
-      r.status = ImageStatus::Failed;
-      r.error = cat("preview failed (the EXR was written): ", e.what());
-      return;
-    }
-  }
-  r.status = ImageStatus::Ok;
 }
 
 ImageWriter::ImageWriter(WriteFn write, bool threaded, size_t capacity)

@@ -13,11 +13,11 @@
 
 namespace aperture::app {
 
-/// Writes `r`'s EXR (header `meta`) and, when the job has one, its preview, and sets r.status
-/// to Ok, or to Failed with r.error when either write throws: an image whose preview could not
-/// be written is a failed image (its EXR may exist; --resume renders it again).
-void writeImageFiles(ImageResult& r, const Framebuffer& fb, const ExrMetadata& meta,
-                     const ExrOptions& options);
+/// Writes `r`'s preview (when the job has one, with `preview`) and then its EXR (header
+/// `meta`) through writeViewOutputs, and sets r.status to Ok, or to Failed with r.error when
+/// either write throws: a failed preview leaves no new EXR, and --resume renders it again.
+void writeImageFiles(ImageResult& r, const RenderedView& view, const ExrMetadata& meta,
+                     const ExrOptions& options, const PreviewOptions& preview);
 
 /// Encodes and writes rendered images. Threaded, it holds at most `capacity` images waiting,
 /// so the renderer blocks instead of piling up framebuffers; unthreaded, push() writes inline.

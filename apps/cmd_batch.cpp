@@ -15,6 +15,7 @@
 #include "apps/commands.h"
 #include "apps/job.h"
 #include "apps/merge_summaries.h"
+#include "apps/outputs.h"
 #include "apps/render_options.h"
 #include "apps/resume.h"
 #include "apps/scene_setup.h"
@@ -173,12 +174,14 @@ int printDryRun(const BatchPlan& plan) {
 double renderImages(BatchPlan& plan, const LoadedScene& scene, const BatchArgs& a,
                     Progress& progress) {
   const Job& job = plan.job;
+  const PreviewOptions preview = batchPreviewOptions(job, scene.worldLo, scene.worldHi);
   double renderSeconds = 0;
   auto write = [&](ImageWriter::Task& task) {
     const auto t0 = BatchClock::now();
     writeImageFiles(
-        *task.result, task.view.fb,
-        viewMetadata(task.view, scene.names, job.aovs, job.build.quality, job.placement), job.exr);
+        *task.result, task.view,
+        viewMetadata(task.view, scene.names, job.aovs, job.build.quality, job.placement), job.exr,
+        preview);
     task.result->writeSeconds = secondsSince(t0);
     task.view = RenderedView();
     progress.finished(*task.result);

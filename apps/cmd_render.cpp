@@ -1,10 +1,10 @@
 // `aperture render`: one frame of a mesh from one camera into a multi-channel EXR.
 #include <cstdio>
-#include <filesystem>
 #include <vector>
 
 #include "apps/camera_flags.h"
 #include "apps/commands.h"
+#include "apps/outputs.h"
 #include "apps/presets.h"
 #include "apps/render_options.h"
 #include "apps/scene_setup.h"
@@ -22,9 +22,24 @@ struct RenderArgs {
   SceneOptions scene;
   CameraFlags camera;
   RenderOptions render;
-  std::string out = "out/render.exr", preview, compression = "zip", preset;
+  std::string out = "out/render.exr", preview, previewRange, compression = "zip", preset;
   bool half = false, quiet = false;
 };
+
+/// --out, --preview and --preview-range, checked before anything is loaded or rendered.
+PreviewOptions checkRenderOutputs(const RenderArgs& a, AovMask aovs) {
+  checkOutputPath("--out", a.out, OutputKind::Exr);
+  PreviewOptions preview;
+  if (!a.previewRange.empty()) {
+    preview.depthRange = parsePreviewRange("--preview-range", a.previewRange);
+    if (a.preview.empty())
+      throw Error(cat("--preview-range: '", a.previewRange, "' needs --preview"));
+  }
+  if (a.preview.empty()) return preview;
+  checkOutputPath("--preview", a.preview, OutputKind::Preview);
+  checkPreviewable("--preview", a.preview, aovs);
+  return preview;
+}
 
 int runRender(const RenderArgs& a) {
   // Everything that can be checked is checked before loading the mesh.
@@ -37,7 +52,7 @@ int runRender(const RenderArgs& a) {
       resolveCommandCamera(given, a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0));
   const RenderSettings settings = a.render.settings(unframed.spp);
   checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs, a.preview.empty() ? 0 : 4);
-  if (std::filesystem::is_directory(a.out)) throw Error(cat("--out: '", a.out, "' is a directory"));
+  const PreviewOptions preview = checkRenderOutputs(a, aovs);
   if (given.has("eye")) makeCamera(unframed);
 
   ThreadLimit threads(a.render.threads);
@@ -60,14 +75,10 @@ int runRender(const RenderArgs& a) {
   for (const Mesh& m : loaded.meshes) meshNames.push_back(m.name);
   const ExrMetadata meta = viewMetadata(view, meshNames, aovs, a.scene.buildOptions().quality,
                                         a.scene.loadOptions().placement);
-  ensureParentDirectory(a.out, "--out");
-  writeExr(a.out, fb, meta, exr);
+  writeViewOutputs(view, meta, exr, a.out, a.preview, preview);
+  if (!a.quiet && !a.preview.empty())
+    std::fprintf(stderr, "aperture: wrote %s\n", a.preview.c_str());
   if (!a.quiet) std::fprintf(stderr, "aperture: wrote %s\n", a.out.c_str());
-  if (!a.preview.empty()) {
-    ensureParentDirectory(a.preview, "--preview");
-    writePreview(a.preview, fb);
-    if (!a.quiet) std::fprintf(stderr, "aperture: wrote %s\n", a.preview.c_str());
-  }
   return 0;
 }
 
@@ -79,9 +90,14 @@ Command addRenderCommand(CLI::App& app) {
   addSceneOptions(*sub, args->scene);
   args->camera.add(*sub);
   addRenderOptions(*sub, args->render);
-  sub->add_option("--out", args->out, "Output EXR path (written atomically)")
+  sub->add_option("--out", args->out, "Output EXR path, must end in .exr (written atomically)")
       ->capture_default_str();
-  sub->add_option("--preview", args->preview, "Also write an 8-bit preview (PNG)");
+  sub->add_option("--preview", args->preview,
+                  "Also write an opaque 8-bit preview (.png .jpg .jpeg .tif .tiff .bmp .tga "
+                  ".ppm) of color, else depth, normal, primid or geomid; written before the EXR");
+  sub->add_option("--preview-range", args->previewRange,
+                  "NEAR,FAR: a depth preview maps depth NEAR to white and FAR to black, clamped "
+                  "(default: the image's own nearest and farthest depth)");
   sub->add_flag("--half", args->half, "Store color (R G B A) as half; geometry stays float32");
   sub->add_option("--compression", args->compression,
                   "EXR compression: none rle zips zip piz pxr24 b44 b44a dwaa dwab")

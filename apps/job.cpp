@@ -14,6 +14,7 @@
 
 #include "apps/job_camera.h"
 #include "apps/job_json.h"
+#include "apps/outputs.h"
 #include "apps/presets.h"
 #include "cameras/registry.h"
 #include "core/error.h"
@@ -323,14 +324,25 @@ void readCameras(const Object& top, const CameraParams& defaults, const std::str
   }
 }
 
-/// Outputs: EXR names, one file per image, never a directory.
-void checkOutputs(const Object& top, const Job& job) {
-  auto lower = [](std::string s) {
-    for (char& ch : s) ch = char(std::tolower(static_cast<unsigned char>(ch)));
-    return s;
-  };
-  if (lower(fs::path(job.outputPattern).extension().string()) != ".exr")
-    top.fail("output", cat("'", job.outputPattern, "': the pattern must end in .exr"));
+/// Outputs: checked as `aperture render` checks --out, --preview and --preview-range
+/// (apps/outputs.h); one file per image.
+void checkOutputs(const Object& top, const std::string& baseDir, Job& job) {
+  if (const auto range = top.vec2("preview_range")) {
+    try {
+      checkPreviewRange(*range);
+    } catch (const Error& e) {
+      top.fail("preview_range", cat("[", range->x, ", ", range->y, "]: ", e.what()));
+    }
+    if (job.previewPattern.empty()) top.fail("preview_range", "needs a \"preview\" pattern");
+    job.preview.depthRange = *range;
+  }
+  job.outputDirectory = resolve(baseDir, patternDirectory(job.outputPattern));
+  try {
+    checkJobOutputs(job, job.outputDirectory,
+                    resolve(baseDir, patternDirectory(job.previewPattern)));
+  } catch (const Error& e) {
+    throw Error(cat(top.file(), ": ", e.what()));
+  }
   std::map<std::string, const JobImage*> used;
   for (const JobImage& f : job.images) {
     for (const std::string* out : {&f.output, &f.preview}) {
@@ -341,19 +353,8 @@ void checkOutputs(const Object& top, const Job& job) {
         top.fail(key, cat("camera '", f.camera, "' frame ", f.frame, " and camera '",
                           it->second->camera, "' frame ", it->second->frame, " both write '", *out,
                           "' (use {camera} and {frame} in the pattern)"));
-      std::error_code ec;
-      if (fs::is_directory(*out, ec)) top.fail(key, cat("'", *out, "' is a directory"));
     }
   }
-}
-
-/// The output pattern's directory up to the first placeholder, resolved.
-std::string outputDirectoryOf(const std::string& pattern, const std::string& baseDir) {
-  const std::string fixed = pattern.substr(0, pattern.find('{'));
-  const size_t slash = fixed.rfind('/');
-  const std::string dir =
-      resolve(baseDir, slash == std::string::npos ? "." : fixed.substr(0, slash + 1));
-  return dir.empty() ? "." : dir;
 }
 
 }  // namespace
@@ -361,8 +362,8 @@ std::string outputDirectoryOf(const std::string& pattern, const std::string& bas
 Job parseJobText(const std::string& text, const std::string& name, const std::string& baseDir) {
   const json root = parseJsonText(text, name);
   const Object top(name, "", root,
-                   {"scene", "cameras", "aovs", "size", "spp", "output", "preview", "compression",
-                    "half", "performance", "preset"});
+                   {"scene", "cameras", "aovs", "size", "spp", "output", "preview", "preview_range",
+                    "compression", "half", "performance", "preset"});
   Job job;
   job.path = name;
   const Preset* preset = readPreset(top, job);
@@ -375,8 +376,7 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
   readPerformance(top, job);
   readScene(top, baseDir, job);
   readCameras(top, defaults, baseDir, job);
-  checkOutputs(top, job);
-  job.outputDirectory = outputDirectoryOf(job.outputPattern, baseDir);
+  checkOutputs(top, baseDir, job);
   return job;
 }
 

@@ -11,6 +11,7 @@
 #include "cameras/params.h"
 #include "core/exr.h"
 #include "core/framebuffer.h"
+#include "core/image.h"
 #include "core/render.h"
 #include "core/scene.h"
 
@@ -43,6 +44,9 @@ struct Job {
   ExrOptions exr;
   std::string outputPattern;   ///< as written in the job file
   std::string previewPattern;  ///< as written; "" for none
+  /// "preview_range": the depth range of every preview; without it, `aperture batch` uses
+  /// batchPreviewOptions (apps/outputs.h).
+  PreviewOptions preview;
   /// The output pattern's directory up to the first placeholder, resolved (where summary.json
   /// goes by default); "." when the pattern starts with a placeholder.
   std::string outputDirectory;

@@ -40,7 +40,19 @@ void ensureParentDirectory(const std::string& path, const std::string& what) {
   std::error_code ec;
   std::filesystem::create_directories(parent, ec);
   if (ec)
-    throw Error(cat(what, ": cannot create directory '", parent.string(), "': ", ec.message()));
+    throw Error(cat(what, ": '", path, "': cannot create directory '", parent.string(),
+                    "': ", ec.message()));
+}
+
+void writeViewOutputs(const RenderedView& view, const ExrMetadata& meta, const ExrOptions& exr,
+                      const std::string& exrPath, const std::string& previewPath,
+                      const PreviewOptions& preview) {
+  if (!previewPath.empty()) {
+    ensureParentDirectory(previewPath, "preview");
+    writePreview(previewPath, view.fb, preview);
+  }
+  ensureParentDirectory(exrPath, "output");
+  writeExr(exrPath, view.fb, meta, exr);
 }
 
 }  // namespace aperture::app

@@ -7,6 +7,7 @@
 #include "cameras/params.h"
 #include "core/exr.h"
 #include "core/framebuffer.h"
+#include "core/image.h"
 #include "core/mesh.h"
 #include "core/render.h"
 #include "core/scene.h"
@@ -29,7 +30,18 @@ RenderedView renderView(const Scene& scene, const CameraParams& params,
 ExrMetadata viewMetadata(const RenderedView& view, const std::vector<std::string>& meshNames,
                          AovMask aovs, BvhQuality quality, Placement placement);
 
-/// Creates the parent directory of `path`; throws Error("<what>: cannot create directory ...").
+/// Creates the parent directory of `path`; throws Error("<what>: '<path>': cannot create
+/// directory ...").
 void ensureParentDirectory(const std::string& path, const std::string& what);
+
+/// Writes the files of a rendered view in a fixed order: first the preview (when
+/// `previewPath` is not empty, with `preview`), then the EXR, each atomically and each after
+/// creating its directory. A preview that cannot be written throws before the EXR is
+/// started, so a complete EXR always has its preview beside it and `batch --resume`, which
+/// looks at the EXR, renders a frame whose preview failed again. (A preview may remain when
+/// the EXR then fails.) Throws Error naming the file that failed.
+void writeViewOutputs(const RenderedView& view, const ExrMetadata& meta, const ExrOptions& exr,
+                      const std::string& exrPath, const std::string& previewPath,
+                      const PreviewOptions& preview = {});
 
 }  // namespace aperture::app

@@ -138,12 +138,17 @@ void writeAtomically(const std::string& finalPath,
 }
 
 void writeTextAtomically(const std::string& finalPath, const std::string& text) {
+  writeBytesAtomically(finalPath, text.data(), text.size());
+}
+
+void writeBytesAtomically(const std::string& finalPath, const void* data, size_t size) {
+  const char* bytes = static_cast<const char*>(data);
   writeAtomically(finalPath, [&](const std::string& tmp) {
     const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
     if (fd < 0) throw Error(cat("create ", tmp, ": ", errnoText(errno)));
     size_t done = 0;
-    while (done < text.size()) {
-      const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    while (done < size) {
+      const ssize_t n = ::write(fd, bytes + done, size - done);
       if (n < 0) {
         if (errno == EINTR) continue;
         const int err = errno;

@@ -1,5 +1,6 @@
 #pragma once
 // Write-to-temporary-then-rename, so a final name only ever holds a complete file.
+#include <cstddef>
 #include <functional>
 #include <optional>
 #include <string>
@@ -35,5 +36,9 @@ void writeAtomically(const std::string& finalPath,
 
 /// Writes `text` to `finalPath` atomically.
 void writeTextAtomically(const std::string& finalPath, const std::string& text);
+
+/// Writes `size` bytes at `data` to `finalPath` atomically, checking every write (a full disk
+/// is an Error, never a short file).
+void writeBytesAtomically(const std::string& finalPath, const void* data, size_t size);
 
 }  // namespace aperture

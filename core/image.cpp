@@ -1,5 +1,6 @@
 #include "core/image.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
@@ -7,11 +8,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <vector>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/sampling.h"
 
 namespace aperture {
 
@@ -25,51 +28,184 @@ double srgbEncode(double linear) {
   return linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
 }
 
-/// The extension of `path` (".png"), or "" when it has none.
-std::string extensionOf(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  const size_t dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-  if (dot == (slash == std::string::npos ? 0 : slash + 1)) return "";
-  return path.substr(dot);
+/// Its inverse: the linear value of an sRGB-encoded value in [0, 1].
+double srgbDecode(double encoded) {
+  return encoded <= 0.04045 ? encoded / 12.92 : std::pow((encoded + 0.055) / 1.055, 2.4);
 }
 
-/// Pixels (channels interleaved) of the preview of `fb`.
-std::vector<uint8_t> previewPixels(const Framebuffer& fb, const std::string& path, int* channels) {
-  const size_t n = fb.pixelCount();
-  std::vector<uint8_t> out;
-  if (fb.has(kAovColor) && fb.rgba.size() == 4 * n) {
-    *channels = 4;
-    out.resize(4 * n);
-    for (size_t i = 0; i < n; ++i) {
-      for (int c = 0; c < 3; ++c) out[4 * i + c] = toByte(srgbEncode(fb.rgba[4 * i + c]));
-      out[4 * i + 3] = toByte(fb.rgba[4 * i + 3]);
-    }
-    return out;
-  }
-  *channels = 3;
-  out.assign(3 * n, 0);
-  if (fb.has(kAovDepth) && fb.depth.size() == n) {
-    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-    for (float z : fb.depth)
-      if (std::isfinite(z)) lo = std::min(lo, z), hi = std::max(hi, z);
-    for (size_t i = 0; i < n; ++i) {
-      const float z = fb.depth[i];
-      if (!std::isfinite(z)) continue;
-      // Near is bright, far dark, as a display value (not sRGB-encoded); constant depth is white.
-      const double t = hi > lo ? (double(hi) - z) / (double(hi) - lo) : 1.0;
-      const uint8_t g = toByte(t);
-      out[3 * i] = out[3 * i + 1] = out[3 * i + 2] = g;
-    }
-    return out;
-  }
-  if (fb.has(kAovNormal) && fb.normal.size() == 3 * n) {
-    for (size_t i = 0; i < 3 * n; ++i) out[i] = toByte(fb.normal[i] * 0.5 + 0.5);
-    return out;
-  }
-  throw Error(
-      cat("cannot write preview '", path, "': the framebuffer has no color, depth or normal AOV"));
+/// RGB bytes of a preview, 3 per pixel, and what they show (for ImageDescription).
+struct PreviewImage {
+  std::vector<uint8_t> rgb;
+  std::string description;
+};
+
+void setPixel(std::vector<uint8_t>& rgb, size_t i, const std::array<uint8_t, 3>& c) {
+  for (int k = 0; k < 3; ++k) rgb[3 * i + size_t(k)] = c[size_t(k)];
 }
+
+/// Every pixel starts as the background; the AOV's painters overwrite the hits.
+std::vector<uint8_t> backgroundPixels(size_t n) {
+  std::vector<uint8_t> rgb(3 * n);
+  for (size_t i = 0; i < n; ++i) setPixel(rgb, i, kPreviewBackground);
+  return rgb;
+}
+
+PreviewImage colorPreview(const Framebuffer& fb) {
+  const size_t n = fb.pixelCount();
+  PreviewImage out{std::vector<uint8_t>(3 * n), "color over the background"};
+  double background[3];
+  for (int c = 0; c < 3; ++c) background[c] = srgbDecode(kPreviewBackground[size_t(c)] / 255.0);
+  for (size_t i = 0; i < n; ++i) {
+    const double uncovered = 1.0 - std::clamp(double(fb.rgba[4 * i + 3]), 0.0, 1.0);
+    for (int c = 0; c < 3; ++c)
+      out.rgb[3 * i + size_t(c)] =
+          toByte(srgbEncode(fb.rgba[4 * i + size_t(c)] + uncovered * background[c]));
+  }
+  return out;
+}
+
+/// options.depthRange, else the nearest and farthest finite depth of the image (NaN, NaN when
+/// it has none).
+glm::dvec2 depthRangeOf(const Framebuffer& fb, const PreviewOptions& options) {
+  if (options.depthRange) return *options.depthRange;
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  for (float z : fb.depth)
+    if (std::isfinite(z)) lo = std::min(lo, z), hi = std::max(hi, z);
+  if (lo > hi) return glm::dvec2(std::numeric_limits<double>::quiet_NaN());
+  return {lo, hi};
+}
+
+/// `x` with 9 significant digits ("0.45", not cat's "0.45000000000000001").
+std::string shortNumber(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.9g", x);
+  return text;
+}
+
+PreviewImage depthPreview(const Framebuffer& fb, const PreviewOptions& options) {
+  const glm::dvec2 range = depthRangeOf(fb, options);
+  const double nearZ = range.x, farZ = range.y;
+  PreviewImage out{backgroundPixels(fb.pixelCount()),
+                   std::isnan(nearZ)
+                       ? std::string("depth (Z): no finite depth")
+                       : cat("depth (Z): ", shortNumber(nearZ), " white to ", shortNumber(farZ),
+                             " black (", options.depthRange ? "fixed" : "this image's", " range)")};
+  for (size_t i = 0; i < fb.pixelCount(); ++i) {
+    const double z = fb.depth[i];
+    if (!std::isfinite(z)) continue;
+    // Near is bright, far dark, as a display value (not sRGB-encoded); constant depth is white.
+    const uint8_t g = toByte(farZ > nearZ ? (farZ - z) / (farZ - nearZ) : 1.0);
+    setPixel(out.rgb, i, {g, g, g});
+  }
+  return out;
+}
+
+PreviewImage normalPreview(const Framebuffer& fb) {
+  PreviewImage out{backgroundPixels(fb.pixelCount()), "normal (N * 0.5 + 0.5)"};
+  for (size_t i = 0; i < fb.pixelCount(); ++i) {
+    const float* n = &fb.normal[3 * i];
+    if (n[0] == 0.0f && n[1] == 0.0f && n[2] == 0.0f) continue;  // a miss
+    setPixel(out.rgb, i,
+             {toByte(n[0] * 0.5 + 0.5), toByte(n[1] * 0.5 + 0.5), toByte(n[2] * 0.5 + 0.5)});
+  }
+  return out;
+}
+
+/// A colour per ID: three bytes of its hash, each lifted into [96, 255] so that no ID is as
+/// dark as the background. The ID is salted so that ID 0 (hash32(0) = 0) is not grey.
+std::array<uint8_t, 3> idColor(uint32_t id) {
+  const uint32_t h = hash32(id ^ 0x9e3779b9u);
+  std::array<uint8_t, 3> c;
+  for (int k = 0; k < 3; ++k) c[size_t(k)] = uint8_t(96 + ((h >> (8 * k)) & 0xffu) * 159u / 255u);
+  return c;
+}
+
+PreviewImage idPreview(const std::vector<uint32_t>& ids, const char* name) {
+  PreviewImage out{backgroundPixels(ids.size()), cat(name, " (hashed colours)")};
+  for (size_t i = 0; i < ids.size(); ++i)
+    if (ids[i] != kInvalidId) setPixel(out.rgb, i, idColor(ids[i]));
+  return out;
+}
+
+/// The preview of `fb` (its buffers must have the framebuffer's size).
+PreviewImage previewPixels(const Framebuffer& fb, const PreviewOptions& options,
+                           const std::string& path) {
+  const size_t n = fb.pixelCount();
+  switch (previewAov(fb.aovs)) {
+    case kAovColor:
+      if (fb.rgba.size() == 4 * n) return colorPreview(fb);
+      break;
+    case kAovDepth:
+      if (fb.depth.size() == n) return depthPreview(fb, options);
+      break;
+    case kAovNormal:
+      if (fb.normal.size() == 3 * n) return normalPreview(fb);
+      break;
+    case kAovPrimId:
+      if (fb.primId.size() == n) return idPreview(fb.primId, "primID");
+      break;
+    case kAovGeomId:
+      if (fb.geomId.size() == n) return idPreview(fb.geomId, "geomID");
+      break;
+    default:
+      throw Error(cat("cannot write preview '", path, "': none of the AOVs ",
+                      aovListString(fb.aovs), " can be previewed (",
+                      aovListString(kPreviewableAovs), " can)"));
+  }
+  throw Error(cat("cannot write preview '", path, "': the framebuffer's buffers are incomplete"));
+}
+
+/// The file `path` would hold, encoded in memory by the OpenImageIO writer of its extension.
+/// (OpenImageIO's PNG, BMP and Targa writers do not report a full disk, and libjpeg exits the
+/// process on one, so the bytes are written by writeBytesAtomically, which checks every step.)
+std::vector<unsigned char> encodeRgb8(const std::string& path, int width, int height,
+                                      const PreviewImage& image) {
+  auto out = OIIO::ImageOutput::create(path);
+  if (!out) throw Error(cat("no image writer for this extension: ", OIIO::geterror()));
+  if (!out->supports("ioproxy"))
+    throw Error(cat("the ", out->format_name(), " writer cannot encode to memory"));
+  std::vector<unsigned char> bytes;
+  OIIO::Filesystem::IOVecOutput memory(bytes);
+  OIIO::Filesystem::IOProxy* proxy = &memory;
+  OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+  spec.attribute("oiio:ColorSpace", "sRGB");
+  spec.attribute("ImageDescription", "aperture preview: " + image.description);
+  spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+  // libtiff fails to write the Exif directory into memory and, with a colour space set, the
+  // file is left without its ImageLength tag; a preview needs no Exif data.
+  spec.attribute("tiff:write_exif", 0);
+  if (!out->open(path, spec)) throw Error(out->geterror());
+  if (!out->write_image(OIIO::TypeDesc::UINT8, image.rgb.data())) {
+    const std::string message = out->geterror();
+    out->close();
+    throw Error(message);
+  }
+  if (!out->close()) throw Error(out->geterror());
+  return bytes;
+}
+
+}  // namespace
+
+Aov previewAov(AovMask aovs) {
+  for (Aov a : {kAovColor, kAovDepth, kAovNormal, kAovPrimId, kAovGeomId})
+    if (aovs & a) return a;
+  return Aov(0);
+}
+
+void writePreview(const std::string& path, const Framebuffer& fb, const PreviewOptions& options) {
+  if (fb.width <= 0 || fb.height <= 0)
+    throw Error(cat("cannot write preview '", path, "': empty framebuffer"));
+  const PreviewImage image = previewPixels(fb, options, path);
+  std::vector<unsigned char> bytes;
+  try {
+    bytes = encodeRgb8(path, fb.width, fb.height, image);
+  } catch (const Error& e) {
+    throw Error(cat("cannot write '", path, "': ", e.what()));
+  }
+  writeBytesAtomically(path, bytes.data(), bytes.size());
+}
+
+namespace {
 
 /// Mean relative depth error over pixels finite in both with Zref != 0.
 double depthRelativeError(const std::vector<float>& test, const std::vector<float>& ref) {
@@ -84,34 +220,6 @@ double depthRelativeError(const std::vector<float>& test, const std::vector<floa
 }
 
 }  // namespace
-
-void writePreview(const std::string& path, const Framebuffer& fb) {
-  if (fb.width <= 0 || fb.height <= 0)
-    throw Error(cat("cannot write preview '", path, "': empty framebuffer"));
-  int channels = 0;
-  const std::vector<uint8_t> pixels = previewPixels(fb, path, &channels);
-  writeAtomically(
-      path,
-      [&](const std::string& tmp) {
-        auto out = OIIO::ImageOutput::create(tmp);
-        if (!out) throw Error(cat("no image writer for this extension: ", OIIO::geterror()));
-        OIIO::ImageSpec spec(fb.width, fb.height, channels, OIIO::TypeDesc::UINT8);
-        spec.attribute("oiio:ColorSpace", "sRGB");
-        if (channels == 4) {
-          // The bytes go into the file as computed: no alpha (dis)association by OpenImageIO.
-          spec.alpha_channel = 3;
-          spec.attribute("oiio:UnassociatedAlpha", 1);
-        }
-        if (!out->open(tmp, spec)) throw Error(out->geterror());
-        if (!out->write_image(OIIO::TypeDesc::UINT8, pixels.data())) {
-          const std::string message = out->geterror();
-          out->close();
-          throw Error(message);
-        }
-        if (!out->close()) throw Error(out->geterror());
-      },
-      extensionOf(path));
-}
 
 ImageDiff compareFramebuffers(const Framebuffer& test, const Framebuffer& reference, double peak) {
   if (test.width != reference.width || test.height != reference.height)

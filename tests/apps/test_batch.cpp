@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <csignal>
@@ -22,6 +23,8 @@
 #include "apps/shard.h"
 #include "core/error.h"
 #include "core/exr.h"
+#include "core/image.h"
+#include "tests/apps/unwritable_dir.h"
 #include "tests/support.h"
 
 using namespace aperture;
@@ -219,7 +222,7 @@ TEST(JobParse, BadOutputPatterns) {
       {"out/{camera_{frame}.exr", "unknown placeholder"},
       {"out/{camera}_{frame.exr", "is not closed"},
       {"out/camera}.exr", "'}' without '{'"},
-      {"out/{camera}.png", "the pattern must end in .exr"},
+      {"out/{camera}.png", "'out/{camera}.png': unknown extension '.png'; supported: .exr"},
       {"out/fixed.exr", "both write"},
   };
   for (const auto& [pattern, expect] : cases) {
@@ -761,9 +764,10 @@ TEST(BatchResume, AFailedPreviewFailsTheImageAndResumeRendersItAgain) {
   EXPECT_EQ(withStatus(summary, "failed"), (std::set<size_t>{1}));
   EXPECT_NE(summary["images"][1]["error"].get<std::string>().find("preview"), std::string::npos);
 
-  // The EXR is complete, the preview missing: --resume renders that image again, exit 0.
+  // The preview is written first, so its failure left no EXR: --resume renders that image
+  // again, exit 0.
   const Job job = app::parseJob(jobPath);
-  EXPECT_TRUE(isCompleteExr(job.images[1].output));
+  EXPECT_FALSE(fs::exists(job.images[1].output));
   fs::remove(dir + "/prev/ortho");
   ASSERT_EQ(batch("--resume --quiet", jobPath, &out), 0) << out;
   summary = readJson(dir + "/out/summary.json");
@@ -1056,4 +1060,223 @@ TEST(BatchShard, MergeRefusesSummariesOfDifferentJobs) {
             0)
       << out;
   EXPECT_EQ(readJson(dir + "/x.json")["images_ok"], 1);
+}
+
+// Issue 10 item 5 in job files: the "output" and "preview" patterns, their directories up to the
+// first placeholder, every frame's paths, the AOVs a preview needs and "preview_range" are
+// checked as `aperture render` checks its flags, naming the key and the value.
+TEST(JobParse, OutputsAreCheckedLikeTheRenderFlags) {
+  const std::string dir = scratchDir();
+  writeFile(dir + "/afile", "a regular file");
+  fs::create_directories(dir + "/out/cam_0000.exr");
+  auto withPreview = [](const char* pattern) {
+    json j = baseJob();
+    j["preview"] = pattern;
+    return j;
+  };
+  std::vector<std::pair<json, std::string>> cases;
+  cases.emplace_back(withPreview("out/{camera}.gif"),
+                     "preview: 'out/{camera}.gif': unknown extension '.gif'; supported: .png");
+  cases.emplace_back(withPreview("out/{camera}"), "preview: 'out/{camera}': has no extension");
+  json j = withPreview("out/{camera}.png");
+  j["aovs"] = "position,distance";
+  cases.emplace_back(j,
+                     "preview: 'out/{camera}.png': none of the AOVs distance,position can be "
+                     "previewed");
+  j = withPreview("out/{camera}.png");
+  j["preview_range"] = {5, 2};
+  cases.emplace_back(j, "preview_range: [5, 2]: NEAR 5 must be less than FAR 2");
+  j["preview_range"] = {-1, 2};
+  cases.emplace_back(j, "preview_range: [-1, 2]: NEAR -1 must be >= 0");
+  j["preview_range"] = {1};
+  cases.emplace_back(j, "preview_range: expected an array of 2 numbers");
+  j = baseJob();
+  j["preview_range"] = {1, 2};
+  cases.emplace_back(j, "preview_range: needs a \"preview\" pattern");
+  j = baseJob();
+  j["output"] = "afile/{camera}_{frame}.exr";
+  cases.emplace_back(j, "output: 'afile/{camera}_{frame}.exr': cannot create directory '" + dir +
+                            "/afile': '" + dir + "/afile' is not a directory");
+  j = withPreview("afile/p/{camera}.png");
+  cases.emplace_back(j, "preview: 'afile/p/{camera}.png': cannot create directory");
+  j = baseJob();  // out/{camera}_{frame:04d}.exr: frame 0 of "cam" is a directory
+  cases.emplace_back(j, "output: '" + dir + "/out/cam_0000.exr': is a directory");
+  for (const auto& [job, expect] : cases) {
+    const std::string message = parseError(job, dir);
+    EXPECT_EQ(message.rfind("job.json: ", 0), 0u) << message;
+    EXPECT_NE(message.find("job.json: " + expect), std::string::npos)
+        << "expected '" << expect << "' in\n"
+        << message;
+  }
+
+  j = withPreview("previews/{camera}.jpg");
+  j["preview_range"] = {1, 9};
+  const Job job = parse(j);
+  ASSERT_TRUE(job.preview.depthRange);
+  EXPECT_EQ(*job.preview.depthRange, glm::dvec2(1, 9));
+  EXPECT_FALSE(parse(withPreview("p/{camera}.png")).preview.depthRange);
+
+  APERTURE_REQUIRE_UNWRITABLE_DIR(ro, dir + "/ro");
+  EXPECT_NE(
+      parseError(withPreview("ro/{camera}.png"), dir)
+          .find("job.json: preview: 'ro/{camera}.png': directory '" + dir + "/ro' is not writable"),
+      std::string::npos)
+      << parseError(withPreview("ro/{camera}.png"), dir);
+}
+
+namespace {
+
+/// The pixels of a binary PPM preview ("P6\nW H\n255\n" then RGB bytes, as OpenImageIO
+/// writes it), read without OpenImageIO; empty when the file is not such a PPM of W x H.
+std::vector<uint8_t> readPpm(const std::string& path, int width, int height) {
+  std::ifstream in(path, std::ios::binary);
+  std::string magic;
+  int w = 0, h = 0, maxValue = 0;
+  in >> magic >> w >> h >> maxValue;
+  in.get();  // the one whitespace byte before the pixels
+  EXPECT_EQ(magic, "P6") << path;
+  EXPECT_EQ(w, width) << path;
+  EXPECT_EQ(h, height) << path;
+  EXPECT_EQ(maxValue, 255) << path;
+  std::vector<uint8_t> rgb(size_t(width) * size_t(height) * 3);
+  in.read(reinterpret_cast<char*>(rgb.data()), std::streamsize(rgb.size()));
+  if (magic != "P6" || w != width || h != height || size_t(in.gcount()) != rgb.size()) return {};
+  return rgb;
+}
+
+/// A turntable around three cubes (two instances of one spec, one baked), depth previews (PPM,
+/// which the test reads without OpenImageIO).
+json turntableJob() {
+  return json::parse(R"({
+    "scene": {"meshes": [
+      {"path": "procedural:cube?size=2", "transform": {"translate": [1.5, 0, 0]}},
+      {"path": "procedural:cube?size=2", "transform": {"translate": [-0.5, 0, 3]}},
+      {"path": "procedural:cube?size=1", "transform": {"translate": [0, 2, -2]}}
+    ]},
+    "cameras": [{"name": "turn", "orbit": {"radius": 12, "height": 2}, "frames": 4, "fov": 40}],
+    "aovs": "depth",
+    "size": [48, 36],
+    "output": "out/{camera}_{frame}.exr",
+    "preview": "out/{camera}_{frame}.ppm",
+    "performance": {"threads": 2}
+  })");
+}
+
+/// The grey of depth z with NEAR -> 255 and FAR -> 0, clamped (docs/batch.md).
+int greyOf(double z, const glm::dvec2& range) {
+  const double t = std::min(1.0, std::max(0.0, (range.y - z) / (range.y - range.x)));
+  return int(std::floor(255.0 * t + 0.5));
+}
+
+/// Checks the preview of `image` against its EXR: hits grey by `range` (within 1 for rounding),
+/// misses the background. Returns how many hits are more than 2 greys off the mapping by the
+/// image's own depth range (the convention a batch must not use).
+int expectDepthPreview(const app::JobImage& image, const glm::dvec2& range) {
+  SCOPED_TRACE(image.preview);
+  const Framebuffer fb = readExr(image.output);
+  const std::vector<uint8_t> rgb = readPpm(image.preview, fb.width, fb.height);
+  if (rgb.empty()) return 0;
+  float lo = INFINITY, hi = -INFINITY;
+  for (float z : fb.depth)
+    if (std::isfinite(z)) lo = std::min(lo, z), hi = std::max(hi, z);
+  int hits = 0, offOwnRange = 0;
+  for (size_t i = 0; i < fb.pixelCount(); ++i) {
+    const uint8_t* p = &rgb[3 * i];
+    if (!std::isfinite(fb.depth[i])) {
+      EXPECT_EQ(
+          std::vector<int>({p[0], p[1], p[2]}),
+          std::vector<int>({kPreviewBackground[0], kPreviewBackground[1], kPreviewBackground[2]}))
+          << "miss " << i;
+      continue;
+    }
+    ++hits;
+    EXPECT_EQ(p[0], p[1]);
+    EXPECT_EQ(p[1], p[2]);
+    EXPECT_LE(std::abs(p[0] - greyOf(fb.depth[i], range)), 1)
+        << "pixel " << i << " depth " << fb.depth[i];
+    offOwnRange += std::abs(p[0] - greyOf(fb.depth[i], glm::dvec2(lo, hi))) > 2;
+  }
+  EXPECT_GT(hits, 100);
+  return offOwnRange;
+}
+
+}  // namespace
+
+// Issue 10 item 6: every preview of a batch uses one depth range, so a turntable does not
+// flicker: by default the planar depths of the scene's bounding box over all of the job's
+// frames (shards agree), or the job's "preview_range".
+TEST(Batch, TurntablePreviewsShareOneDepthRange) {
+  const std::string dir = scratchDir();
+  const std::string jobPath = writeJob(dir, turntableJob());
+  std::string out;
+  ASSERT_EQ(runCommand(apertureBinary() + " batch --quiet " + quote(jobPath), &out), 0) << out;
+  const Job job = app::parseJob(jobPath);
+  ASSERT_EQ(job.images.size(), 4u);
+
+  // The scene's box from the placements: cubes of side 2 at (1.5, 0, 0) and (-0.5, 0, 3), of
+  // side 1 at (0, 2, -2).
+  const glm::dvec3 lo(-1.5, -1, -2.5), hi(2.5, 2.5, 4);
+  glm::dvec2 range(INFINITY, -INFINITY);
+  for (const app::JobImage& f : job.images) {
+    const glm::dvec3 axis = glm::normalize(*f.params.at - f.params.eye);
+    for (int k = 0; k < 8; ++k) {
+      const glm::dvec3 corner(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
+      const double z = glm::dot(corner - f.params.eye, axis);
+      range = glm::dvec2(std::min(range.x, z), std::max(range.y, z));
+    }
+  }
+  ASSERT_GT(range.x, 0.0);
+  int offOwnRange = 0;
+  for (const app::JobImage& f : job.images) offOwnRange += expectDepthPreview(f, range);
+  EXPECT_GT(offOwnRange, 100) << "the frames' own ranges would give the same greys: the test "
+                                 "could not tell a shared range from per-frame ones";
+
+  // A shard renders only frames 1 and 3 but uses the range of the whole job.
+  const std::string shardDir = dir + "/shard";
+  fs::create_directories(shardDir);
+  const std::string shardJob = writeJob(shardDir, turntableJob());
+  ASSERT_EQ(runCommand(apertureBinary() + " batch --quiet --shard 1/2 " + quote(shardJob), &out), 0)
+      << out;
+  for (int frame : {1, 3}) {
+    const std::string name = "/out/turn_" + std::to_string(frame) + ".ppm";
+    const std::vector<uint8_t> shardPixels = readPpm(shardDir + name, 48, 36);
+    EXPECT_FALSE(shardPixels.empty());
+    EXPECT_EQ(shardPixels, readPpm(dir + name, 48, 36)) << name;
+  }
+
+  // "preview_range" wins.
+  json fixed = turntableJob();
+  fixed["preview_range"] = {10, 13};
+  const std::string fixedJob = writeJob(dir, fixed);
+  ASSERT_EQ(runCommand(apertureBinary() + " batch --quiet " + quote(fixedJob), &out), 0) << out;
+  for (const app::JobImage& f : app::parseJob(fixedJob).images)
+    expectDepthPreview(f, glm::dvec2(10, 13));
+}
+
+// A preview that cannot be written fails its frame and no EXR is written for it; the other
+// frames are written with their previews.
+TEST(Batch, APreviewThatFailsFailsItsFrameWithoutAnExr) {
+  const std::string dir = scratchDir();
+  json j = baseJob();
+  j["cameras"] = json::parse(R"([
+    {"name": "a", "eye": [0, 0, 5], "at": [0, 0, 0]},
+    {"name": "blocked", "orbit": {"radius": 5}, "frames": 2}
+  ])");
+  j["output"] = "out/{camera}_{frame}.exr";
+  j["preview"] = "previews/{camera}/{frame}.png";
+  fs::create_directories(dir + "/previews");
+  writeFile(dir + "/previews/blocked", "a regular file where a directory should be");
+  std::string out;
+  EXPECT_EQ(runCommand(apertureBinary() + " batch --quiet " + quote(writeJob(dir, j)), &out), 1)
+      << out;
+  EXPECT_TRUE(isCompleteExr(dir + "/out/a_0.exr"));
+  EXPECT_TRUE(fs::exists(dir + "/previews/a/0.png"));
+  EXPECT_FALSE(fs::exists(dir + "/out/blocked_0.exr"));
+  EXPECT_FALSE(fs::exists(dir + "/out/blocked_1.exr"));
+  const json summary = readJson(dir + "/out/summary.json");
+  EXPECT_EQ(summary["failed"], json({"blocked frame 0", "blocked frame 1"}));
+  EXPECT_NE(summary["images"][1]["error"].get<std::string>().find(
+                "preview: '" + dir + "/previews/blocked/0.png': cannot create directory"),
+            std::string::npos)
+      << summary["images"][1]["error"];
 }

@@ -2,7 +2,10 @@
 // bit-identical EXRs across packet widths and threads (EXR header reprojection:
 // test_exr_headers.cpp).
 #include <gtest/gtest.h>
+#include <sys/mount.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -12,6 +15,7 @@
 #include <vector>
 
 #include "core/exr.h"
+#include "tests/apps/unwritable_dir.h"
 #include "tests/support.h"
 
 using namespace aperture;
@@ -330,3 +334,100 @@ TEST(Cli, SizeAcceptsWxH) {
 }
 
 }  // namespace
+
+namespace {
+
+/// Every file under `dir`, recursively, with its size (what "wrote nothing" compares).
+std::vector<std::pair<std::string, uintmax_t>> listing(const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::vector<std::pair<std::string, uintmax_t>> files;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    files.emplace_back(fs::relative(e.path(), dir).string(), e.is_directory() ? 0 : e.file_size());
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+}  // namespace
+
+// Issue 10 item 5: output and preview paths, their directories, their extensions, the AOVs a
+// preview needs and --preview-range are refused before the mesh is loaded (the mesh here would
+// take minutes), naming the flag and the value, and nothing at all is written.
+TEST(Cli, RefusedOutputsNameTheFlagAndValueAndWriteNothing) {
+  const std::string dir = scratchDir(), exr = dir + "/x.exr", png = dir + "/x.png";
+  std::filesystem::create_directories(dir + "/adir");
+  test::writeFile(dir + "/afile", "a regular file");
+  APERTURE_REQUIRE_UNWRITABLE_DIR(ro, dir + "/ro");
+  const auto before = listing(dir);
+  struct Case {
+    std::string args;
+    std::vector<std::string> expect;
+  } cases[] = {
+      {"--out " + dir + "/x.png", {"--out: '" + dir + "/x.png'", "supported: .exr"}},
+      {"--out " + dir + "/adir", {"--out: '" + dir + "/adir': is a directory"}},
+      {"--out " + dir + "/adir/", {"--out: '" + dir + "/adir/': is a directory"}},
+      {"--out " + ro.path() + "/x.exr", {"--out: '" + ro.path() + "/x.exr'", "not writable"}},
+      {"--out " + exr + " --preview " + dir + "/adir",
+       {"--preview: '" + dir + "/adir': is a directory"}},
+      {"--out " + exr + " --preview " + dir + "/p.gif",
+       {"--preview: '" + dir + "/p.gif': unknown extension '.gif'", ".png .jpg"}},
+      {"--out " + exr + " --preview " + dir + "/p",
+       {"--preview: '" + dir + "/p': has no extension"}},
+      {"--out " + exr + " --preview " + dir + "/afile/sub/p.png",
+       {"--preview: '" + dir + "/afile/sub/p.png': cannot create directory", "not a directory"}},
+      {"--out " + exr + " --preview " + ro.path() + "/p.png",
+       {"--preview: '" + ro.path() + "/p.png': directory '" + ro.path() + "' is not writable"}},
+      {"--out " + exr + " --preview " + png + " --aov position,distance",
+       {"--preview: '" + png + "': none of the AOVs distance,position can be previewed"}},
+      {"--out " + exr + " --preview " + png + " --preview-range 5,2",
+       {"--preview-range: '5,2': NEAR 5 must be less than FAR 2"}},
+      {"--out " + exr + " --preview " + png + " --preview-range -1,2",
+       {"--preview-range: '-1,2': NEAR -1 must be >= 0"}},
+      {"--out " + exr + " --preview " + png + " --preview-range 1,inf",
+       {"--preview-range: '1,inf'", "non-finite"}},
+      {"--out " + exr + " --preview " + png + " --preview-range 4", {"--preview-range", "'4'"}},
+      {"--out " + exr + " --preview-range 1,2", {"--preview-range: '1,2' needs --preview"}},
+  };
+  for (const Case& c : cases) {
+    std::string out;
+    const int rc =
+        runCommand(apertureBinary() +
+                       " render --mesh 'procedural:spheres?tris=200000000' --size 8,8 " + c.args,
+                   &out);
+    EXPECT_EQ(rc, 1) << c.args << "\n" << out;
+    for (const std::string& e : c.expect)
+      EXPECT_NE(out.find(e), std::string::npos) << c.args << ": no '" << e << "' in\n" << out;
+    EXPECT_EQ(out.find("loaded"), std::string::npos) << c.args << ": refused after loading";
+    EXPECT_EQ(listing(dir), before) << c.args << ": wrote a file";
+  }
+}
+
+// A preview that fails while it is written (here: its 64 KB file system is full) fails the
+// render, and the EXR, written after it, does not exist.
+TEST(Cli, APreviewThatFailsWhileWritingLeavesNoExr) {
+  const std::string dir = scratchDir(), small = dir + "/small";
+  std::filesystem::create_directories(small);
+  if (::mount("tmpfs", small.c_str(), "tmpfs", 0, "size=64k") != 0)
+    GTEST_SKIP() << "cannot mount a 64 KB tmpfs here (" << std::strerror(errno) << ")";
+  struct Unmount {
+    std::string dir;
+    ~Unmount() { ::umount(dir.c_str()); }
+  } unmount{small};
+  std::string out;
+  // An uncompressed 256x256 BMP is 192 KB: it cannot fit.
+  const int rc = runCommand(apertureBinary() + " render --quiet --mesh procedural:cube --size " +
+                                "256,256 --eye 2,2,2 --at 0,0,0 --out " + dir + "/x.exr " +
+                                "--preview " + small + "/p.bmp",
+                            &out);
+  EXPECT_EQ(rc, 1) << out;
+  EXPECT_NE(out.find("cannot write '" + small + "/p.bmp'"), std::string::npos) << out;
+  EXPECT_FALSE(test::fileExists(dir + "/x.exr")) << "the EXR of a failed preview was written";
+  EXPECT_TRUE(listing(small).empty()) << "a temporary file remains";
+  // The same render with room for the preview writes both.
+  ASSERT_EQ(runCommand(apertureBinary() + " render --quiet --mesh procedural:cube --size " +
+                           "256,256 --eye 2,2,2 --at 0,0,0 --out " + dir + "/x.exr " +
+                           "--preview " + dir + "/p.bmp",
+                       &out),
+            0)
+      << out;
+  EXPECT_TRUE(isCompleteExr(dir + "/x.exr"));
+}

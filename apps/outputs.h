@@ -1,0 +1,94 @@
+#pragma once
+// Output paths checked before any work (extensions per role, directories, write permission,
+// previewable AOVs, preview depth ranges), and the one depth range every preview of a batch
+// shares.
+#include <deque>
+#include <glm/glm.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cameras/params.h"
+#include "core/framebuffer.h"
+#include "core/image.h"
+#include "core/mesh.h"
+
+namespace aperture::app {
+
+struct Job;
+
+/// What an output path is written as.
+enum class OutputKind {
+  Exr,      ///< the multi-channel EXR (`--out`, the job's "output")
+  Preview,  ///< the 8-bit preview (`--preview`, the job's "preview")
+};
+
+/// The extensions (lower case, with the dot) a kind of output may end in; checks ignore case.
+/// Exr: .exr. Preview: the 8-bit RGB formats OpenImageIO writes here: .png .jpg .jpeg .tif
+/// .tiff .bmp .tga .ppm.
+const std::vector<std::string>& supportedExtensions(OutputKind kind);
+
+/// Checks the name of the output file `path`, given as `name` (a flag such as "--out" or a job
+/// key such as "output"): it is not an existing directory and does not end in '/' ("is a
+/// directory"), and it ends in one of supportedExtensions(kind) (else the message lists them).
+/// Throws Error("NAME: 'PATH': reason").
+void checkOutputName(const std::string& name, const std::string& path, OutputKind kind);
+
+/// Checks that the directory `dir` that output `path` goes into exists or can be created and
+/// that files can be created in it: its nearest existing ancestor must be a directory that is
+/// writable and searchable (access(W_OK | X_OK)). Nothing is created. Throws
+/// Error("NAME: 'PATH': reason") naming the directory and the reason.
+void checkOutputDirectory(const std::string& name, const std::string& path, const std::string& dir);
+
+/// Everything that can be known about writing `path` without writing it: checkOutputName,
+/// then checkOutputDirectory of its parent directory ("." for a bare file name).
+void checkOutputPath(const std::string& name, const std::string& path, OutputKind kind);
+
+/// The directory of an output pattern up to its first placeholder, as written: "out/" for
+/// "out/{camera}/{frame}.exr", "." when the pattern starts with a placeholder or names no
+/// directory.
+std::string patternDirectory(const std::string& pattern);
+
+/// The output checks of a parsed job, as `aperture render` checks --out and --preview: the
+/// "output" and "preview" patterns' extensions, that the job's AOVs can be previewed when it
+/// has a preview pattern, checkOutputName of every frame's paths, and checkOutputDirectory of
+/// `outputDirectory` and `previewDirectory` (each pattern's directory up to its first
+/// placeholder, resolved; directories named by placeholders are created, or fail, per frame).
+/// Throws Error("output: ..." or "preview: ...").
+void checkJobOutputs(const Job& job, const std::string& outputDirectory,
+                     const std::string& previewDirectory);
+
+/// Refuses a preview (`path`, given as `name`) of a framebuffer of `aovs` when none of them can
+/// be previewed (previewableAovs of core/image.h); the message lists the ones that can.
+void checkPreviewable(const std::string& name, const std::string& path, AovMask aovs);
+
+/// Checks a preview depth range [NEAR, FAR]: both finite, 0 <= NEAR < FAR. Throws Error with
+/// the reason only; callers prefix the flag or key and the value.
+void checkPreviewRange(const glm::dvec2& range);
+
+/// Parses and checks `flag` NEAR,FAR (e.g. "--preview-range 2,10"); throws Error naming the
+/// flag and the text.
+glm::dvec2 parsePreviewRange(const std::string& flag, const std::string& text);
+
+/// The planar depths Z = dot(P − eye, −W) that the cameras `cameras` can see of points in the
+/// world box [lo, hi] lie within the returned [NEAR, FAR]: the minimum (clamped at 0) and the
+/// maximum of Z over the box's eight corners and all the cameras (Z is linear in P, so its
+/// extremes over a box are at corners). Nothing when FAR <= NEAR (the box is behind every
+/// camera) or when there is no camera.
+std::optional<glm::dvec2> depthRangeOfBox(const glm::dvec3& lo, const glm::dvec3& hi,
+                                          const std::vector<CameraParams>& cameras);
+
+/// The world-space bounding box of a job's scene as `aperture batch` loads it: each entry of
+/// job.meshes is the loaded mesh of its spec (matched by Mesh::name), placed by its transform
+/// when the spec appears more than once (an instance) and as loaded otherwise (a spec used once
+/// has its transform baked in at load; docs/batch.md). The box of a transformed mesh is the
+/// box around its transformed corners. Throws Error when a spec has no loaded mesh.
+
+/// The preview options every frame of a batch uses: the job's (its "preview_range"), else,
+/// when the job writes previews that show depth, the depthRangeOfBox of the scene's box
+/// [lo, hi] (LoadedScene's world bounds) over every frame of the job (all shards), so that the
+/// frames of a turntable share one range and shards agree. Without such a range (nothing in front
+/// of any camera), each preview falls back to its own range.
+PreviewOptions batchPreviewOptions(const Job& job, const glm::dvec3& lo, const glm::dvec3& hi);
+
+}  // namespace aperture::app
