@@ -1,6 +1,7 @@
 #include "core/mesh.h"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -8,8 +9,6 @@
 #include "core/error.h"
 
 namespace aperture {
-
-namespace {
 
 std::string lowerExtension(const std::string& path) {
   size_t slash = path.find_last_of('/');
@@ -19,8 +18,6 @@ std::string lowerExtension(const std::string& path) {
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
   return ext;
 }
-
-}  // namespace
 
 void Mesh::bounds(glm::vec3& lo, glm::vec3& hi) const {
   lo = glm::vec3(std::numeric_limits<float>::max());
