@@ -14,6 +14,7 @@
 #include "cameras/registry.h"
 #include "core/error.h"
 #include "core/image.h"
+#include "core/stats.h"
 
 namespace aperture::app {
 
@@ -24,13 +25,6 @@ using Clock = std::chrono::steady_clock;
 
 /// What the study renders: color for the image error, depth and primID for the geometry.
 constexpr AovMask kStudyAovs = kAovColor | kAovDepth | kAovPrimId;
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 bool sameBuild(const BuildOptions& a, const BuildOptions& b) {
   return a.quality == b.quality && a.robust == b.robust && a.compact == b.compact;
