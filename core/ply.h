@@ -12,7 +12,23 @@ namespace aperture {
 enum class PlyType { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
 
 /// Bytes of one binary value of type `t`.
-size_t plyTypeSize(PlyType t);
+inline size_t plyTypeSize(PlyType t) {
+  switch (t) {
+    case PlyType::Int8:
+    case PlyType::UInt8:
+      return 1;
+    case PlyType::Int16:
+    case PlyType::UInt16:
+      return 2;
+    case PlyType::Int32:
+    case PlyType::UInt32:
+    case PlyType::Float32:
+      return 4;
+    case PlyType::Float64:
+      return 8;
+  }
+  return 0;
+}
 
 /// One `property` line: a scalar, or a list with its count type and item type.
 struct PlyProperty {
