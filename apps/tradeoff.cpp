@@ -168,6 +168,35 @@ class Study {
     return back;
   }
 
+  /// A row that only changes how the file is written: the base frame and its timing, written
+  /// with the row's EXR options and compared after reading it back.
+  TradeoffRow measureFileOnly(const TradeoffSetting& s, TradeoffRow& r) {
+    r.frameSeconds = baseRow_.frameSeconds;
+    r.mraysPerSecond = baseRow_.mraysPerSecond;
+    r.buildSeconds = baseRow_.buildSeconds;
+    r.embreeBytes = baseRow_.embreeBytes;
+    const Framebuffer back = writeAndRead(*baseFrame_, *baseScene_, s.render.spp, s.exr, r);
+    compare(back, s.render.spp, r);
+    return r;
+  }
+
+  /// Renders the warm-up and timed frames of `scene` with `rs`; the medians go to `r`, the
+  /// last frame is returned.
+  Framebuffer timeFrames(const Scene& scene, const RenderSettings& rs, TradeoffRow& r) {
+    const auto cam = camera(scene, rs.spp);
+    Framebuffer fb(c_.camera.width, c_.camera.height, kStudyAovs);
+    std::vector<double> seconds, mrays;
+    for (int f = 0; f < c_.warmup + std::max(1, c_.frames); ++f) {
+      const RenderStats st = renderImage(scene, *cam, rs, fb);
+      if (f < c_.warmup) continue;
+      seconds.push_back(st.seconds);
+      mrays.push_back(st.mraysPerSecond());
+    }
+    r.frameSeconds = median(seconds);
+    r.mraysPerSecond = median(mrays);
+    return fb;
+  }
+
   TradeoffRow measure(const TradeoffSetting& s, const TradeoffSetting& base) {
     TradeoffRow r;
     r.setting = s;
@@ -176,15 +205,7 @@ class Study {
         s.knob != "base" && sameBuild(s.build, base.build) && s.placement == base.placement &&
         s.render.packetWidth == base.render.packetWidth &&
         s.render.tileSize == base.render.tileSize && s.render.spp == base.render.spp;
-    if (exrOnly && baseFrame_) {
-      r.frameSeconds = baseRow_.frameSeconds;
-      r.mraysPerSecond = baseRow_.mraysPerSecond;
-      r.buildSeconds = baseRow_.buildSeconds;
-      r.embreeBytes = baseRow_.embreeBytes;
-      const Framebuffer back = writeAndRead(*baseFrame_, *baseScene_, s.render.spp, s.exr, r);
-      compare(back, s.render.spp, r);
-      return r;
-    }
+    if (exrOnly && baseFrame_) return measureFileOnly(s, r);
 
     // The base scene is kept for the knobs that do not change the build.
     std::unique_ptr<Scene> own;
@@ -202,17 +223,7 @@ class Study {
       r.embreeBytes = baseRow_.embreeBytes;
     }
 
-    const auto cam = camera(*scene, s.render.spp);
-    Framebuffer fb(c_.camera.width, c_.camera.height, kStudyAovs);
-    std::vector<double> seconds, mrays;
-    for (int f = 0; f < c_.warmup + std::max(1, c_.frames); ++f) {
-      const RenderStats st = renderImage(*scene, *cam, s.render, fb);
-      if (f < c_.warmup) continue;
-      seconds.push_back(st.seconds);
-      mrays.push_back(st.mraysPerSecond());
-    }
-    r.frameSeconds = median(seconds);
-    r.mraysPerSecond = median(mrays);
+    Framebuffer fb = timeFrames(*scene, s.render, r);
     compare(fb, s.render.spp, r);
 
     if (s.knob == "base") {
