@@ -19,6 +19,7 @@
 #include "core/atomic_file.h"
 #include "core/baseline.h"
 #include "core/error.h"
+#include "core/stats.h"
 
 namespace aperture::app {
 
@@ -33,27 +34,7 @@ struct BenchArgs {
   std::string sweep, json, preset;
 };
 
-/// Median, min, max and coefficient of variation of a sample.
-struct Summary {
-  double median = 0, min = 0, max = 0, cv = 0;
-};
-Summary summarize(std::vector<double> v) {
-  Summary s;
-  if (v.empty()) return s;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  s.median = n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-  s.min = v.front();
-  s.max = v.back();
-  double mean = 0, var = 0;
-  for (double x : v) mean += x;
-  mean /= double(n);
-  for (double x : v) var += (x - mean) * (x - mean);
-  s.cv = n > 1 && mean > 0 ? std::sqrt(var / double(n - 1)) / mean : 0;
-  return s;
-}
-
-nlohmann::json toJson(const Summary& s) {
+nlohmann::json toJson(const SampleSummary& s) {
   return {{"median", s.median}, {"min", s.min}, {"max", s.max}, {"cv", s.cv}};
 }
 
@@ -79,17 +60,13 @@ std::vector<double> timeBaseline(const Scene& scene, const BaselineTracer& base,
   return mrays;
 }
 
-void printSummary(const char* label, const Summary& s, int frames) {
+void printSummary(const char* label, const SampleSummary& s, int frames) {
   std::printf("%-28s median %8.2f Mrays/s  (min %.2f, max %.2f, cv %.2f%%, %d frames)\n", label,
               s.median, s.min, s.max, 100 * s.cv, frames);
 }
 
-int runBench(const BenchArgs& a) {
-  const AovMask aovs = parseAovList(a.render.aovs);
-  const ParamSet given = a.camera.given();
-  const CameraParams unframed =
-      resolveCommandCamera(given, a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0));
-  const RenderSettings settings = a.render.settings(unframed.spp);
+/// Throws Error for a bad --frames, --warmup, --builds or --sweep.
+void validateBenchArgs(const BenchArgs& a) {
   if (a.frames < 1 || a.frames > 100000)
     throw Error(cat("--frames ", a.frames, " must be in [1, 100000]"));
   if (a.warmup < 0) throw Error(cat("--warmup ", a.warmup, " must be >= 0"));
@@ -97,62 +74,79 @@ int runBench(const BenchArgs& a) {
   if (!a.sweep.empty() && a.sweep != "packet" && a.sweep != "threads" && a.sweep != "quality" &&
       a.sweep != "aovs")
     throw Error(cat("--sweep: '", a.sweep, "' is not one of packet, threads, quality, aovs"));
-  checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs);
+}
 
-  ThreadLimit threads(a.render.threads);
-  Device device;
-  const SceneSpec sceneSpec = a.scene.spec();
-  LoadedScene loaded = loadSceneMeshes(sceneSpec, a.quiet);
-  const CameraParams params =
-      resolveCommandCamera(given, a.camera.defaults(), loaded.worldLo, loaded.worldHi);
-  buildLoadedScene(device, loaded, sceneSpec, a.quiet, {params});
-  const auto camera = makeCamera(params, loaded.scene->renderOrigin());
-  const BuildOptions build = a.scene.buildOptions();
+/// What every measurement of one bench run shares: the loaded scene, its camera and settings.
+struct Bench {
+  const BenchArgs& args;
+  const ThreadLimit& threads;
+  const Device& device;
+  LoadedScene& loaded;
+  AovMask aovs;
+  RenderSettings settings;
+  BuildOptions build;
+  CameraParams params;
+  std::unique_ptr<Camera> camera;
 
-  nlohmann::json j;
+  /// Mrays/s of the run's timed frames of `scene` with `rs` and `frameAovs`.
+  SampleSummary timeScene(const Scene& scene, const RenderSettings& rs, AovMask frameAovs) const {
+    return summarize(timeFrames(scene, *camera, rs, frameAovs, params.width, params.height,
+                                args.warmup, args.frames));
+  }
+  SampleSummary time(const RenderSettings& rs) const { return timeScene(*loaded.scene, rs, aovs); }
+};
+
+/// The configuration beside every number: in the JSON and on stdout.
+void reportConfig(const Bench& b, nlohmann::json& j) {
+  const BenchArgs& a = b.args;
+  const BuildStats& st = b.loaded.scene->stats();
   std::string meshNames;
-  for (const Mesh& m : loaded.meshes) meshNames += (meshNames.empty() ? "" : ";") + m.name;
+  for (const Mesh& m : b.loaded.meshes) meshNames += (meshNames.empty() ? "" : ";") + m.name;
   j["config"] = {{"meshes", meshNames},
-                 {"triangles", loaded.scene->stats().triangles},
+                 {"triangles", st.triangles},
                  {"cull", a.scene.cull},
-                 {"culled_triangles", loaded.scene->stats().culledTriangles},
-                 {"threads", threads.threads()},
+                 {"culled_triangles", st.culledTriangles},
+                 {"threads", b.threads.threads()},
                  {"hardware_threads", std::thread::hardware_concurrency()},
-                 {"isa", device.isaName()},
-                 {"packet_width", settings.packetWidth},
-                 {"tile_size", settings.tileSize},
+                 {"isa", b.device.isaName()},
+                 {"packet_width", b.settings.packetWidth},
+                 {"tile_size", b.settings.tileSize},
                  {"bvh_quality", a.scene.quality},
                  {"robust", a.scene.robust},
                  {"compact", a.scene.compact},
                  {"placement", a.scene.worldSpace ? "world-space" : "camera-relative"},
-                 {"aovs", aovListString(aovs)},
-                 {"camera", params.type},
-                 {"width", params.width},
-                 {"height", params.height},
-                 {"spp", params.spp},
+                 {"aovs", aovListString(b.aovs)},
+                 {"camera", b.params.type},
+                 {"width", b.params.width},
+                 {"height", b.params.height},
+                 {"spp", b.params.spp},
                  {"frames", a.frames},
                  {"warmup", a.warmup}};
   std::printf(
       "config: %s, %zu triangles; %d threads, Embree ISA %s; packet %d, tile %d; BVH %s%s%s; "
       "AOVs %s; %s %dx%d, %d spp\n",
-      meshNames.c_str(), loaded.scene->stats().triangles, threads.threads(),
-      device.isaName().c_str(), settings.packetWidth, settings.tileSize, a.scene.quality.c_str(),
+      meshNames.c_str(), st.triangles, b.threads.threads(), b.device.isaName().c_str(),
+      b.settings.packetWidth, b.settings.tileSize, a.scene.quality.c_str(),
       a.scene.robust ? " robust" : "", a.scene.compact ? " compact" : "",
-      aovListString(aovs).c_str(), params.type.c_str(), params.width, params.height, params.spp);
+      aovListString(b.aovs).c_str(), b.params.type.c_str(), b.params.width, b.params.height,
+      b.params.spp);
+}
 
-  // Load and build.
+/// Load speed, and the BVH build time over --builds builds (the first is the run's own).
+void measureLoadAndBuild(const Bench& b, nlohmann::json& j) {
+  const LoadedScene& loaded = b.loaded;
   const double loadMBps = loaded.fileBytes / 1e6 / std::max(loaded.loadSeconds, 1e-9);
   j["load_seconds"] = loaded.loadSeconds;
   j["load_mb_per_s"] = loaded.fileBytes ? loadMBps : 0.0;
   j["file_bytes"] = loaded.fileBytes;
   std::vector<double> buildTimes{loaded.scene->stats().buildSeconds};
-  for (int b = 1; b < a.builds; ++b)
-    buildTimes.push_back(Scene(device, loaded.objects, build).stats().buildSeconds);
-  const Summary buildSummary = summarize(buildTimes);
+  for (int k = 1; k < b.args.builds; ++k)
+    buildTimes.push_back(Scene(b.device, loaded.objects, b.build).stats().buildSeconds);
+  const SampleSummary builds = summarize(buildTimes);
   const double tris = double(loaded.scene->stats().triangles);
   const double bytes = double(loaded.scene->stats().embreeBytes);
-  j["build_seconds"] = toJson(buildSummary);
-  j["build_seconds_median"] = buildSummary.median;
+  j["build_seconds"] = toJson(builds);
+  j["build_seconds_median"] = builds.median;
   j["embree_bytes"] = bytes;
   j["embree_bytes_per_triangle"] = tris > 0 ? bytes / tris : 0.0;
   if (loaded.cull) {
@@ -166,106 +160,156 @@ int runBench(const BenchArgs& a) {
   std::printf(
       "build: median %.3f s over %d builds (min %.3f, max %.3f); Embree memory %.1f MB "
       "(%.1f bytes/triangle)\n",
-      buildSummary.median, a.builds, buildSummary.min, buildSummary.max, bytes / 1e6,
+      builds.median, b.args.builds, builds.min, builds.max, bytes / 1e6,
       tris > 0 ? bytes / tris : 0.0);
+}
 
-  // The frame loop, and the baseline right after it in the same run.
-  const Summary render = summarize(timeFrames(*loaded.scene, *camera, settings, aovs, params.width,
-                                              params.height, a.warmup, a.frames));
-  printSummary("render:", render, a.frames);
+/// The frame loop, and with --baseline bare rtcIntersect16 on the same rays right after it.
+void measureRender(const Bench& b, nlohmann::json& j) {
+  const SampleSummary render = b.time(b.settings);
+  printSummary("render:", render, b.args.frames);
   j["mrays_per_s"] = toJson(render);
   j["mrays_per_s_median"] = render.median;
-  if (a.baseline) {
-    BaselineTracer base(*camera, params.width, params.height, settings.tileSize);
-    const Summary b = summarize(timeBaseline(*loaded.scene, base, a.warmup, a.frames));
-    printSummary("baseline (rtcIntersect16):", b, a.frames);
-    std::printf("render / baseline: %.3f\n", render.median / b.median);
-    j["baseline_mrays_per_s"] = toJson(b);
-    j["baseline_mrays_per_s_median"] = b.median;
-    j["render_over_baseline"] = render.median / b.median;
-  }
+  if (!b.args.baseline) return;
+  BaselineTracer base(*b.camera, b.params.width, b.params.height, b.settings.tileSize);
+  const SampleSummary bare =
+      summarize(timeBaseline(*b.loaded.scene, base, b.args.warmup, b.args.frames));
+  printSummary("baseline (rtcIntersect16):", bare, b.args.frames);
+  std::printf("render / baseline: %.3f\n", render.median / bare.median);
+  j["baseline_mrays_per_s"] = toJson(bare);
+  j["baseline_mrays_per_s_median"] = bare.median;
+  j["render_over_baseline"] = render.median / bare.median;
+}
 
-  if (a.sweep == "packet") {
-    nlohmann::json rows = nlohmann::json::array();
-    for (int w : {1, 4, 8, 16}) {
-      RenderSettings s = settings;
-      s.packetWidth = w;
-      const Summary r = summarize(timeFrames(*loaded.scene, *camera, s, aovs, params.width,
-                                             params.height, a.warmup, a.frames));
-      printSummary(cat("sweep packet ", w, ":").c_str(), r, a.frames);
-      rows.push_back(
-          {{"packet_width", w}, {"mrays_per_s", toJson(r)}, {"mrays_per_s_median", r.median}});
-    }
-    j["sweep_packet"] = rows;
-  } else if (a.sweep == "threads") {
-    nlohmann::json rows = nlohmann::json::array();
-    double single = 0;
-    for (int t = 1; t <= threads.threads(); ++t) {
-      ThreadLimit limit(t);
-      const Summary r = summarize(timeFrames(*loaded.scene, *camera, settings, aovs, params.width,
-                                             params.height, a.warmup, a.frames));
-      if (t == 1) single = r.median;
-      const double efficiency = single > 0 ? r.median / (single * t) : 0;
-      printSummary(cat("sweep threads ", t, ":").c_str(), r, a.frames);
-      std::printf("%-28s parallel efficiency %.1f%%\n", "", 100 * efficiency);
-      rows.push_back({{"threads", t},
+nlohmann::json sweepPacketWidths(const Bench& b) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (int w : {1, 4, 8, 16}) {
+    RenderSettings s = b.settings;
+    s.packetWidth = w;
+    const SampleSummary r = b.time(s);
+    printSummary(cat("sweep packet ", w, ":").c_str(), r, b.args.frames);
+    rows.push_back(
+        {{"packet_width", w}, {"mrays_per_s", toJson(r)}, {"mrays_per_s_median", r.median}});
+  }
+  return rows;
+}
+
+/// 1 .. --threads threads, with the parallel efficiency against one thread.
+nlohmann::json sweepThreads(const Bench& b) {
+  nlohmann::json rows = nlohmann::json::array();
+  double single = 0;
+  for (int t = 1; t <= b.threads.threads(); ++t) {
+    ThreadLimit limit(t);
+    const SampleSummary r = b.time(b.settings);
+    if (t == 1) single = r.median;
+    const double efficiency = single > 0 ? r.median / (single * t) : 0;
+    printSummary(cat("sweep threads ", t, ":").c_str(), r, b.args.frames);
+    std::printf("%-28s parallel efficiency %.1f%%\n", "", 100 * efficiency);
+    rows.push_back({{"threads", t},
+                    {"mrays_per_s", toJson(r)},
+                    {"mrays_per_s_median", r.median},
+                    {"parallel_efficiency", efficiency}});
+  }
+  return rows;
+}
+
+/// Every BVH quality, plain and robust, each a fresh build.
+nlohmann::json sweepBvhQuality(const Bench& b) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (BvhQuality q : {BvhQuality::Low, BvhQuality::Medium, BvhQuality::High})
+    for (bool robust : {false, true}) {
+      BuildOptions bo = b.build;
+      bo.quality = q;
+      bo.robust = robust;
+      Scene scene(b.device, b.loaded.objects, bo);
+      const SampleSummary r = b.timeScene(scene, b.settings, b.aovs);
+      printSummary(cat("sweep ", bvhQualityName(q), robust ? " robust:" : ":").c_str(), r,
+                   b.args.frames);
+      std::printf("%-28s build %.3f s, Embree %.1f MB\n", "", scene.stats().buildSeconds,
+                  scene.stats().embreeBytes / 1e6);
+      rows.push_back({{"bvh_quality", bvhQualityName(q)},
+                      {"robust", robust},
                       {"mrays_per_s", toJson(r)},
                       {"mrays_per_s_median", r.median},
-                      {"parallel_efficiency", efficiency}});
+                      {"build_seconds", scene.stats().buildSeconds},
+                      {"embree_bytes", scene.stats().embreeBytes}});
     }
-    j["sweep_threads"] = rows;
-  } else if (a.sweep == "quality") {
-    nlohmann::json rows = nlohmann::json::array();
-    for (BvhQuality q : {BvhQuality::Low, BvhQuality::Medium, BvhQuality::High})
-      for (bool robust : {false, true}) {
-        BuildOptions bo = build;
-        bo.quality = q;
-        bo.robust = robust;
-        Scene scene(device, loaded.objects, bo);
-        const Summary r = summarize(timeFrames(scene, *camera, settings, aovs, params.width,
-                                               params.height, a.warmup, a.frames));
-        printSummary(cat("sweep ", bvhQualityName(q), robust ? " robust:" : ":").c_str(), r,
-                     a.frames);
-        std::printf("%-28s build %.3f s, Embree %.1f MB\n", "", scene.stats().buildSeconds,
-                    scene.stats().embreeBytes / 1e6);
-        rows.push_back({{"bvh_quality", bvhQualityName(q)},
-                        {"robust", robust},
-                        {"mrays_per_s", toJson(r)},
-                        {"mrays_per_s_median", r.median},
-                        {"build_seconds", scene.stats().buildSeconds},
-                        {"embree_bytes", scene.stats().embreeBytes}});
-      }
-    j["sweep_quality"] = rows;
-  } else if (a.sweep == "aovs") {
-    // Interleaved: each round renders one frame of every AOV set, so load from other processes
-    // falls on all sets alike.
-    const std::vector<std::pair<std::string, AovMask>> sets = {
-        {"depth", kAovDepth},
-        {"primid", kAovPrimId},
-        {"color", kAovColor},
-        {"color,depth", kAovColor | kAovDepth},
-        {"all", parseAovList("all")}};
-    std::vector<Framebuffer> fbs;
-    for (const auto& set : sets) fbs.emplace_back(params.width, params.height, set.second);
-    std::vector<std::vector<double>> mrays(sets.size());
-    for (int f = 0; f < a.warmup + a.frames; ++f)
-      for (size_t k = 0; k < sets.size(); ++k) {
-        const RenderStats st = renderImage(*loaded.scene, *camera, settings, fbs[k]);
-        if (f >= a.warmup) mrays[k].push_back(st.mraysPerSecond());
-      }
-    nlohmann::json rows = nlohmann::json::object();
-    const double depthOnly = summarize(mrays[0]).median;
+  return rows;
+}
+
+/// Mrays/s of each AOV set, timed interleaved: each round renders one frame of every set, so
+/// load from other processes falls on all sets alike.
+std::vector<std::vector<double>> timeAovSetsInterleaved(
+    const Bench& b, const std::vector<std::pair<std::string, AovMask>>& sets) {
+  std::vector<Framebuffer> fbs;
+  for (const auto& set : sets) fbs.emplace_back(b.params.width, b.params.height, set.second);
+  std::vector<std::vector<double>> mrays(sets.size());
+  for (int f = 0; f < b.args.warmup + b.args.frames; ++f)
     for (size_t k = 0; k < sets.size(); ++k) {
-      const Summary r = summarize(mrays[k]);
-      printSummary(cat("sweep aovs ", sets[k].first, ":").c_str(), r, a.frames);
-      std::printf("%-28s %.3f x depth alone\n", "", depthOnly > 0 ? r.median / depthOnly : 0.0);
-      rows[sets[k].first] = {{"aovs", aovListString(sets[k].second)},
-                             {"mrays_per_s", toJson(r)},
-                             {"mrays_per_s_median", r.median},
-                             {"relative_to_depth", depthOnly > 0 ? r.median / depthOnly : 0.0}};
+      const RenderStats st = renderImage(*b.loaded.scene, *b.camera, b.settings, fbs[k]);
+      if (f >= b.args.warmup) mrays[k].push_back(st.mraysPerSecond());
     }
-    j["sweep_aovs"] = rows;
+  return mrays;
+}
+
+/// Depth alone .. all AOVs, each relative to depth alone.
+nlohmann::json sweepAovs(const Bench& b) {
+  const std::vector<std::pair<std::string, AovMask>> sets = {{"depth", kAovDepth},
+                                                             {"primid", kAovPrimId},
+                                                             {"color", kAovColor},
+                                                             {"color,depth", kAovColor | kAovDepth},
+                                                             {"all", parseAovList("all")}};
+  const std::vector<std::vector<double>> mrays = timeAovSetsInterleaved(b, sets);
+  nlohmann::json rows = nlohmann::json::object();
+  const double depthOnly = summarize(mrays[0]).median;
+  for (size_t k = 0; k < sets.size(); ++k) {
+    const SampleSummary r = summarize(mrays[k]);
+    const double relative = depthOnly > 0 ? r.median / depthOnly : 0.0;
+    printSummary(cat("sweep aovs ", sets[k].first, ":").c_str(), r, b.args.frames);
+    std::printf("%-28s %.3f x depth alone\n", "", relative);
+    rows[sets[k].first] = {{"aovs", aovListString(sets[k].second)},
+                           {"mrays_per_s", toJson(r)},
+                           {"mrays_per_s_median", r.median},
+                           {"relative_to_depth", relative}};
   }
+  return rows;
+}
+
+/// The --sweep the run asked for, if any, under its JSON key.
+void runSweep(const Bench& b, nlohmann::json& j) {
+  const std::string& sweep = b.args.sweep;
+  if (sweep == "packet") j["sweep_packet"] = sweepPacketWidths(b);
+  if (sweep == "threads") j["sweep_threads"] = sweepThreads(b);
+  if (sweep == "quality") j["sweep_quality"] = sweepBvhQuality(b);
+  if (sweep == "aovs") j["sweep_aovs"] = sweepAovs(b);
+}
+
+int runBench(const BenchArgs& a) {
+  const AovMask aovs = parseAovList(a.render.aovs);
+  const ParamSet given = a.camera.given();
+  const CameraParams unframed =
+      resolveCommandCamera(given, a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0));
+  const RenderSettings settings = a.render.settings(unframed.spp);
+  validateBenchArgs(a);
+  checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs);
+
+  ThreadLimit threads(a.render.threads);
+  Device device;
+  const SceneSpec sceneSpec = a.scene.spec();
+  LoadedScene loaded = loadSceneMeshes(sceneSpec, a.quiet);
+  const CameraParams params =
+      resolveCommandCamera(given, a.camera.defaults(), loaded.worldLo, loaded.worldHi);
+  buildLoadedScene(device, loaded, sceneSpec, a.quiet, {params});
+  auto camera = makeCamera(params, loaded.scene->renderOrigin());
+  const Bench bench{
+      a,      threads,          device, loaded, aovs, settings, a.scene.buildOptions(),
+      params, std::move(camera)};
+
+  nlohmann::json j;
+  reportConfig(bench, j);
+  measureLoadAndBuild(bench, j);
+  measureRender(bench, j);
+  runSweep(bench, j);
   if (!a.json.empty()) writeTextAtomically(a.json, j.dump(2) + "\n");
   return 0;
 }

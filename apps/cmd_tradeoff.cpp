@@ -28,12 +28,13 @@ struct TradeoffArgs {
   bool half = false, quick = false, noCombinations = false, quiet = false;
 };
 
-int runTradeoff(const TradeoffArgs& a) {
+/// The study's settings from the flags (the camera is set apart, once the scene is known).
+TradeoffConfig tradeoffConfig(const TradeoffArgs& a) {
   TradeoffConfig c;
   c.scene = a.scene;
-  const ParamSet given = a.camera.given();
   c.base = a.render.settings(
-      resolveCommandCamera(given, a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0)).spp);
+      resolveCommandCamera(a.camera.given(), a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0))
+          .spp);
   c.baseExr.compression = parseExrCompression(a.compression);
   c.baseExr.halfColor = a.half;
   c.quick = a.quick;
@@ -51,9 +52,12 @@ int runTradeoff(const TradeoffArgs& a) {
   }
   if (a.name.empty() || a.name.find('/') != std::string::npos)
     throw Error(cat("--name: '", a.name, "' must be a non-empty file name stem"));
+  return c;
+}
 
-  ThreadLimit threads(a.render.threads);
-  // Bounds for framing come from a camera-relative load (the study loads its own meshes).
+/// The camera from the flags, framing the scene's bounds from a camera-relative load (the
+/// study loads its own meshes); a bad camera fails here, before the study starts.
+CameraParams framedCamera(const TradeoffArgs& a) {
   glm::dvec3 lo(0.0), hi(0.0);
   {
     Device device;
@@ -63,11 +67,15 @@ int runTradeoff(const TradeoffArgs& a) {
     lo = s.worldLo;
     hi = s.worldHi;
   }
-  c.camera = resolveCommandCamera(given, a.camera.defaults(), lo, hi);
-  makeCamera(c.camera);  // a bad camera fails before the study starts
+  const CameraParams params = resolveCommandCamera(a.camera.given(), a.camera.defaults(), lo, hi);
+  makeCamera(params);
+  return params;
+}
 
-  fs::create_directories(a.outDir);
-  c.tempDir = (fs::path(a.outDir) / cat(".exr-tmp-", getpid())).string();
+/// Runs the study with its EXR files in a temporary directory under `outDir`, removed after.
+std::vector<TradeoffRow> runWithTempDir(TradeoffConfig& c, const std::string& outDir) {
+  fs::create_directories(outDir);
+  c.tempDir = (fs::path(outDir) / cat(".exr-tmp-", getpid())).string();
   std::vector<TradeoffRow> rows;
   try {
     rows = runTradeoff(c);
@@ -78,17 +86,30 @@ int runTradeoff(const TradeoffArgs& a) {
   }
   std::error_code ec;
   fs::remove_all(c.tempDir, ec);
+  return rows;
+}
 
+/// NAME.csv and NAME.md in --out-dir, and the Markdown table on stdout.
+void writeReports(const TradeoffArgs& a, const TradeoffConfig& c, int threads,
+                  const std::vector<TradeoffRow>& rows) {
   const std::string csv = (fs::path(a.outDir) / (a.name + ".csv")).string();
   const std::string md = (fs::path(a.outDir) / (a.name + ".md")).string();
   writeTextAtomically(csv, tradeoffCsv(rows));
   const std::string title =
       cat(a.name, ": ", c.camera.type, " ", c.camera.width, "x", c.camera.height, ", reference ",
           c.referenceSpp, " spp (robust, high, camera-relative); ", c.frames,
-          " timed frames after ", c.warmup, " warm-up, ", threads.threads(), " threads");
+          " timed frames after ", c.warmup, " warm-up, ", threads, " threads");
   writeTextAtomically(md, tradeoffMarkdown(rows, title));
   if (!a.quiet) std::fprintf(stderr, "aperture: wrote %s and %s\n", csv.c_str(), md.c_str());
   std::printf("%s", tradeoffMarkdown(rows, title).c_str());
+}
+
+int runTradeoff(const TradeoffArgs& a) {
+  TradeoffConfig c = tradeoffConfig(a);
+  ThreadLimit threads(a.render.threads);
+  c.camera = framedCamera(a);
+  const std::vector<TradeoffRow> rows = runWithTempDir(c, a.outDir);
+  writeReports(a, c, threads.threads(), rows);
   return 0;
 }
 

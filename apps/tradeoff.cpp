@@ -14,6 +14,7 @@
 #include "cameras/registry.h"
 #include "core/error.h"
 #include "core/image.h"
+#include "core/stats.h"
 
 namespace aperture::app {
 
@@ -24,13 +25,6 @@ using Clock = std::chrono::steady_clock;
 
 /// What the study renders: color for the image error, depth and primID for the geometry.
 constexpr AovMask kStudyAovs = kAovColor | kAovDepth | kAovPrimId;
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 bool sameBuild(const BuildOptions& a, const BuildOptions& b) {
   return a.quality == b.quality && a.robust == b.robust && a.compact == b.compact;
@@ -168,6 +162,35 @@ class Study {
     return back;
   }
 
+  /// A row that only changes how the file is written: the base frame and its timing, written
+  /// with the row's EXR options and compared after reading it back.
+  TradeoffRow measureFileOnly(const TradeoffSetting& s, TradeoffRow& r) {
+    r.frameSeconds = baseRow_.frameSeconds;
+    r.mraysPerSecond = baseRow_.mraysPerSecond;
+    r.buildSeconds = baseRow_.buildSeconds;
+    r.embreeBytes = baseRow_.embreeBytes;
+    const Framebuffer back = writeAndRead(*baseFrame_, *baseScene_, s.render.spp, s.exr, r);
+    compare(back, s.render.spp, r);
+    return r;
+  }
+
+  /// Renders the warm-up and timed frames of `scene` with `rs`; the medians go to `r`, the
+  /// last frame is returned.
+  Framebuffer timeFrames(const Scene& scene, const RenderSettings& rs, TradeoffRow& r) {
+    const auto cam = camera(scene, rs.spp);
+    Framebuffer fb(c_.camera.width, c_.camera.height, kStudyAovs);
+    std::vector<double> seconds, mrays;
+    for (int f = 0; f < c_.warmup + std::max(1, c_.frames); ++f) {
+      const RenderStats st = renderImage(scene, *cam, rs, fb);
+      if (f < c_.warmup) continue;
+      seconds.push_back(st.seconds);
+      mrays.push_back(st.mraysPerSecond());
+    }
+    r.frameSeconds = median(seconds);
+    r.mraysPerSecond = median(mrays);
+    return fb;
+  }
+
   TradeoffRow measure(const TradeoffSetting& s, const TradeoffSetting& base) {
     TradeoffRow r;
     r.setting = s;
@@ -176,15 +199,7 @@ class Study {
         s.knob != "base" && sameBuild(s.build, base.build) && s.placement == base.placement &&
         s.render.packetWidth == base.render.packetWidth &&
         s.render.tileSize == base.render.tileSize && s.render.spp == base.render.spp;
-    if (exrOnly && baseFrame_) {
-      r.frameSeconds = baseRow_.frameSeconds;
-      r.mraysPerSecond = baseRow_.mraysPerSecond;
-      r.buildSeconds = baseRow_.buildSeconds;
-      r.embreeBytes = baseRow_.embreeBytes;
-      const Framebuffer back = writeAndRead(*baseFrame_, *baseScene_, s.render.spp, s.exr, r);
-      compare(back, s.render.spp, r);
-      return r;
-    }
+    if (exrOnly && baseFrame_) return measureFileOnly(s, r);
 
     // The base scene is kept for the knobs that do not change the build.
     std::unique_ptr<Scene> own;
@@ -202,17 +217,7 @@ class Study {
       r.embreeBytes = baseRow_.embreeBytes;
     }
 
-    const auto cam = camera(*scene, s.render.spp);
-    Framebuffer fb(c_.camera.width, c_.camera.height, kStudyAovs);
-    std::vector<double> seconds, mrays;
-    for (int f = 0; f < c_.warmup + std::max(1, c_.frames); ++f) {
-      const RenderStats st = renderImage(*scene, *cam, s.render, fb);
-      if (f < c_.warmup) continue;
-      seconds.push_back(st.seconds);
-      mrays.push_back(st.mraysPerSecond());
-    }
-    r.frameSeconds = median(seconds);
-    r.mraysPerSecond = median(mrays);
+    Framebuffer fb = timeFrames(*scene, s.render, r);
     compare(fb, s.render.spp, r);
 
     if (s.knob == "base") {

@@ -8,12 +8,13 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <fstream>
-#include <map>
+#include <optional>
 #include <string_view>
 
 #include "core/error.h"
+#include "core/mesh.h"
+#include "core/ply.h"
 
 namespace aperture {
 
@@ -54,95 +55,101 @@ std::vector<std::string_view> words(std::string_view line) {
   return out;
 }
 
-size_t plyTypeSize(std::string_view t) {
-  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
-  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
-  if (t == "double" || t == "float64") return 8;
-  return 4;
-}
-
-struct PlyElem {
-  std::string name;
-  uint64_t count = 0;
-  uint64_t fixedBytes = 0;  // bytes of the scalar properties (binary)
-  uint64_t minBytes = 0;    // smallest possible item (binary: scalars + list counts)
-  int lists = 0, props = 0;
-  size_t listCountBytes = 1, listItemBytes = 4;
-  bool doubleXyz = false;
-};
-
-void estimatePly(const std::string& head, uint64_t fileBytes, MeshSizeEstimate& m) {
-  std::vector<PlyElem> elems;
-  bool ascii = true, terminated = false;
-  size_t pos = 0;
-  uint64_t headerBytes = 0;
-  while (pos < head.size()) {
-    size_t nl = head.find('\n', pos);
-    if (nl == std::string::npos) break;
-    auto w = words(std::string_view(head).substr(pos, nl - pos));
-    pos = nl + 1;
-    if (w.empty()) continue;
-    if (w[0] == "end_header") {
-      terminated = true;
-      headerBytes = pos;
-      break;
-    }
-    if (w[0] == "format" && w.size() >= 2) ascii = w[1] == "ascii";
-    if (w[0] == "element" && w.size() == 3) {
-      PlyElem e;
-      e.name = std::string(w[1]);
-      e.count = std::strtoull(std::string(w[2]).c_str(), nullptr, 10);
-      elems.push_back(e);
-    }
-    if (w[0] == "property" && !elems.empty()) {
-      PlyElem& e = elems.back();
-      ++e.props;
-      if (w.size() == 5 && w[1] == "list") {
-        ++e.lists;
-        e.listCountBytes = plyTypeSize(w[2]);
-        e.listItemBytes = plyTypeSize(w[3]);
-        e.minBytes += e.listCountBytes;
-      } else if (w.size() == 3) {
-        e.fixedBytes += plyTypeSize(w[1]);
-        e.minBytes += plyTypeSize(w[1]);
-        if ((w[1] == "double" || w[1] == "float64") && (w[2] == "x" || w[2] == "y" || w[2] == "z"))
-          e.doubleXyz = true;
-      }
-    }
-  }
-  if (!terminated) return;
-  const uint64_t dataBytes = fileBytes - headerBytes;
-  // Clamp counts to what the data could hold (ASCII: at least 2 bytes a value).
-  for (PlyElem& e : elems) {
-    const uint64_t minItem = ascii ? 2 * uint64_t(e.props) : e.minBytes;
+/// Counts a file could not hold are clamped to what its data could (the loader reports them).
+void clampCountsToData(PlyHeader& h, uint64_t dataBytes) {
+  for (PlyElement& e : h.elements) {
+    const uint64_t minItem = plyMinItemBytes(h.format, e);
     if (minItem > 0) e.count = std::min(e.count, dataBytes / minItem);
   }
-  bool doubles = false;
+}
+
+bool hasList(const PlyElement& e) {
+  return std::any_of(e.props.begin(), e.props.end(), [](const PlyProperty& p) { return p.list; });
+}
+
+/// Binary bytes of an item's scalar properties.
+uint64_t scalarBytes(const PlyElement& e) {
+  uint64_t bytes = 0;
+  for (const PlyProperty& p : e.props)
+    if (!p.list) bytes += plyTypeSize(p.type);
+  return bytes;
+}
+
+/// The list property of `e` when it has exactly one, else nullptr.
+const PlyProperty* onlyList(const PlyElement& e) {
+  const PlyProperty* list = nullptr;
+  for (const PlyProperty& p : e.props)
+    if (p.list) {
+      if (list) return nullptr;
+      list = &p;
+    }
+  return list;
+}
+
+/// How many values the lists of `e` hold in all, when the file size tells: a binary file in
+/// which `e` has the only list property and every other item has a fixed size.
+std::optional<uint64_t> listValueCount(const PlyHeader& h, const PlyElement& e,
+                                       uint64_t dataBytes) {
+  const PlyProperty* list = onlyList(e);
+  if (h.format == PlyFormat::Ascii || !list) return std::nullopt;
   uint64_t otherBytes = 0;
-  bool othersFixed = true;
-  for (const PlyElem& e : elems) {
+  for (const PlyElement& other : h.elements) {
+    if (&other == &e) continue;
+    if (hasList(other)) return std::nullopt;
+    otherBytes += other.count * scalarBytes(other);
+  }
+  const uint64_t ownBytes = e.count * (scalarBytes(e) + plyTypeSize(list->countType));
+  if (otherBytes + ownBytes > dataBytes) return std::nullopt;
+  return (dataBytes - otherBytes - ownBytes) / plyTypeSize(list->type);
+}
+
+/// Triangles the loader makes of a face element: a polygon of n corners makes n - 2 (a fan),
+/// so all of them make corners - 2 * faces. One a face where the corners cannot be told.
+uint64_t faceTriangles(const PlyHeader& h, const PlyElement& e, uint64_t dataBytes) {
+  const std::optional<uint64_t> corners = listValueCount(h, e, dataBytes);
+  return corners && *corners >= 3 * e.count ? *corners - 2 * e.count : e.count;
+}
+
+/// Triangles the loader makes of a tristrips element, bounded from above: a strip of n indices
+/// makes at most n - 2 (each restart makes fewer, and only the data shows them).
+uint64_t stripTriangles(const PlyHeader& h, const PlyElement& e, uint64_t dataBytes) {
+  if (const std::optional<uint64_t> indices = listValueCount(h, e, dataBytes))
+    return *indices > 2 * e.count ? *indices - 2 * e.count : 0;
+  const PlyProperty* list = onlyList(e);
+  const uint64_t bytesPerIndex = h.format == PlyFormat::Ascii ? 2
+                                 : list                       ? plyTypeSize(list->type)
+                                                              : 4;
+  return dataBytes / bytesPerIndex;
+}
+
+bool hasDoubleCoordinates(const PlyElement& vertex) {
+  return std::any_of(vertex.props.begin(), vertex.props.end(), [](const PlyProperty& p) {
+    return !p.list && p.type == PlyType::Float64 &&
+           (p.name == "x" || p.name == "y" || p.name == "z");
+  });
+}
+
+/// Counts from the loader's own header reader; a header it rejects is left to the loader
+/// (the estimate then falls back on the file size).
+void estimatePly(const std::string& path, const std::string& head, uint64_t fileBytes,
+                 MeshSizeEstimate& m) {
+  PlyHeader h;
+  try {
+    h = readPlyHeader(path, head.data(), head.size());
+  } catch (const Error&) {
+    return;
+  }
+  const uint64_t dataBytes = fileBytes - std::min<uint64_t>(fileBytes, h.dataOffset);
+  clampCountsToData(h, dataBytes);
+  bool doubles = false;
+  for (const PlyElement& e : h.elements) {
     if (e.name == "vertex") {
       m.vertices = e.count;
-      doubles = e.doubleXyz;
-    }
-    if (e.name != "face" && e.name != "tristrips") {
-      if (e.lists) othersFixed = false;
-      otherBytes += e.count * e.fixedBytes;
-    }
-  }
-  for (const PlyElem& e : elems) {
-    if (e.name == "face") {
-      m.triangles += e.count;
-      // Binary faces with one list and fixed-size other elements: the average polygon size
-      // follows from the bytes the faces take.
-      if (!ascii && othersFixed && e.lists == 1 && e.count > 0 && dataBytes > otherBytes) {
-        const double perFace = double(dataBytes - otherBytes) / double(e.count);
-        const double corners =
-            (perFace - double(e.fixedBytes + e.listCountBytes)) / double(e.listItemBytes);
-        if (corners > 3) m.triangles = e.count * uint64_t(std::lround(corners - 2));
-      }
+      doubles = hasDoubleCoordinates(e);
+    } else if (e.name == "face") {
+      m.triangles += faceTriangles(h, e, dataBytes);
     } else if (e.name == "tristrips") {
-      m.triangles += dataBytes / (ascii ? 2 : e.listItemBytes);
+      m.triangles += stripTriangles(h, e, dataBytes);
     }
   }
   m.loaderBytes = m.vertices * (doubles ? 37 : 13) + m.triangles * 12;
@@ -199,52 +206,19 @@ void estimateObj(const std::string& head, uint64_t fileBytes, MeshSizeEstimate& 
   m.how = cat("OBJ sample of ", head.size(), " bytes");
 }
 
+/// The generator's own counts; a spec it rejects is left to it (the estimate counts nothing).
 void estimateProcedural(const std::string& spec, MeshSizeEstimate& m) {
-  std::string rest = spec.substr(std::strlen("procedural:"));
-  const size_t q = rest.find('?');
-  const std::string name = rest.substr(0, q);
-  std::map<std::string, double> params;
-  if (q != std::string::npos) {
-    std::string query = rest.substr(q + 1);
-    size_t at = 0;
-    while (at <= query.size()) {
-      size_t amp = query.find('&', at);
-      if (amp == std::string::npos) amp = query.size();
-      const std::string kv = query.substr(at, amp - at);
-      const size_t eq = kv.find('=');
-      if (eq != std::string::npos)
-        params[kv.substr(0, eq)] = std::strtod(kv.c_str() + eq + 1, nullptr);
-      at = amp + 1;
-    }
+  MeshCounts counts;
+  try {
+    counts = proceduralMeshCounts(spec);
+  } catch (const Error&) {
+    m.how = "procedural spec (invalid: left to the generator)";
+    return;
   }
-  auto get = [&](const char* key, double fallback) {
-    auto it = params.find(key);
-    const double v = it == params.end() ? fallback : it->second;
-    return std::isfinite(v) && v > 0 ? std::min(v, 1e10) : fallback;
-  };
-  double tris = 20000;  // city
-  if (name == "spheres" || name == "default") {
-    tris = get("tris", 200000);
-  } else if (name == "sphere") {
-    tris = 2 * get("segments", 64) * get("rings", 32);
-  } else if (name == "quad") {
-    tris = 2;
-  } else if (name == "cube") {
-    tris = 12;
-  }
-  m.triangles = uint64_t(tris);
-  m.vertices = m.triangles / 2 + 8;
+  m.vertices = counts.vertices;
+  m.triangles = counts.triangles;
   m.loaderBytes = m.vertices * 37 + m.triangles * 12;
   m.how = "procedural spec";
-}
-
-std::string lowerExtension(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  const size_t dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-  std::string ext = path.substr(dot);
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
 }
 
 }  // namespace
@@ -262,7 +236,7 @@ MeshSizeEstimate estimateMeshSize(const std::string& spec) {
   }
   const std::string ext = lowerExtension(spec);
   if (ext == ".ply")
-    estimatePly(head, m.fileBytes, m);
+    estimatePly(spec, head, m.fileBytes, m);
   else if (ext == ".obj")
     estimateObj(sampleChunks(spec, m.fileBytes), m.fileBytes, m);
   // The loaders map the whole file; its pages count too.

@@ -17,10 +17,12 @@ struct MeshSizeEstimate {
   std::string how;           ///< "PLY header", "OBJ sample of N bytes", "procedural spec"
 };
 
-/// Estimates `spec` (a .ply or .obj path or a procedural spec): a PLY's element counts from its
-/// header (at most 1 MiB read), an OBJ's from 1 MiB sampled across the file and scaled, a
-/// procedural mesh's from its parameters. Counts a file could not hold are clamped to its size
-/// (the loader reports those). Throws Error only for an unreadable path.
+/// Estimates `spec` (a .ply or .obj path or a procedural spec): a PLY's counts from its header
+/// as the loader reads it (readPlyHeader; at most 1 MiB read; binary polygons and strips from
+/// the bytes their lists take, strips as an upper bound), an OBJ's from 1 MiB sampled across
+/// the file and scaled, a procedural mesh's from the generator (proceduralMeshCounts). Counts a
+/// file could not hold are clamped to its size. Never throws: an unreadable path, a header the
+/// loader rejects or a bad procedural spec is left to the loader, which names the problem.
 MeshSizeEstimate estimateMeshSize(const std::string& spec);
 
 /// Bytes per pixel of the requested AOVs' framebuffers.

@@ -1,6 +1,7 @@
 #include "core/mesh.h"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -8,8 +9,6 @@
 #include "core/error.h"
 
 namespace aperture {
-
-namespace {
 
 std::string lowerExtension(const std::string& path) {
   size_t slash = path.find_last_of('/');
@@ -19,8 +18,6 @@ std::string lowerExtension(const std::string& path) {
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
   return ext;
 }
-
-}  // namespace
 
 void Mesh::bounds(glm::vec3& lo, glm::vec3& hi) const {
   lo = glm::vec3(std::numeric_limits<float>::max());
@@ -55,20 +52,35 @@ Mesh loadMesh(const std::string& spec, const LoadOptions& options) {
   return mesh;
 }
 
-void finishMesh(Mesh& mesh, const LoadOptions& options) {
-  const size_t n = mesh.vertexCount;
-  const bool fromDouble = !mesh.positionsDouble.empty() || mesh.positions.empty();
-  if (fromDouble) {
-    APERTURE_CHECK_OP(mesh.positionsDouble.size(), ==, 3 * n);
-  } else {
-    APERTURE_CHECK_OP(mesh.positions.size(), >=, 3 * n);
-  }
-  APERTURE_CHECK_OP(mesh.indices.size() % 3, ==, 0u);
-  auto coord = [&](size_t i) -> double {
-    return fromDouble ? mesh.positionsDouble[i] : double(mesh.positions[i]);
-  };
+namespace {
 
-  // Index range check before anything else touches the vertices.
+/// The loader's vertices after the options' scale, translate and transform, in double; reads
+/// the loader's float or double positions as they are at the time of the call.
+class WorldVertices {
+ public:
+  WorldVertices(const Mesh& mesh, const LoadOptions& options, bool fromDouble)
+      : mesh_(mesh), options_(options), fromDouble_(fromDouble) {}
+
+  glm::dvec3 operator()(size_t k) const {
+    const glm::dvec3 v =
+        options_.scale * glm::dvec3(coord(3 * k), coord(3 * k + 1), coord(3 * k + 2)) +
+        options_.translate;
+    return options_.transform ? glm::dvec3(*options_.transform * glm::dvec4(v, 1.0)) : v;
+  }
+
+ private:
+  double coord(size_t i) const {
+    return fromDouble_ ? mesh_.positionsDouble[i] : double(mesh_.positions[i]);
+  }
+
+  const Mesh& mesh_;
+  const LoadOptions& options_;
+  bool fromDouble_;
+};
+
+/// Throws Error naming the mesh, how many indices are >= vertexCount and the first of them.
+void checkIndicesInRange(const Mesh& mesh) {
+  const size_t n = mesh.vertexCount;
   size_t badIndices = 0;
   size_t firstBadAt = 0;
   uint32_t firstBad = 0;
@@ -82,17 +94,14 @@ void finishMesh(Mesh& mesh, const LoadOptions& options) {
   if (badIndices)
     throw Error(cat(mesh.name, ": ", badIndices, " vertex indices out of range (the mesh has ", n,
                     " vertices); the first is ", firstBad, " in triangle ", firstBadAt));
+}
 
-  // Transform in double, mark non-finite vertices and take the bounding box of the rest.
-  auto world = [&](size_t k) {
-    const glm::dvec3 v =
-        options.scale * glm::dvec3(coord(3 * k), coord(3 * k + 1), coord(3 * k + 2)) +
-        options.translate;
-    return options.transform ? glm::dvec3(*options.transform * glm::dvec4(v, 1.0)) : v;
-  };
-  std::vector<uint8_t> bad(n, 0);
-  glm::dvec3 lo(std::numeric_limits<double>::max());
-  glm::dvec3 hi(-std::numeric_limits<double>::max());
+/// Sets bad[k] for the n vertices with a non-finite world position and returns how many there
+/// are; [lo, hi] becomes the bounding box of the others.
+size_t markNonFiniteVertices(const WorldVertices& world, size_t n, std::vector<uint8_t>& bad,
+                             glm::dvec3& lo, glm::dvec3& hi) {
+  lo = glm::dvec3(std::numeric_limits<double>::max());
+  hi = glm::dvec3(-std::numeric_limits<double>::max());
   size_t nonFinite = 0;
   for (size_t k = 0; k < n; ++k) {
     glm::dvec3 v = world(k);
@@ -104,13 +113,16 @@ void finishMesh(Mesh& mesh, const LoadOptions& options) {
       hi = glm::max(hi, v);
     }
   }
-  mesh.stats.nonFiniteVertices = nonFinite;
+  return nonFinite;
+}
 
-  // Drop triangles using a non-finite vertex; count (and keep) degenerate ones.
+/// Drops the triangles using a bad vertex (when `anyBad`) and counts, but keeps, degenerate
+/// ones (a repeated index); both counts go to the mesh's stats.
+void dropTrianglesOfBadVertices(Mesh& mesh, const std::vector<uint8_t>& bad, bool anyBad) {
   size_t out = 0, dropped = 0, degenerate = 0;
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
     uint32_t a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
-    if (nonFinite && (bad[a] || bad[b] || bad[c])) {
+    if (anyBad && (bad[a] || bad[b] || bad[c])) {
       ++dropped;
       continue;
     }
@@ -122,14 +134,14 @@ void finishMesh(Mesh& mesh, const LoadOptions& options) {
   mesh.indices.resize(out);
   mesh.stats.droppedTriangles = dropped;
   mesh.stats.degenerateTriangles = degenerate;
+}
 
-  if (options.placement == Placement::WorldSpace || nonFinite == n)
-    mesh.anchor = glm::dvec3(0.0);
-  else
-    mesh.anchor = 0.5 * (lo + hi);
-
-  // Non-finite vertices are stored as 0 relative to the anchor (no triangle uses them). Float
-  // sources are rewritten in place: vertex k is read before it is overwritten.
+/// Writes the float positions relative to mesh.anchor, padded for Embree. Non-finite vertices
+/// are stored as 0 (no triangle uses them). Float sources are rewritten in place: vertex k is
+/// read before it is overwritten.
+void writeAnchoredPositions(Mesh& mesh, const WorldVertices& world, const std::vector<uint8_t>& bad,
+                            bool fromDouble) {
+  const size_t n = mesh.vertexCount;
   if (fromDouble) mesh.positions.assign(3 * n + kVertexPaddingFloats, 0.0f);
   mesh.positions.resize(3 * n + kVertexPaddingFloats);
   std::fill(mesh.positions.begin() + 3 * n, mesh.positions.end(), 0.0f);
@@ -137,6 +149,34 @@ void finishMesh(Mesh& mesh, const LoadOptions& options) {
     glm::dvec3 v = bad[k] ? glm::dvec3(0.0) : world(k) - mesh.anchor;
     for (int a = 0; a < 3; ++a) mesh.positions[3 * k + a] = float(v[a]);
   }
+}
+
+}  // namespace
+
+void finishMesh(Mesh& mesh, const LoadOptions& options) {
+  const size_t n = mesh.vertexCount;
+  const bool fromDouble = !mesh.positionsDouble.empty() || mesh.positions.empty();
+  if (fromDouble) {
+    APERTURE_CHECK_OP(mesh.positionsDouble.size(), ==, 3 * n);
+  } else {
+    APERTURE_CHECK_OP(mesh.positions.size(), >=, 3 * n);
+  }
+  APERTURE_CHECK_OP(mesh.indices.size() % 3, ==, 0u);
+  // Index range check before anything else touches the vertices.
+  checkIndicesInRange(mesh);
+
+  const WorldVertices world(mesh, options, fromDouble);
+  std::vector<uint8_t> bad(n, 0);
+  glm::dvec3 lo, hi;
+  const size_t nonFinite = markNonFiniteVertices(world, n, bad, lo, hi);
+  mesh.stats.nonFiniteVertices = nonFinite;
+  dropTrianglesOfBadVertices(mesh, bad, nonFinite > 0);
+
+  if (options.placement == Placement::WorldSpace || nonFinite == n)
+    mesh.anchor = glm::dvec3(0.0);
+  else
+    mesh.anchor = 0.5 * (lo + hi);
+  writeAnchoredPositions(mesh, world, bad, fromDouble);
   mesh.positionsDouble.clear();
   mesh.positionsDouble.shrink_to_fit();
 }

@@ -76,6 +76,19 @@ Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& name);
 Mesh loadObjFromMemory(const char* data, size_t size, const std::string& name);
 Mesh makeProcedural(const std::string& spec);
 
+/// How many vertices and triangles a mesh has.
+struct MeshCounts {
+  size_t vertices = 0;
+  size_t triangles = 0;
+};
+/// The counts makeProcedural(spec) will have, from the generator's own layout and without
+/// generating the large meshes (used by the memory estimate). Throws Error for a bad spec,
+/// as makeProcedural does.
+MeshCounts proceduralMeshCounts(const std::string& spec);
+
+/// The extension of the last path component, lower-cased with its dot (".ply"), or "".
+std::string lowerExtension(const std::string& path);
+
 /// Counts and zeroes non-finite vertices, drops the triangles using them, counts degenerate
 /// triangles, checks every index (< vertexCount, else Error naming `name`), applies the
 /// options' transform and anchor, and pads positions for Embree.

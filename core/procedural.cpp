@@ -25,6 +25,7 @@
 #include "core/error.h"
 #include "core/mesh.h"
 #include "core/parallel.h"
+#include "core/sampling.h"
 #include "core/units.h"
 
 namespace aperture {
@@ -130,19 +131,32 @@ void writeSphere(double* pos, uint32_t* idx, uint32_t v0, glm::dvec3 c, double r
   for (long k = 0; k < segments; ++k) tri(south, ring(rings - 1, k + 1), ring(rings - 1, k));
 }
 
-Mesh makeSphere(const std::string& spec, const Params& p) {
-  long segments = asCount(spec, "segments", p.at("segments"), 3, 1 << 16);
-  long rings = asCount(spec, "rings", p.at("rings"), 2, 1 << 16);
-  double radius = p.at("radius");
-  if (!(radius > 0)) throw Error(cat(spec, ": radius=", radius, " must be positive"));
-  if (sphereVertices(segments, rings) > (size_t(1) << 31))
+/// A sphere spec's tessellation, radius and centre, validated.
+struct SphereShape {
+  long segments = 0, rings = 0;
+  double radius = 1;
+  glm::dvec3 centre{0.0};
+};
+
+SphereShape sphereShape(const std::string& spec, const Params& p) {
+  SphereShape s;
+  s.segments = asCount(spec, "segments", p.at("segments"), 3, 1 << 16);
+  s.rings = asCount(spec, "rings", p.at("rings"), 2, 1 << 16);
+  s.radius = p.at("radius");
+  if (!(s.radius > 0)) throw Error(cat(spec, ": radius=", s.radius, " must be positive"));
+  if (sphereVertices(s.segments, s.rings) > (size_t(1) << 31))
     throw Error(cat(spec, ": segments*rings is too large"));
+  s.centre = {p.at("cx"), p.at("cy"), p.at("cz")};
+  return s;
+}
+
+Mesh makeSphere(const SphereShape& s) {
   Mesh m;
-  m.vertexCount = sphereVertices(segments, rings);
+  m.vertexCount = sphereVertices(s.segments, s.rings);
   m.positionsDouble.resize(3 * m.vertexCount);
-  m.indices.resize(3 * sphereTriangles(segments, rings));
-  writeSphere(m.positionsDouble.data(), m.indices.data(), 0, {p.at("cx"), p.at("cy"), p.at("cz")},
-              radius, segments, rings);
+  m.indices.resize(3 * sphereTriangles(s.segments, s.rings));
+  writeSphere(m.positionsDouble.data(), m.indices.data(), 0, s.centre, s.radius, s.segments,
+              s.rings);
   return m;
 }
 
@@ -165,54 +179,61 @@ void chooseTessellation(double target, long& segments, long& rings) {
   }
 }
 
-uint32_t mix(uint32_t x) {
-  x ^= x >> 16;
-  x *= 0x7feb352du;
-  x ^= x >> 15;
-  x *= 0x846ca68bu;
-  x ^= x >> 16;
-  return x;
+/// Uniform in [0, 1) from an integer: the sizes and heights of the scenes' objects.
+double hash01(uint32_t i) { return double(hash32(i)) / 4294967296.0; }
+
+/// The spheres scene's layout: a g x g grid of spheres after the ground; sphere i has
+/// segs[i] x rings[i] and its vertices and triangles start at vOff[i] and tOff[i]. The last
+/// offsets are the mesh's vertex and triangle counts.
+struct SpheresPlan {
+  long grid = 1;
+  std::vector<long> segs, rings;
+  std::vector<size_t> vOff, tOff;
+};
+
+SpheresPlan planSpheres(const std::string& spec, const Params& p) {
+  const long tris = asCount(spec, "tris", p.at("tris"), 100, 400000000);
+  SpheresPlan plan;
+  // More spheres for larger budgets, capped to keep them detailed.
+  plan.grid = std::clamp(std::lround(std::sqrt(double(tris) / 5000.0)), 1L, 20L);
+  const size_t count = size_t(plan.grid * plan.grid);
+  plan.segs.resize(count);
+  plan.rings.resize(count);
+  plan.vOff.assign(count + 1, 4);  // the ground's 4 vertices and 2 triangles come first
+  plan.tOff.assign(count + 1, 2);
+  for (size_t i = 0; i < count; ++i) {
+    // Each sphere aims at an equal share of what is left, so rounding errors do not add up.
+    const double target = double(size_t(tris) - plan.tOff[i]) / double(count - i);
+    chooseTessellation(target, plan.segs[i], plan.rings[i]);
+    plan.vOff[i + 1] = plan.vOff[i] + sphereVertices(plan.segs[i], plan.rings[i]);
+    plan.tOff[i + 1] = plan.tOff[i] + sphereTriangles(plan.segs[i], plan.rings[i]);
+  }
+  if (plan.vOff.back() > (size_t(1) << 32) - 1)
+    throw Error(cat(spec, ": too many vertices for 32-bit indices"));
+  return plan;
 }
 
-double hash01(uint32_t i) { return double(mix(i)) / 4294967296.0; }
-
-Mesh makeSpheres(const std::string& spec, const Params& p) {
-  const long tris = asCount(spec, "tris", p.at("tris"), 100, 400000000);
-  // Grid of g x g spheres; more spheres for larger budgets, capped to keep them detailed.
-  const long g = std::clamp(std::lround(std::sqrt(double(tris) / 5000.0)), 1L, 20L);
-  const long count = g * g;
-  std::vector<long> segs(static_cast<size_t>(count)), rings(static_cast<size_t>(count));
-  std::vector<size_t> vOff(size_t(count) + 1), tOff(size_t(count) + 1);
-  vOff[0] = 4;  // the ground's 4 vertices come first
-  tOff[0] = 2;
-  for (long i = 0; i < count; ++i) {
-    // Each sphere aims at an equal share of what is left, so rounding errors do not add up.
-    double target = double(size_t(tris) - tOff[size_t(i)]) / double(count - i);
-    chooseTessellation(target, segs[size_t(i)], rings[size_t(i)]);
-    vOff[size_t(i) + 1] = vOff[size_t(i)] + sphereVertices(segs[size_t(i)], rings[size_t(i)]);
-    tOff[size_t(i) + 1] = tOff[size_t(i)] + sphereTriangles(segs[size_t(i)], rings[size_t(i)]);
-  }
-  if (vOff.back() > (size_t(1) << 32) - 1)
-    throw Error(cat(spec, ": too many vertices for 32-bit indices"));
+Mesh makeSpheres(const SpheresPlan& plan) {
   Mesh m;
-  m.vertexCount = vOff.back();
+  m.vertexCount = plan.vOff.back();
   m.positionsDouble.resize(3 * m.vertexCount);
-  m.indices.resize(3 * tOff.back());
+  m.indices.resize(3 * plan.tOff.back());
   const double h = 6.0;
   const double ground[12] = {-h, 0, h, h, 0, h, h, 0, -h, -h, 0, -h};
   std::copy(ground, ground + 12, m.positionsDouble.begin());
   const uint32_t groundIdx[6] = {0, 1, 2, 0, 2, 3};
   std::copy(groundIdx, groundIdx + 6, m.indices.begin());
+  const long g = plan.grid;
   const double spacing = 10.0 / double(g);
-  parallelFor(size_t(count), 16, [&](size_t first, size_t last) {
+  parallelFor(size_t(g * g), 16, [&](size_t first, size_t last) {
     for (long i = long(first); i != long(last); ++i) {
       long row = i / g, col = i % g;
       double r = spacing * 0.45 * (0.35 + 0.65 * hash01(uint32_t(i)));
       glm::dvec3 c(-5.0 + spacing * (double(col) + 0.5), r, -5.0 + spacing * (double(row) + 0.5));
       size_t k = size_t(i);
-      uint32_t* idx = m.indices.data() + 3 * tOff[k];
-      writeSphere(m.positionsDouble.data() + 3 * vOff[k], idx, uint32_t(vOff[k]), c, r, segs[k],
-                  rings[k]);
+      uint32_t* idx = m.indices.data() + 3 * plan.tOff[k];
+      writeSphere(m.positionsDouble.data() + 3 * plan.vOff[k], idx, uint32_t(plan.vOff[k]), c, r,
+                  plan.segs[k], plan.rings[k]);
     }
   });
   return m;
@@ -298,46 +319,72 @@ Mesh makeCube(const Params& p) {
   return m;
 }
 
-}  // namespace
+/// A procedural spec split into its name and its parameters (defaults filled in).
+struct ProceduralSpec {
+  std::string name;
+  Params params;
+};
 
-Mesh makeProcedural(const std::string& spec) {
+ProceduralSpec parseSpec(const std::string& spec) {
   const std::string prefix = "procedural:";
   if (spec.rfind(prefix, 0) != 0)
     throw Error(cat(spec, ": a procedural spec starts with '", prefix, "'"));
   std::string rest = spec.substr(prefix.size());
   size_t q = rest.find('?');
-  std::string name = rest.substr(0, q);
+  ProceduralSpec s;
+  s.name = rest.substr(0, q);
   std::string query = q == std::string::npos ? "" : rest.substr(q + 1);
-  Params params;
-  if (name == "spheres" || name == "default") {
-    params = {{"tris", 200000}};
-  } else if (name == "sphere") {
-    params = {{"radius", 1}, {"segments", 64}, {"rings", 32}, {"cx", 0}, {"cy", 0}, {"cz", 0}};
-  } else if (name == "quad") {
-    params = {{"size", 2}, {"z", 0}};
-  } else if (name == "cube") {
-    params = {{"size", 1}};
-  } else if (name != "city") {
-    throw Error(cat(spec, ": unknown procedural mesh '", name,
+  if (s.name == "spheres" || s.name == "default") {
+    s.params = {{"tris", 200000}};
+  } else if (s.name == "sphere") {
+    s.params = {{"radius", 1}, {"segments", 64}, {"rings", 32}, {"cx", 0}, {"cy", 0}, {"cz", 0}};
+  } else if (s.name == "quad") {
+    s.params = {{"size", 2}, {"z", 0}};
+  } else if (s.name == "cube") {
+    s.params = {{"size", 1}};
+  } else if (s.name != "city") {
+    throw Error(cat(spec, ": unknown procedural mesh '", s.name,
                     "' (known: spheres, default, sphere, quad, cube, city)"));
   }
-  parseParams(spec, name, query, params);
-  if (params.count("size") && !(params["size"] > 0))
-    throw Error(cat(spec, ": size=", params["size"], " must be positive"));
-  Mesh m;
-  if (name == "spheres" || name == "default")
-    m = makeSpheres(spec, params);
-  else if (name == "sphere")
-    m = makeSphere(spec, params);
-  else if (name == "quad")
-    m = makeQuad(params);
-  else if (name == "cube")
-    m = makeCube(params);
-  else
-    m = makeCity();
+  parseParams(spec, s.name, query, s.params);
+  if (s.params.count("size") && !(s.params["size"] > 0))
+    throw Error(cat(spec, ": size=", s.params["size"], " must be positive"));
+  return s;
+}
+
+bool isSpheresScene(const ProceduralSpec& s) { return s.name == "spheres" || s.name == "default"; }
+
+Mesh generate(const std::string& spec, const ProceduralSpec& s) {
+  if (isSpheresScene(s)) return makeSpheres(planSpheres(spec, s.params));
+  if (s.name == "sphere") return makeSphere(sphereShape(spec, s.params));
+  if (s.name == "quad") return makeQuad(s.params);
+  if (s.name == "cube") return makeCube(s.params);
+  return makeCity();
+}
+
+}  // namespace
+
+Mesh makeProcedural(const std::string& spec) {
+  Mesh m = generate(spec, parseSpec(spec));
   m.name = spec;
   m.stats.sourceFaces = m.triangleCount();
   return m;
+}
+
+MeshCounts proceduralMeshCounts(const std::string& spec) {
+  const ProceduralSpec s = parseSpec(spec);
+  if (isSpheresScene(s)) {
+    const SpheresPlan plan = planSpheres(spec, s.params);
+    return {plan.vOff.back(), plan.tOff.back()};
+  }
+  if (s.name == "sphere") {
+    const SphereShape shape = sphereShape(spec, s.params);
+    return {sphereVertices(shape.segments, shape.rings),
+            sphereTriangles(shape.segments, shape.rings)};
+  }
+  // The others are a few hundred triangles at most: generate them and count.
+  const Mesh m = generate(spec, s);
+  return {m.vertexCount, m.triangleCount()};
 }
 
 }  // namespace aperture
