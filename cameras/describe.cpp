@@ -6,6 +6,7 @@
 
 #include "cameras/base.h"
 #include "cameras/conventions.h"
+#include "cameras/param_schema.h"
 #include "cameras/registry.h"
 
 namespace aperture {
@@ -53,6 +54,19 @@ void describeExrHeader(std::ostream& s, const CameraDescription& desc) {
 }
 }  // namespace
 
+std::string describeParameters(const CameraParams& params) {
+  std::ostringstream s;
+  s << "parameters (" << params.type << "; from the schema, docs/cameras.md):\n";
+  for (const ParamSpec* spec : findCameraModel(params.type).params) {
+    const std::optional<ParamValue> v = spec->access.get(params);
+    s << "  " << spec->name << " = "
+      << (v ? formatParamValue(*v) : "not given: " + spec->defaultText());
+    if (*spec->unit) s << "  [" << spec->unit << "]";
+    s << "\n";
+  }
+  return s.str();
+}
+
 std::string describeCamera(const CameraParams& params, double nearDist, double farDist) {
   const auto cam = makeCameraModel(params);
   const CameraDescription desc = cam->describe();
@@ -68,6 +82,7 @@ std::string describeCamera(const CameraParams& params, double nearDist, double f
   s.precision(9);
   s << "camera " << desc.type << ", " << desc.width << "x" << desc.height << " pixels, spp "
     << desc.spp << "\n";
+  s << describeParameters(params);
   s << "frame (world):\n  e = " << vec(desc.eye) << "\n  U = " << vec(desc.u)
     << "\n  V = " << vec(desc.v) << "\n  W = " << vec(desc.w) << "  (W points backwards)\n";
   if (planarPerspective || parallel) {

@@ -14,6 +14,10 @@ namespace aperture {
 /// corners. nearDist/farDist < 0 pick defaults: near = d for perspective and thin lens, 0
 /// otherwise; far = 2·|at − eye| with a look-at point, else 10·d (or 10·max(vw, vh) for
 /// parallel cameras). Throws Error as makeCamera.
+/// Every parameter the camera's model reads, with its value or, when not given, its default
+/// rule and unit: generated from the parameter schema.
+std::string describeParameters(const CameraParams& params);
+
 std::string describeCamera(const CameraParams& params, double nearDist = -1, double farDist = -1);
 
 }  // namespace aperture

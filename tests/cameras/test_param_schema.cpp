@@ -12,6 +12,7 @@
 
 #include "apps/job.h"
 #include "cameras/base.h"
+#include "cameras/describe.h"
 #include "cameras/param_schema.h"
 #include "cameras/registry.h"
 #include "core/error.h"
@@ -316,6 +317,26 @@ TEST(ParamSchema, DocsTableIsTheGeneratedOne) {
   EXPECT_NE(docs.find(cameraParamsMarkdown()), std::string::npos)
       << "docs/cameras.md does not hold the generated table; regenerate it with "
          "`aperture camera --params-table` and paste it between the markers";
+}
+
+}  // namespace
+
+namespace {
+
+// --describe lists every parameter the model reads, with the given value or the default.
+TEST(ParamSchema, DescribeListsEveryParameterOfTheModel) {
+  for (const CameraModel* m : cameraModels()) {
+    SCOPED_TRACE(m->name);
+    const CameraParams p = test::cameraParamsFromFlags(baseFlags(*m) + " --spp 3");
+    const std::string text = describeParameters(p);
+    for (const ParamSpec* s : m->params)
+      EXPECT_NE(text.find("\n  " + std::string(s->name) + " = "), std::string::npos) << s->name;
+    EXPECT_NE(text.find("\n  spp = 3\n"), std::string::npos) << text;
+    for (const ParamSpec* s : allCameraParamSpecs()) {
+      if (m->accepts(s->name)) continue;
+      EXPECT_EQ(text.find("\n  " + std::string(s->name) + " = "), std::string::npos) << s->name;
+    }
+  }
 }
 
 }  // namespace
