@@ -30,61 +30,63 @@ std::string unknownFlagMessage(const CLI::App& sub, int argc, char** argv) {
   return "";
 }
 
-}  // namespace
+using Commands = std::vector<std::pair<CLI::App*, aperture::app::Command>>;
 
-int main(int argc, char** argv) {
+/// Registers every subcommand on `app`.
+Commands addCommands(CLI::App& app) {
   using namespace aperture::app;
-  // Past a file-size limit (ulimit -f), write() should fail with EFBIG, which the atomic
-  // writer reports and cleans up, instead of SIGXFSZ killing the process mid-write.
-  std::signal(SIGXFSZ, SIG_IGN);
-  CLI::App app{"aperture " APERTURE_VERSION
-               ": batch-render and benchmark large triangle meshes with Embree ray packets"};
-  app.set_version_flag("--version", "aperture " APERTURE_VERSION);
-  app.require_subcommand(1);
-  std::vector<std::pair<CLI::App*, Command>> commands;
-  auto add = [&](Command (*make)(CLI::App&)) {
+  Commands commands;
+  for (Command (*make)(CLI::App&) :
+       {addRenderCommand, addBenchCommand, addBatchCommand, addCameraCommand, addTradeoffCommand}) {
     const size_t before = app.get_subcommands({}).size();
     Command run = make(app);
     commands.emplace_back(app.get_subcommands({})[before], std::move(run));
-  };
-  add(addRenderCommand);
-  add(addBenchCommand);
-  add(addBatchCommand);
-  add(addCameraCommand);
-  add(addTradeoffCommand);
-  // A first word that is no subcommand: say which word, and list the commands.
+  }
+  return commands;
+}
+
+/// A first word that is no subcommand: says which word (with "did you mean") and lists the
+/// commands; false when the word is a command or a flag.
+bool reportUnknownCommand(const Commands& commands, int argc, char** argv) {
+  if (argc < 2 || argv[1][0] == '-') return false;
+  std::vector<std::string> names;
   std::string known;
-  bool isCommand = false;
   for (const auto& c : commands) {
+    if (c.first->get_name() == argv[1]) return false;
+    names.push_back(c.first->get_name());
     known += (known.empty() ? "" : ", ") + c.first->get_name();
-    isCommand = isCommand || (argc > 1 && c.first->get_name() == argv[1]);
   }
-  if (argc > 1 && argv[1][0] != '-' && !isCommand) {
-    std::vector<std::string> names;
-    for (const auto& c : commands) names.push_back(c.first->get_name());
-    std::fprintf(stderr, "aperture: unknown command '%s'%s (known: %s); see aperture --help\n",
-                 argv[1], aperture::didYouMean(argv[1], names).c_str(), known.c_str());
-    return 2;
-  }
+  std::fprintf(stderr, "aperture: unknown command '%s'%s (known: %s); see aperture --help\n",
+               argv[1], aperture::didYouMean(argv[1], names).c_str(), known.c_str());
+  return true;
+}
+
+/// Parses the command line; the exit code of a usage error (2), --help/--version (0), or -1
+/// to go on.
+int parseCommandLine(CLI::App& app, const Commands& commands, int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ExtrasError& e) {
-    for (const auto& c : commands)
-      if (argc > 1 && c.first->get_name() == argv[1]) {
-        const std::string message = unknownFlagMessage(*c.first, argc, argv);
-        if (!message.empty()) {
-          std::fprintf(stderr, "%s\n", message.c_str());
-          return 2;
-        }
-      }
+    for (const auto& c : commands) {
+      if (c.first->get_name() != argv[1]) continue;
+      const std::string message = unknownFlagMessage(*c.first, argc, argv);
+      if (message.empty()) break;
+      std::fprintf(stderr, "%s\n", message.c_str());
+      return 2;
+    }
     return app.exit(e) == 0 ? 0 : 2;
   } catch (const CLI::ParseError& e) {
     // --help/--version exit 0; every usage error (CLI11 uses codes such as 104 for a value
     // that does not convert) exits 2 with its message.
     return app.exit(e) == 0 ? 0 : 2;
   }
+  return -1;
+}
+
+/// Runs the parsed subcommand: its exit code, or 1 with the error on stderr.
+int runParsedCommand(const Commands& commands) {
   try {
-    for (auto& [sub, run] : commands)
+    for (const auto& [sub, run] : commands)
       if (sub->parsed()) return run();
   } catch (const aperture::Error& e) {
     std::fprintf(stderr, "aperture: error: %s\n", e.what());
@@ -94,4 +96,20 @@ int main(int argc, char** argv) {
     return 1;
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Past a file-size limit (ulimit -f), write() should fail with EFBIG, which the atomic
+  // writer reports and cleans up, instead of SIGXFSZ killing the process mid-write.
+  std::signal(SIGXFSZ, SIG_IGN);
+  CLI::App app{"aperture " APERTURE_VERSION
+               ": batch-render and benchmark large triangle meshes with Embree ray packets"};
+  app.set_version_flag("--version", "aperture " APERTURE_VERSION);
+  app.require_subcommand(1);
+  const Commands commands = addCommands(app);
+  if (reportUnknownCommand(commands, argc, argv)) return 2;
+  const int parsed = parseCommandLine(app, commands, argc, argv);
+  return parsed >= 0 ? parsed : runParsedCommand(commands);
 }
