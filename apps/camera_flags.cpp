@@ -70,4 +70,14 @@ CameraParams resolveCommandCamera(const ParamSet& given, const CameraParams& def
   return p;
 }
 
+LoadedScene loadSceneForCamera(const Device& device, const SceneOptions& scene,
+                               const ParamSet& given, const CameraParams& defaults, bool quiet,
+                               CameraParams& camera) {
+  const SceneSpec spec = scene.spec();
+  LoadedScene loaded = loadSceneMeshes(spec, quiet);
+  camera = resolveCommandCamera(given, defaults, loaded.worldLo, loaded.worldHi);
+  buildLoadedScene(device, loaded, spec, quiet, {camera});
+  return loaded;
+}
+
 }  // namespace aperture::app

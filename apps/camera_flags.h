@@ -5,6 +5,7 @@
 #include <deque>
 #include <string>
 
+#include "apps/scene_setup.h"
 #include "cameras/param_schema.h"
 
 namespace aperture::app {
@@ -36,5 +37,11 @@ class CameraFlags {
 /// --at nor --dir it looks at the box's centre. Throws Error naming the flags.
 CameraParams resolveCommandCamera(const ParamSet& given, const CameraParams& defaults,
                                   const glm::dvec3& lo, const glm::dvec3& hi);
+
+/// A command's scene and camera: loads the meshes, frames the command-line camera on their
+/// bounds (resolveCommandCamera) and builds the BVH (culled for that camera with --cull).
+LoadedScene loadSceneForCamera(const Device& device, const SceneOptions& scene,
+                               const ParamSet& given, const CameraParams& defaults, bool quiet,
+                               CameraParams& camera);
 
 }  // namespace aperture::app

@@ -295,11 +295,9 @@ int runBench(const BenchArgs& a) {
 
   ThreadLimit threads(a.render.threads);
   Device device;
-  const SceneSpec sceneSpec = a.scene.spec();
-  LoadedScene loaded = loadSceneMeshes(sceneSpec, a.quiet);
-  const CameraParams params =
-      resolveCommandCamera(given, a.camera.defaults(), loaded.worldLo, loaded.worldHi);
-  buildLoadedScene(device, loaded, sceneSpec, a.quiet, {params});
+  CameraParams params;
+  LoadedScene loaded =
+      loadSceneForCamera(device, a.scene, given, a.camera.defaults(), a.quiet, params);
   auto camera = makeCamera(params, loaded.scene->renderOrigin());
   const Bench bench{
       a,      threads,          device, loaded, aovs, settings, a.scene.buildOptions(),

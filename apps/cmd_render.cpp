@@ -57,11 +57,9 @@ int runRender(const RenderArgs& a) {
 
   ThreadLimit threads(a.render.threads);
   Device device;
-  const SceneSpec sceneSpec = a.scene.spec();
-  LoadedScene loaded = loadSceneMeshes(sceneSpec, a.quiet);
-  const CameraParams params =
-      resolveCommandCamera(given, a.camera.defaults(), loaded.worldLo, loaded.worldHi);
-  buildLoadedScene(device, loaded, sceneSpec, a.quiet, {params});
+  CameraParams params;
+  LoadedScene loaded =
+      loadSceneForCamera(device, a.scene, given, a.camera.defaults(), a.quiet, params);
 
   const RenderedView view = renderView(*loaded.scene, params, settings, aovs);
   const Framebuffer& fb = view.fb;
