@@ -3,6 +3,7 @@
 #include <cctype>
 #include <cmath>
 
+#include "cameras/image_window.h"
 #include "core/error.h"
 #include "core/units.h"
 
@@ -120,7 +121,8 @@ ImagePlane fromOpenCV(double fx, double fy, double cx, double cy, int width, int
   p.d = d;
   p.vw = d * width / fx;
   p.vh = d * height / fy;
-  p.shift = {0.5 - (cx + 0.5) / width, (cy + 0.5) / height - 0.5};
+  // OpenCV puts pixel centres at integers, aperture's raster at half-integers.
+  p.shift = ImageWindow::shiftForPrincipalPoint(cx + 0.5, cy + 0.5, width, height);
   return p;
 }
 
@@ -145,8 +147,10 @@ ConventionSummary toConventions(const ImagePlane& plane, int width, int height) 
   s.focal35HorizontalMm = 36.0 * d / plane.vw;
   s.fx = d * width / plane.vw;
   s.fy = d * height / plane.vh;
-  s.cx = (0.5 - plane.shift.x) * width - 0.5;
-  s.cy = (0.5 + plane.shift.y) * height - 0.5;
+  const glm::dvec2 principal =
+      ImageWindow{width, height, plane.vw, plane.vh, plane.shift}.principalPoint();
+  s.cx = principal.x - 0.5;
+  s.cy = principal.y - 0.5;
   return s;
 }
 
