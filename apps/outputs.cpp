@@ -13,6 +13,7 @@
 #include "apps/job.h"
 #include "cameras/registry.h"
 #include "core/error.h"
+#include "core/mesh.h"
 #include "core/number_text.h"
 
 namespace aperture::app {
@@ -20,12 +21,6 @@ namespace aperture::app {
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string lowerExtension(const std::string& path) {
-  std::string ext = fs::path(path).extension().string();
-  for (char& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
-  return ext;
-}
 
 std::string extensionList(OutputKind kind) {
   std::string list;

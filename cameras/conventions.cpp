@@ -5,6 +5,7 @@
 
 #include "cameras/image_window.h"
 #include "core/error.h"
+#include "core/spelling.h"
 #include "core/units.h"
 
 namespace aperture {
@@ -24,11 +25,6 @@ void checkFov(double fovDeg) {
 
 double fullAngleDeg(double extent, double d) {
   return 2.0 * std::atan(0.5 * extent / d) / kRadPerDeg;
-}
-
-std::string lower(std::string s) {
-  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return s;
 }
 
 }  // namespace
@@ -57,7 +53,7 @@ ImagePlane fromPbrt(double fovDeg, int width, int height, double d) {
 }
 
 MitsubaFovAxis parseMitsubaFovAxis(const std::string& name) {
-  const std::string n = lower(name);
+  const std::string n = toLowerAscii(name);
   if (n == "x") return MitsubaFovAxis::X;
   if (n == "y") return MitsubaFovAxis::Y;
   if (n == "diagonal") return MitsubaFovAxis::Diagonal;
@@ -82,7 +78,7 @@ ImagePlane fromMitsuba(double fovDeg, MitsubaFovAxis axis, int width, int height
 }
 
 BlenderSensorFit parseBlenderSensorFit(const std::string& name) {
-  const std::string n = lower(name);
+  const std::string n = toLowerAscii(name);
   if (n == "auto") return BlenderSensorFit::Auto;
   if (n == "horizontal") return BlenderSensorFit::Horizontal;
   if (n == "vertical") return BlenderSensorFit::Vertical;

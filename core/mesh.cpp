@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "core/error.h"
+#include "core/spelling.h"
 
 namespace aperture {
 
@@ -14,9 +15,7 @@ std::string lowerExtension(const std::string& path) {
   size_t slash = path.find_last_of('/');
   size_t dot = path.find_last_of('.');
   if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-  std::string ext = path.substr(dot);
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
+  return toLowerAscii(path.substr(dot));
 }
 
 void Mesh::bounds(glm::vec3& lo, glm::vec3& hi) const {

@@ -5,12 +5,10 @@
 
 namespace aperture {
 
-namespace {
-std::string lowered(std::string s) {
+std::string toLowerAscii(std::string s) {
   for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
   return s;
 }
-}  // namespace
 
 size_t editDistance(const std::string& a, const std::string& b) {
   // Optimal string alignment distance over three rows of the dynamic-programming table.
@@ -31,18 +29,18 @@ size_t editDistance(const std::string& a, const std::string& b) {
 }
 
 std::string closestMatch(const std::string& word, const std::vector<std::string>& candidates) {
-  const std::string w = lowered(word);
+  const std::string w = toLowerAscii(word);
   // A unique candidate that starts with the word ("diag" for "diagonal").
   std::string prefixed;
   size_t prefixes = 0;
   for (const std::string& c : candidates)
-    if (w.size() >= 2 && lowered(c).rfind(w, 0) == 0) ++prefixes, prefixed = c;
+    if (w.size() >= 2 && toLowerAscii(c).rfind(w, 0) == 0) ++prefixes, prefixed = c;
   if (prefixes == 1) return prefixed;
   const size_t limit = std::max<size_t>(1, w.size() / 3);
   std::string best;
   size_t bestDistance = limit + 1;
   for (const std::string& c : candidates) {
-    const size_t d = editDistance(w, lowered(c));
+    const size_t d = editDistance(w, toLowerAscii(c));
     if (d < bestDistance) bestDistance = d, best = c;
   }
   return best;

@@ -6,6 +6,9 @@
 
 namespace aperture {
 
+/// `s` with ASCII letters in lower case.
+std::string toLowerAscii(std::string s);
+
 /// Edit distance (insertions, deletions, substitutions, adjacent transpositions).
 size_t editDistance(const std::string& a, const std::string& b);
 
