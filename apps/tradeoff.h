@@ -33,7 +33,7 @@ struct TradeoffRow {
   /// Color RMSE against the reference settings at this row's spp: the knob's own error,
   /// without the sampling error that the spp rows measure.
   double rmseSameSpp = 0;
-  /// Geometry (first sample of each pixel) against the reference settings at this row's spp.
+  /// Geometry (the centre ray of each pixel) against the reference settings at this row's spp.
   double primIdMismatch = 0, depthRelError = 0;
   double frameSeconds = 0;    ///< median over the timed frames
   double mraysPerSecond = 0;  ///< median

@@ -216,14 +216,18 @@ uint32_t permuteIndex(uint32_t index, uint32_t n, uint32_t seed) {
 }  // namespace
 
 void CameraBase::lensSample(int i, int j, int s, double& lensX, double& lensY) const {
+  if (s == PacketRequest::kCentreRay) {
+    lensX = lensY = 0.5;  // stratified2D's value at spp 1
+    return;
+  }
   const uint32_t seed = hash32(uint32_t(j) ^ hash32(uint32_t(i) ^ 0x5bd1e995u));
   const int stratum = spp_ > 1 ? int(permuteIndex(uint32_t(s), uint32_t(spp_), seed)) : s;
   stratified2D(uint32_t(j), uint32_t(i), stratum, spp_, 1, lensX, lensY);
 }
 
 void CameraBase::samplePosition(int i, int j, int s, double& x, double& y) const {
-  double sx, sy;
-  stratified2D(uint32_t(j), uint32_t(i), s, spp_, 0, sx, sy);
+  double sx = 0.5, sy = 0.5;  // the centre: stratified2D's value at spp 1
+  if (s != PacketRequest::kCentreRay) stratified2D(uint32_t(j), uint32_t(i), s, spp_, 0, sx, sy);
   x = j + sx;
   y = i + sy;
 }

@@ -57,11 +57,13 @@ class CameraBase : public Camera {
     u = (x / width_ - 0.5 + shift_.x) * vw_;
     v = (-(y / height_ - 0.5) + shift_.y) * vh_;
   }
-  /// Raster position of pixel (row i, column j), sample s: centre for spp 1, else stratified.
+  /// Raster position of pixel (row i, column j), sample s: the pixel centre (j + ½, i + ½)
+  /// for spp 1 and for s = PacketRequest::kCentreRay, else stratified.
   void samplePosition(int i, int j, int s, double& x, double& y) const;
   /// Lens sample in [0, 1)² of pixel (i, j), sample s: stratified over the spp samples like
   /// the pixel positions, with the strata paired through a per-pixel permutation so lens and
-  /// pixel positions are not correlated. (½, ½) for spp 1. Depends on (i, j, s) only.
+  /// pixel positions are not correlated. The lens centre (½, ½) for spp 1 and for
+  /// s = PacketRequest::kCentreRay. Depends on (i, j, s) only.
   void lensSample(int i, int j, int s, double& lensX, double& lensY) const;
 
   const CameraFrame& frame() const { return frame_; }
@@ -140,15 +142,14 @@ class PacketCamera : public CameraBase {
   void generate(const PacketRequest& req, RayLanes& out, int* valid) const override {
     const Derived& self = static_cast<const Derived&>(*this);
     const bool lens = self.usesLens();
-    const int lanes = req.blockW * req.blockH;
-    for (int k = 0; k < lanes; ++k) {
-      const int i = req.y0 + k / req.blockW, j = req.x0 + k % req.blockW;
+    for (int k = 0; k < req.lanes(); ++k) {
+      const LanePixel px = req.pixel(k);
       double x, y, lensX = 0.5, lensY = 0.5;
-      samplePosition(i, j, req.sample, x, y);
-      if (lens) lensSample(i, j, req.sample, lensX, lensY);
+      samplePosition(px.row, px.column, req.sample, x, y);
+      if (lens) lensSample(px.row, px.column, req.sample, lensX, lensY);
       glm::dvec3 org, dir;
       const bool hasRay = self.rayAt(x, y, lensX, lensY, org, dir);
-      valid[k] = (hasRay && i < height_ && j < width_) ? -1 : 0;
+      valid[k] = (hasRay && px.inImage(width_, height_)) ? -1 : 0;
       setLane(out, k, org, dir);
     }
   }

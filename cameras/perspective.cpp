@@ -21,7 +21,8 @@ PerspectiveCamera::PerspectiveCamera(const CameraParams& p, const glm::dvec3& re
 }
 
 void PerspectiveCamera::generate(const PacketRequest& req, RayLanes& out, int* valid) const {
-  if (pinholeCentres_) {
+  // Pinhole rays through pixel centres: every sample at spp 1, the centre ray at any spp.
+  if (pinholeCentres_ || (req.centreRay() && lensRadius_ == 0)) {
     // The frame loop's block shapes get loops with constant trip counts.
     if (req.blockW == 4 && req.blockH == 4) return generatePinholeCentres<4, 4>(req, out, valid);
     if (req.blockW == 4 && req.blockH == 2) return generatePinholeCentres<4, 2>(req, out, valid);
@@ -35,16 +36,17 @@ template <int kBW, int kBH>
 void PerspectiveCamera::generatePinholeCentres(const PacketRequest& req, RayLanes& out,
                                                int* valid) const {
   constexpr int kLanes = kBW * kBH;
-  // Lane k is column x0 + k % kBW, row y0 + k / kBW. The raster centre j + ½ is exact in
-  // double, so u and v below are rasterToPlane's values bit for bit; computing them per lane
-  // (rather than gathering from a table) keeps the whole loop in vector registers.
+  // The raster centre j + ½ is exact in double, so u and v below are rasterToPlane's values
+  // bit for bit; computing them per lane (rather than gathering from a table) keeps the whole
+  // loop in vector registers.
   const double x0 = req.x0, y0 = req.y0, w = width_, h = height_;
   const double sx = shift_.x, sy = shift_.y, vw = vw_, vh = vh_;
   // rayAt's pinhole branch term by term: (u·U + v·V) − d·W, times 1 / its length.
   const glm::dvec3 U = frame_.u, V = frame_.v, dW = d_ * frame_.w;
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
   for (int k = 0; k < kLanes; ++k) {
-    const double x = (x0 + double(k % kBW)) + 0.5, y = (y0 + double(k / kBW)) + 0.5;
+    const LanePixel offset = lanePixel(0, 0, kBW, k);  // a constant once unrolled
+    const double x = (x0 + double(offset.column)) + 0.5, y = (y0 + double(offset.row)) + 0.5;
     const double u = (x / w - 0.5 + sx) * vw;
     const double v = (-(y / h - 0.5) + sy) * vh;
     const double px = (u * U.x + v * V.x) - dW.x;
@@ -84,8 +86,9 @@ void PerspectiveCamera::generatePinholeCentres(const PacketRequest& req, RayLane
     id[k] = unsigned(k);
     flags[k] = 0;
   }
-  for (int k = 0; k < kLanes; ++k)
-    valid[k] = req.y0 + k / kBW < height_ && req.x0 + k % kBW < width_ ? -1 : 0;
+  // Locals: the stores to valid[] could otherwise alias them and force reloads every lane.
+  const int ix0 = req.x0, iy0 = req.y0, width = width_, height = height_;
+  for (int k = 0; k < kLanes; ++k) valid[k] = laneInImage(ix0, iy0, kBW, k, width, height) ? -1 : 0;
 }
 
 std::optional<glm::dvec2> PerspectiveCamera::project(const glm::dvec3& worldPoint) const {

@@ -39,8 +39,9 @@ class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
     return true;
   }
 
-  /// Pinhole at 1 spp (every frame of a batch or benchmark) takes a table-driven SoA path
-  /// that computes exactly rayAt()'s expressions; everything else the shared packet loop.
+  /// Pinhole rays through pixel centres (every sample at 1 spp, the centre ray at any spp)
+  /// take a vectorised SoA path that computes exactly rayAt()'s expressions; everything else
+  /// the shared packet loop.
   void generate(const PacketRequest& req, RayLanes& out, int* valid) const override;
 
   bool stochastic() const override { return spp_ > 1 || lensRadius_ > 0; }

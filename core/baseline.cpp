@@ -23,9 +23,10 @@ BaselineTracer::BaselineTracer(const Camera& camera, int width, int height, int 
     for (int by = y0; by < y1; by += 4)
       for (int bx = x0; bx < x1; bx += 4) {
         ValidMask valid;
-        camera.generate(PacketRequest{bx, by, 4, 4, 0}, lanes, valid.lanes);
+        const PacketRequest req{bx, by, 4, 4, PacketRequest::kCentreRay};
+        camera.generate(req, lanes, valid.lanes);
         for (int k = 0; k < 16; ++k) {
-          if (by + k / 4 >= height || bx + k % 4 >= width) valid.lanes[k] = 0;
+          if (!req.inImage(k, width, height)) valid.lanes[k] = 0;
           rays_ += valid.lanes[k] != 0;
         }
         rays16_.push_back(packet.ray);

@@ -13,8 +13,9 @@ namespace aperture {
 
 class BaselineTracer {
  public:
-  /// Generates the 4x4-pixel packets of sample 0 of every pixel, in the frame loop's tile
-  /// order (tiles of `tileSize`), and keeps them (768 bytes a packet).
+  /// Generates the 4x4-pixel packets of every pixel's centre ray (the rays of the geometry
+  /// AOVs; at spp 1 the only sample), in the frame loop's tile order (tiles of `tileSize`),
+  /// and keeps them (768 bytes a packet).
   BaselineTracer(const Camera& camera, int width, int height, int tileSize);
   /// Traces every packet with rtcIntersect16 (coherent flag) over TBB tiles; returns seconds.
   double traceFrame(const Scene& scene) const;

@@ -2,7 +2,13 @@
 // The camera interface the frame loop traces through. Models live in cameras/.
 //
 // Contract for generate():
-//  - lane k of the packet is pixel (row y0 + k / blockW, column x0 + k % blockW);
+//  - lane k of the packet is pixel lanePixel(x0, y0, blockW, k) (row y0 + k / blockW, column
+//    x0 + k % blockW); lanes past the image's right or bottom edge (laneInImage false) are
+//    invalid. These two functions are the only statement of the mapping: cameras, the frame
+//    loop, the baseline tracer and the tests all call them;
+//  - sample s in [0, spp) is a stratified sample of the pixel; PacketRequest::kCentreRay is
+//    the ray through the pixel centre (j + ½, i + ½) and the lens centre, at any spp (at
+//    spp 1 it equals sample 0). The geometry AOVs come from it;
 //  - origins are in *render space*: world minus the scene's render origin (the mesh anchor),
 //    computed in double and rounded to float once;
 //  - directions are unit length (normalised in double, then rounded), so t is a distance;
@@ -27,11 +33,45 @@ struct RayLanes {
   unsigned *mask, *id, *flags;
 };
 
+/// Row i and column j of a lane's pixel.
+struct LanePixel {
+  int row, column;
+  /// Whether the pixel lies inside a width x height image. Blocks start inside the image, so
+  /// only the right and bottom edges can cut them: only the upper bounds are tested.
+  constexpr bool inImage(int width, int height) const { return row < height && column < width; }
+};
+
+/// The pixel of lane k in a block of blockW columns whose top-left pixel is (row y0, column
+/// x0): lanes run along the block's rows, row by row. Inline and branch-free, so a loop over
+/// the lanes with a constant blockW stays vectorisable.
+constexpr LanePixel lanePixel(int x0, int y0, int blockW, int k) {
+  return {y0 + k / blockW, x0 + k % blockW};
+}
+
+/// Whether lane k (as lanePixel) lies inside a width x height image.
+constexpr bool laneInImage(int x0, int y0, int blockW, int k, int width, int height) {
+  return lanePixel(x0, y0, blockW, k).inImage(width, height);
+}
+
 /// The pixels and sample one packet covers.
 struct PacketRequest {
+  /// `sample` value asking for the centre ray: pixel centre (j + ½, i + ½), lens centre.
+  static constexpr int kCentreRay = -1;
+
   int x0 = 0, y0 = 0;          ///< column and row of the block's top-left pixel
   int blockW = 4, blockH = 4;  ///< lanes = blockW * blockH, at most 16
-  int sample = 0;              ///< sample index in [0, spp)
+  int sample = 0;              ///< sample index in [0, spp), or kCentreRay
+
+  /// Lanes of the packet.
+  int lanes() const { return blockW * blockH; }
+  /// The pixel of lane k (lanePixel).
+  LanePixel pixel(int k) const { return lanePixel(x0, y0, blockW, k); }
+  /// Whether lane k lies inside a width x height image (laneInImage).
+  bool inImage(int k, int width, int height) const {
+    return laneInImage(x0, y0, blockW, k, width, height);
+  }
+  /// Whether the request asks for the centre ray rather than a stratified sample.
+  bool centreRay() const { return sample == kCentreRay; }
 };
 
 /// The projection of an equirectangular panorama (no 4x4 matrix expresses it). With raster

@@ -8,6 +8,7 @@
 
 #include "cameras/base.h"
 #include "cameras/registry.h"
+#include "core/packet.h"
 
 namespace aperture::test {
 
@@ -84,10 +85,10 @@ class PacketBuffer {
   RTCRayHit16 sixteen_{};
 };
 
-/// Block shape of a packet width, as the frame loop uses them.
+/// Block shape of a packet width, as the frame loop uses them (core/packet.h).
 inline void blockShape(int width, int& blockW, int& blockH) {
-  blockW = width == 1 ? 1 : width == 4 ? 2 : 4;
-  blockH = width / blockW;
+  blockW = blockWidthFor(width);
+  blockH = blockHeightFor(width);
 }
 
 /// A generic, non-axis-aligned frame used by many tests.

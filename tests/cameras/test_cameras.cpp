@@ -695,16 +695,17 @@ TEST_P(EveryCamera, PacketsEqualTheScalarPathTailsIncluded) {
       for (int x0 = 0; x0 < p.width; x0 += blockW) {
         PacketBuffer buf(width);
         int valid[16];
-        cam->generate({x0, y0, blockW, blockH, s}, buf.lanes(), valid);
+        const PacketRequest req{x0, y0, blockW, blockH, s};
+        cam->generate(req, buf.lanes(), valid);
         const RayLanes& l = buf.lanes();
         for (int k = 0; k < width; ++k) {
-          const int i = y0 + k / blockW, j = x0 + k % blockW;
+          const int i = req.pixel(k).row, j = req.pixel(k).column;
           double x, y, lx = 0.5, ly = 0.5;
           cam->samplePosition(i, j, s, x, y);
           if (p.apertureRadius > 0) cam->lensSample(i, j, s, lx, ly);
           glm::dvec3 org, dir;
           const bool has = cam->ray(x, y, lx, ly, org, dir);
-          const bool inImage = i < p.height && j < p.width;
+          const bool inImage = req.inImage(k, p.width, p.height);
           tails += !inImage;
           ASSERT_EQ(valid[k], (has && inImage) ? -1 : 0) << "lane " << k;
           ASSERT_EQ(l.orgX[k], float(org.x));

@@ -114,11 +114,11 @@ std::string hashRays(const CameraBase& cam, int bw, int bh) {
   for (int s = 0; s < d.spp; ++s) {
     for (int y0 = 0; y0 < h; y0 += bh)
       for (int x0 = 0; x0 < w; x0 += bw) {
-        cam.generate(PacketRequest{x0, y0, bw, bh, s}, lanes, valid);
-        for (int k = 0; k < bw * bh; ++k) {
-          const int i = y0 + k / bw, j = x0 + k % bw;
-          if (i >= h || j >= w) continue;
-          const size_t p = size_t(i) * w + j;
+        const PacketRequest req{x0, y0, bw, bh, s};
+        cam.generate(req, lanes, valid);
+        for (int k = 0; k < req.lanes(); ++k) {
+          if (!req.inImage(k, w, h)) continue;
+          const size_t p = size_t(req.pixel(k).row) * w + size_t(req.pixel(k).column);
           org[3 * p] = ox[k], org[3 * p + 1] = oy[k], org[3 * p + 2] = oz[k];
           dir[3 * p] = dx[k], dir[3 * p + 1] = dy[k], dir[3 * p + 2] = dz[k];
           validity[p] = valid[k] != 0;

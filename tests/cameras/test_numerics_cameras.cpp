@@ -44,8 +44,9 @@ std::vector<glm::vec3> rowDirections(const Camera& cam, int width, int row) {
   lanes.dirZ = packet.ray.dir_z, lanes.time = packet.ray.time, lanes.tfar = packet.ray.tfar;
   lanes.mask = packet.ray.mask, lanes.id = packet.ray.id, lanes.flags = packet.ray.flags;
   for (int x0 = 0; x0 < width; x0 += 16) {
-    cam.generate(PacketRequest{x0, row, 16, 1, 0}, lanes, valid);
-    for (int k = 0; k < 16 && x0 + k < width; ++k)
+    const PacketRequest req{x0, row, 16, 1, 0};
+    cam.generate(req, lanes, valid);
+    for (int k = 0; k < 16 && req.pixel(k).column < width; ++k)
       dirs.emplace_back(lanes.dirX[k], lanes.dirY[k], lanes.dirZ[k]);
   }
   return dirs;
@@ -245,7 +246,7 @@ TEST(NumericsImagePlane, TinyHugeViewportsAndExtremeAspectRatiosKeepPlanarDepth)
 TEST(NumericsThinLens, TinyApertureEqualsThePinholeWithinFloatError) {
   const Loaded l = load("procedural:city");
   CameraParams pin = lookAt(glm::dvec3(14, 11, 18), glm::dvec3(0, 1, 0), 128, 96);
-  pin.spp = 4;  // the same pixel positions as the lens camera's (geometry AOVs: sample 0)
+  pin.spp = 4;  // as the lens camera's (the geometry AOVs come from the centre rays)
   CameraParams lens = pin;
   lens.type = "thinlens";
   lens.apertureRadius = 1e-9;

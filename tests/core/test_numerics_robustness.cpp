@@ -136,8 +136,8 @@ class PoisonedCamera final : public Camera {
     inner_->generate(req, out, valid);
     const float nan = std::numeric_limits<float>::quiet_NaN();
     const float inf = std::numeric_limits<float>::infinity();
-    for (int k = 0; k < req.blockW * req.blockH; ++k) {
-      const int i = req.y0 + k / req.blockW, j = req.x0 + k % req.blockW;
+    for (int k = 0; k < req.lanes(); ++k) {
+      const int i = req.pixel(k).row, j = req.pixel(k).column;
       if (!poisoned(i, j)) continue;
       switch ((i + j) % 3) {
         case 0:
@@ -196,8 +196,10 @@ TEST(NumericsNonFinite, NonFiniteRaysAreNeverTracedAndNeverReachTheFramebuffer) 
             EXPECT_EQ(fb.position[3 * px + size_t(c)], 0.0f);
           }
         }
-      EXPECT_EQ(stats.raysSkipped, uint64_t(bad) * uint64_t(spp));
-      EXPECT_EQ(stats.raysTraced, uint64_t(fb.pixelCount() - bad) * uint64_t(spp));
+      // Every colour sample, plus the centre ray of the geometry AOVs when spp > 1.
+      const uint64_t raysPerPixel = spp > 1 ? uint64_t(spp) + 1 : 1;
+      EXPECT_EQ(stats.raysSkipped, uint64_t(bad) * raysPerPixel);
+      EXPECT_EQ(stats.raysTraced, uint64_t(fb.pixelCount() - bad) * raysPerPixel);
       for (float v : fb.rgba) EXPECT_TRUE(std::isfinite(v));
     }
   }

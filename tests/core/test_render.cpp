@@ -231,7 +231,7 @@ TEST(RenderInstances, RepeatedMeshMatchesCopiesAndReportsObjectIds) {
   test::expectSameGeometry(render(instanced, p, aovs), render(copies, p, aovs), 301);
 }
 
-TEST(RenderSamples, WithoutColorOnlySampleZeroIsTracedAndGeometryIsUnchanged) {
+TEST(RenderSamples, WithoutColorOnlyTheCentreRayIsTracedAndGeometryIsUnchanged) {
   Device device;
   Mesh sphere = sphereMesh(1.0, {0, 0, 0}, 48, 24);
   Scene scene(device, {&sphere});
@@ -243,8 +243,9 @@ TEST(RenderSamples, WithoutColorOnlySampleZeroIsTracedAndGeometryIsUnchanged) {
   Framebuffer depthOnly(40, 30, kAovDepth), withColor(40, 30, kAovDepth | kAovColor);
   const RenderStats a = renderImage(scene, *cam, rs, depthOnly);
   const RenderStats b = renderImage(scene, *cam, rs, withColor);
-  EXPECT_EQ(a.raysTraced, 40u * 30u);        // one ray a pixel: sample 0
-  EXPECT_EQ(b.raysTraced, 16u * 40u * 30u);  // color averages all 16
+  EXPECT_EQ(a.raysTraced, 40u * 30u);            // one ray a pixel: the centre ray
+  EXPECT_EQ(b.raysTraced, 17u * 40u * 30u);      // color averages 16, plus the centre ray
+  EXPECT_EQ(a.raysSkipped + b.raysSkipped, 0u);  // the sphere's view has no masked lanes
   EXPECT_EQ(test::differingAovs(depthOnly,
                                 [&] {
                                   Framebuffer d(40, 30, kAovDepth);
