@@ -6,6 +6,7 @@
 #include <string>
 
 #include "cameras/frame.h"
+#include "cameras/image_window.h"
 #include "cameras/params.h"
 #include "cameras/view_volume.h"
 #include "core/camera.h"
@@ -51,11 +52,14 @@ class CameraBase : public Camera {
   /// The view volume between nearDist and farDist (see view_volume.h for their meaning).
   virtual ViewVolume viewVolume(double nearDist, double farDist) const = 0;
 
-  /// Image-plane coordinates (u, v) of a raster position, shift included:
-  /// u = (x / W − ½ + sx)·vw, v = (−(y / H − ½) + sy)·vh.
+  /// The image window: raster size, viewport and effective shift (cameras/image_window.h,
+  /// the one owner of the shift formula).
+  ImageWindow window() const { return {width_, height_, vw_, vh_, shift_}; }
+  /// Image-plane coordinates (u, v) of a raster position, shift included (ImageWindow).
   void rasterToPlane(double x, double y, double& u, double& v) const {
-    u = (x / width_ - 0.5 + shift_.x) * vw_;
-    v = (-(y / height_ - 0.5) + shift_.y) * vh_;
+    const ImageWindow w = window();
+    u = w.u(x);
+    v = w.v(y);
   }
   /// Raster position of pixel (row i, column j), sample s: the pixel centre (j + ½, i + ½)
   /// for spp 1 and for s = PacketRequest::kCentreRay, else stratified.
@@ -76,14 +80,12 @@ class CameraBase : public Camera {
   /// Effective shift in viewport units (params.shift plus the architectural tilt shift).
   const glm::dvec2& shift() const { return shift_; }
   /// The image window on the plane at distance d: u in [uLo, uHi], v in [vLo, vHi].
-  double uLo() const { return (shift_.x - 0.5) * vw_; }
-  double uHi() const { return (shift_.x + 0.5) * vw_; }
-  double vLo() const { return (shift_.y - 0.5) * vh_; }
-  double vHi() const { return (shift_.y + 0.5) * vh_; }
+  double uLo() const { return window().uLo(); }
+  double uHi() const { return window().uHi(); }
+  double vLo() const { return window().vLo(); }
+  double vHi() const { return window().vHi(); }
   /// Raster position of image-plane coordinates (inverse of rasterToPlane).
-  glm::dvec2 planeToRaster(double u, double v) const {
-    return {(u / vw_ - shift_.x + 0.5) * width_, (0.5 - (v / vh_ - shift_.y)) * height_};
-  }
+  glm::dvec2 planeToRaster(double u, double v) const { return window().raster(u, v); }
   /// The one NDC map of the planar cameras, as a matrix on homogeneous image-plane coordinates
   /// (u, v, z, w): OpenEXR's NDC x = (u − uLo) / vw, y = (vHi − v) / vh, so the window's
   /// top-left corner (uLo, vHi) goes to (0, 0) and its bottom-right corner (uHi, vLo) to

@@ -39,16 +39,15 @@ void PerspectiveCamera::generatePinholeCentres(const PacketRequest& req, RayLane
   // The raster centre j + ½ is exact in double, so u and v below are rasterToPlane's values
   // bit for bit; computing them per lane (rather than gathering from a table) keeps the whole
   // loop in vector registers.
-  const double x0 = req.x0, y0 = req.y0, w = width_, h = height_;
-  const double sx = shift_.x, sy = shift_.y, vw = vw_, vh = vh_;
+  const double x0 = req.x0, y0 = req.y0;
+  const ImageWindow win = window();
   // rayAt's pinhole branch term by term: (u·U + v·V) − d·W, times 1 / its length.
   const glm::dvec3 U = frame_.u, V = frame_.v, dW = d_ * frame_.w;
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
   for (int k = 0; k < kLanes; ++k) {
     const LanePixel offset = lanePixel(0, 0, kBW, k);  // a constant once unrolled
     const double x = (x0 + double(offset.column)) + 0.5, y = (y0 + double(offset.row)) + 0.5;
-    const double u = (x / w - 0.5 + sx) * vw;
-    const double v = (-(y / h - 0.5) + sy) * vh;
+    const double u = win.u(x), v = win.v(y);
     const double px = (u * U.x + v * V.x) - dW.x;
     const double py = (u * U.y + v * V.y) - dW.y;
     const double pz = (u * U.z + v * V.z) - dW.z;

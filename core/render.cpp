@@ -18,7 +18,6 @@ void validateRenderSettings(const RenderSettings& s) {
     throw Error(cat("packet width ", s.packetWidth, " is not one of 1, 4, 8, 16"));
   if (s.tileSize < 4 || s.tileSize > 4096 || s.tileSize % 4 != 0)
     throw Error(cat("tile size ", s.tileSize, " must be a multiple of 4 in [4, 4096]"));
-  if (s.spp < 1 || s.spp > 65536) throw Error(cat("spp ", s.spp, " must be in [1, 65536]"));
 }
 
 namespace {

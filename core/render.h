@@ -29,8 +29,9 @@ struct RenderStats {
 RenderStats renderImage(const Scene& scene, const Camera& camera, const RenderSettings& settings,
                         Framebuffer& fb);
 
-/// Checks settings (packet width in {1,4,8,16}, tile size a positive multiple of 4 up to 4096,
-/// spp in [1, 65536]); throws Error naming the bad value.
+/// Checks settings (packet width in {1,4,8,16}, tile size a positive multiple of 4 up to
+/// 4096); throws Error naming the bad value. spp is the camera's, checked by the camera
+/// schema; renderImage requires settings.spp to equal it.
 void validateRenderSettings(const RenderSettings& settings);
 
 }  // namespace aperture
