@@ -187,8 +187,9 @@ std::vector<unsigned char> encodeRgb8(const std::string& path, int width, int he
 }  // namespace
 
 Aov previewAov(AovMask aovs) {
-  for (Aov a : {kAovColor, kAovDepth, kAovNormal, kAovPrimId, kAovGeomId})
-    if (aovs & a) return a;
+  static constexpr Aov kOrder[] = {kAovColor, kAovDepth, kAovNormal, kAovPrimId, kAovGeomId};
+  for (const Aov a : kOrder)
+    if ((aovs & AovMask(a)) != 0) return a;
   return Aov(0);
 }
 
