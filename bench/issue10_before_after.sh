@@ -15,3 +15,22 @@ for round in 1 2 3; do
     done
   done
 done
+python3 - "$out" <<'PY'
+import json,glob,statistics,os,sys
+rows=[]
+for name,label in [('dn1','depth,normal, 1 spp'),('dn4','depth,normal, 4 spp'),('cd4','color,depth, 4 spp')]:
+    r={}
+    for which in ['before','after']:
+        vals=[];base=[]
+        for f in sorted(glob.glob(f'{sys.argv[1]}/{name}-{which}-*.json')):
+            d=json.load(open(f)); vals.append(d['mrays_per_s_median'])
+            if 'baseline_mrays_per_s_median' in d: base.append(d['baseline_mrays_per_s_median'])
+        r[which]=(statistics.median(vals) if vals else float('nan'), statistics.median(base) if base else None, vals)
+    rows.append((label,r))
+for label,r in rows:
+    b,a=r['before'],r['after']
+    line=f"| {label} | {b[0]:.1f} | {a[0]:.1f} | {a[0]/b[0]:.3f} |"
+    if a[1]: line+=f" {b[0]/b[1]:.3f} / {a[0]/a[1]:.3f} |"
+    else: line+=" |"
+    print(line, [round(x,1) for x in b[2]], [round(x,1) for x in a[2]])
+PY
