@@ -177,8 +177,7 @@ int reportBatch(const BatchRun& run, const std::vector<ImageResult>& results,
     return 130;
   }
   if (!failed.empty()) {
-    std::string list;
-    for (const std::string& f : failed) list += (list.empty() ? "" : ", ") + f;
+    const std::string list = join(failed, ", ");
     std::fprintf(stderr, "aperture: %zu of %zu images failed: %s\n", failed.size(), results.size(),
                  list.c_str());
     return 1;

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "core/error.h"
+
 namespace aperture::app {
 
 namespace {
@@ -23,9 +25,7 @@ std::string valueShape(const ParamSpec& spec) {
     case ParamKind::Choice:
       break;
   }
-  std::string choices;
-  for (const char* c : spec.choices) choices += (choices.empty() ? "" : "|") + std::string(c);
-  return choices.empty() ? "NAME" : choices;
+  return spec.choices.empty() ? "NAME" : aperture::join(spec.choices, "|");
 }
 }  // namespace
 

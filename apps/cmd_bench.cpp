@@ -100,8 +100,7 @@ struct Bench {
 void reportConfig(const Bench& b, nlohmann::json& j) {
   const BenchArgs& a = b.args;
   const BuildStats& st = b.loaded.scene->stats();
-  std::string meshNames;
-  for (const Mesh& m : b.loaded.meshes) meshNames += (meshNames.empty() ? "" : ";") + m.name;
+  const std::string meshNames = join(b.loaded.meshes, ";", [](const Mesh& m) { return m.name; });
   j["config"] = {{"meshes", meshNames},
                  {"triangles", st.triangles},
                  {"cull", a.scene.cull},

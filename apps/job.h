@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "apps/camera_paths.h"
+#include "apps/job_camera.h"
 #include "apps/scene_setup.h"
 #include "cameras/params.h"
 #include "core/exr.h"
@@ -51,9 +52,6 @@ struct Job {
   /// goes by default); "." when the pattern starts with a placeholder.
   std::string outputDirectory;
 };
-
-/// Most frames one job may hold (so a malformed file cannot exhaust memory).
-inline constexpr size_t kMaxJobImages = 100000;
 
 /// Reads and validates a job file: unknown keys, types, ranges, mesh files (existence only,
 /// nothing is loaded), output patterns (distinct outputs per frame) and every camera (each

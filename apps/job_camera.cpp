@@ -45,9 +45,10 @@ void checkFrameKeys(const Object& c, bool orbit, bool keyed) {
 
 int frameCount(const Object& c, int byDefault, size_t framesLeft) {
   const int n = c.integer("frames", byDefault);
-  if (n < 1 || n > 100000) c.fail(c.keyPath("frames"), cat(n, ": must be in [1, 100000]"));
+  if (n < 1 || size_t(n) > kMaxJobImages)
+    c.fail(c.keyPath("frames"), cat(n, ": must be in [1, ", kMaxJobImages, "]"));
   if (size_t(n) > framesLeft)
-    c.fail(c.keyPath("frames"), "the job would have more than 100000 images");
+    c.fail(c.keyPath("frames"), cat("the job would have more than ", kMaxJobImages, " images"));
   return n;
 }
 

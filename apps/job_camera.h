@@ -11,6 +11,9 @@
 
 namespace aperture::app {
 
+/// Most images one job may hold (so a malformed file cannot exhaust memory).
+inline constexpr size_t kMaxJobImages = 100000;
+
 /// A camera entry expanded into its path frames: (frame number, complete parameters).
 struct JobCamera {
   std::string name;

@@ -12,10 +12,8 @@ Object::Object(const std::string& file, std::string path, const json& j,
   if (!j.is_object()) fail(path_, cat("expected an object, got ", typeName(j)));
   for (const auto& item : j.items()) {
     if (std::find(known.begin(), known.end(), item.key()) != known.end()) continue;
-    std::string list;
-    for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
     fail(keyPath(item.key()),
-         cat("unknown key", didYouMean(item.key(), known), " (known: ", list, ")"));
+         cat("unknown key", didYouMean(item.key(), known), " (known: ", join(known, ", "), ")"));
   }
 }
 

@@ -50,12 +50,11 @@ Commands addCommands(CLI::App& app) {
 bool reportUnknownCommand(const Commands& commands, int argc, char** argv) {
   if (argc < 2 || argv[1][0] == '-') return false;
   std::vector<std::string> names;
-  std::string known;
   for (const auto& c : commands) {
     if (c.first->get_name() == argv[1]) return false;
     names.push_back(c.first->get_name());
-    known += (known.empty() ? "" : ", ") + c.first->get_name();
   }
+  const std::string known = aperture::join(names, ", ");
   std::fprintf(stderr, "aperture: unknown command '%s'%s (known: %s); see aperture --help\n",
                argv[1], aperture::didYouMean(argv[1], names).c_str(), known.c_str());
   return true;

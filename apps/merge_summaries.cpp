@@ -171,9 +171,8 @@ json mergedSummary(const std::vector<SummaryFile>& files, const std::vector<std:
 }
 
 void reportMissing(const json& merged) {
-  std::string list;
-  for (const json& name : merged["missing"])
-    list += (list.empty() ? "" : ", ") + name.get<std::string>();
+  const std::string list =
+      join(merged["missing"], ", ", [](const json& name) { return name.get<std::string>(); });
   std::fprintf(stderr, "aperture: merge: %zu of %zu images missing (no summary has them ok): %s\n",
                merged["images_missing"].get<size_t>(), merged["images_in_job"].get<size_t>(),
                list.c_str());

@@ -22,11 +22,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string extensionList(OutputKind kind) {
-  std::string list;
-  for (const std::string& e : supportedExtensions(kind)) list += (list.empty() ? "" : " ") + e;
-  return list;
-}
+std::string extensionList(OutputKind kind) { return join(supportedExtensions(kind), " "); }
 
 /// "NAME: 'PATH': " — how every message of this module starts.
 std::string prefix(const std::string& name, const std::string& path) {

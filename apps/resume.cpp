@@ -23,11 +23,7 @@ namespace fs = std::filesystem;
 
 std::string show(const glm::dvec3& v) { return cat("(", v.x, ", ", v.y, ", ", v.z, ")"); }
 
-std::string joined(const std::vector<std::string>& items) {
-  std::string s;
-  for (const std::string& item : items) s += (s.empty() ? "" : ",") + item;
-  return s;
-}
+std::string joined(const std::vector<std::string>& items) { return join(items, ","); }
 
 /// "" when `file` and `job` are equal, else "<what> <file>, job wants <job>".
 template <typename T>

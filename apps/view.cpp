@@ -24,8 +24,7 @@ ExrMetadata viewMetadata(const RenderedView& view, const std::vector<std::string
   ExrMetadata meta;
   meta.camera = view.camera;
   meta.renderSeconds = view.stats.seconds;
-  std::string meshes;
-  for (const std::string& m : meshNames) meshes += (meshes.empty() ? "" : ";") + m;
+  const std::string meshes = join(meshNames, ";");
   meta.strings = {{"aperture.meshes", meshes},
                   {"aperture.aovs", aovListString(aovs)},
                   {"aperture.bvhQuality", bvhQualityName(quality)},

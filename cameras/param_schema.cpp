@@ -100,14 +100,19 @@ std::string flagOf(const std::string& name) {
   return s ? s->flag() : "--" + name;
 }
 
+/// The names of the models that read parameter `name`, in registration order.
+std::vector<std::string> modelsReading(const std::string& name) {
+  std::vector<std::string> users;
+  for (const CameraModel* m : cameraModels())
+    if (m->accepts(name)) users.emplace_back(m->name);
+  return users;
+}
+
 void checkApplies(const ParamSet& given, const CameraModel& model) {
   for (const ParamSet::Entry& e : given.entries()) {
     if (model.accepts(e.spec->name)) continue;
-    std::string users;
-    for (const CameraModel* m : cameraModels())
-      if (m->accepts(e.spec->name)) users += std::string(users.empty() ? "" : ", ") + m->name;
     throw Error(cat(e.source, ": does not apply to a '", model.name,
-                    "' camera (it applies to: ", users, ")"));
+                    "' camera (it applies to: ", join(modelsReading(e.spec->name), ", "), ")"));
   }
 }
 
@@ -140,8 +145,7 @@ void checkRange(const ParamSpec& spec, const ParamValue& value, const std::strin
     const std::string& word = std::get<std::string>(value);
     if (spec.choices.empty()) return;  // `type`: checked by the registry
     if (std::find(spec.choices.begin(), spec.choices.end(), word) == spec.choices.end()) {
-      std::string list;
-      for (const char* c : spec.choices) list += std::string(list.empty() ? "" : ", ") + c;
+      const std::string list = join(spec.choices, ", ");
       throw Error(
           cat(label, ": '", word, "' is not one of ", list, didYouMean(word, names(spec.choices))));
     }
@@ -193,16 +197,12 @@ std::string ParamSpec::describeText(const CameraParams& defaults) const {
     // No fixed list: the registered camera models (the `type` parameter).
     std::vector<std::string> words(choices.begin(), choices.end());
     if (words.empty()) words = cameraTypeNames();
-    std::string list;
-    for (const std::string& c : words) list += (list.empty() ? "" : "|") + c;
-    add(list);
+    add(join(words, "|"));
   }
   if (!range.text().empty()) add("range " + range.text());
   if (kind != ParamKind::Flag) add("default " + defaultText(defaults));
   if (!conflicts.empty()) {
-    std::string list;
-    for (const char* c : conflicts) list += std::string(list.empty() ? "" : ", ") + flagOf(c);
-    add("not with " + list);
+    add("not with " + join(conflicts, ", ", [](const char* c) { return flagOf(c); }));
   }
   for (const char* r : needs) add("needs " + flagOf(r));
   return facts.empty() ? s : s + " (" + facts + ")";
@@ -212,9 +212,7 @@ std::string formatParamValue(const ParamValue& v) {
   if (auto* x = std::get_if<std::string>(&v)) return *x;
   if (auto* x = std::get_if<bool>(&v)) return *x ? "true" : "false";
   if (auto* x = std::get_if<glm::ivec2>(&v)) return cat(x->x, "x", x->y);
-  std::string s;
-  for (double c : components(v)) s += (s.empty() ? "" : ",") + number(c);
-  return s;
+  return join(components(v), ",", number);
 }
 
 ParamValue parseParamText(const ParamSpec& spec, const std::string& text,
@@ -298,12 +296,9 @@ std::string cameraParamsMarkdown() {
   s << "| parameter (job key, Python) | flag | cameras | unit | default | range | conflicts / "
        "needs | meaning |\n|---|---|---|---|---|---|---|---|\n";
   for (const ParamSpec* p : allCameraParamSpecs()) {
-    std::string users, rel;
-    size_t accepting = 0;
-    for (const CameraModel* m : cameraModels())
-      if (m->accepts(p->name))
-        ++accepting, users += std::string(users.empty() ? "" : ", ") + m->name;
-    if (accepting == cameraModels().size()) users = "all";
+    const std::vector<std::string> readers = modelsReading(p->name);
+    const std::string users = readers.size() == cameraModels().size() ? "all" : join(readers, ", ");
+    std::string rel;
     for (const char* c : p->conflicts) rel += std::string(rel.empty() ? "not " : ", not ") + c;
     for (const char* r : p->needs) rel += std::string(rel.empty() ? "needs " : ", needs ") + r;
     std::string range = p->range.text();

@@ -31,9 +31,7 @@ std::vector<std::string> cameraTypeNames() {
 const CameraModel& findCameraModel(const std::string& type) {
   for (const CameraModel* m : cameraModels())
     if (type == m->name) return *m;
-  std::string known;
-  for (const std::string& n : cameraTypeNames()) known += (known.empty() ? "" : ", ") + n;
-  throw Error(cat("unknown camera type '", type, "' (known: ", known, ")",
+  throw Error(cat("unknown camera type '", type, "' (known: ", join(cameraTypeNames(), ", "), ")",
                   didYouMean(type, cameraTypeNames())));
 }
 

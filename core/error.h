@@ -22,6 +22,25 @@ std::string cat(const Args&... args) {
   return s.str();
 }
 
+/// The items, each turned into text by `show`, joined by `separator`: the lists of messages
+/// ("known: a, b, c") and headers.
+template <typename Range, typename Show>
+std::string join(const Range& items, const std::string& separator, Show show) {
+  std::string s;
+  bool first = true;
+  for (const auto& item : items) {
+    if (!first) s += separator;
+    s += show(item);
+    first = false;
+  }
+  return s;
+}
+/// The items (strings or C strings) joined by `separator`.
+template <typename Range>
+std::string join(const Range& items, const std::string& separator) {
+  return join(items, separator, [](const auto& item) { return std::string(item); });
+}
+
 }  // namespace aperture
 
 /// Internal invariant check that prints both operands; active in every build type.

@@ -99,28 +99,6 @@ T loadRaw(const char* p, bool swap) {
   return v;
 }
 
-double loadDouble(PlyType t, const char* p, bool swap) {
-  switch (t) {
-    case PlyType::Int8:
-      return loadRaw<int8_t>(p, swap);
-    case PlyType::UInt8:
-      return loadRaw<uint8_t>(p, swap);
-    case PlyType::Int16:
-      return loadRaw<int16_t>(p, swap);
-    case PlyType::UInt16:
-      return loadRaw<uint16_t>(p, swap);
-    case PlyType::Int32:
-      return loadRaw<int32_t>(p, swap);
-    case PlyType::UInt32:
-      return loadRaw<uint32_t>(p, swap);
-    case PlyType::Float32:
-      return loadRaw<float>(p, swap);
-    case PlyType::Float64:
-      return loadRaw<double>(p, swap);
-  }
-  return 0;
-}
-
 int64_t loadInt(PlyType t, const char* p, bool swap) {
   switch (t) {
     case PlyType::Int8:
@@ -138,6 +116,12 @@ int64_t loadInt(PlyType t, const char* p, bool swap) {
     default:
       return 0;  // header validation keeps float types out of integer slots
   }
+}
+
+double loadDouble(PlyType t, const char* p, bool swap) {
+  if (t == PlyType::Float32) return loadRaw<float>(p, swap);
+  if (t == PlyType::Float64) return loadRaw<double>(p, swap);
+  return double(loadInt(t, p, swap));  // every integer type fits int64 and double exactly
 }
 
 /// Reads values from binary data; every read is bounds-checked and errors give byte offsets.
