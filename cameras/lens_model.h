@@ -58,7 +58,8 @@ struct LensValidRegion {
   double maxUndistorted = 0;  ///< r or θ at the fold (first zero of the radial derivative)
   double maxDistorted = 0;    ///< the distorted radius there (normalised coordinates)
   bool bounded() const;       ///< whether a fold (or θ = π) limits the model
-  /// "r < 1.234 (distorted 0.987, 51.0° off-axis)" or "unbounded".
+  /// "r < 1.234 (distorted 0.987, 51.0° off-axis)", "θ < 1.826 rad (distorted 1.217, 104.6°
+  /// off-axis)" or "unbounded".
   std::string text(bool fisheye) const;
 };
 
@@ -104,9 +105,46 @@ class Lens {
   bool operator==(const Lens& o) const { return model_ == o.model_ && params_ == o.params_; }
 
  private:
+  /// Every model's distortion in one shared form, filled from the parameters once:
+  ///   (u', v') = g(s)·(u, v) + tangential(u, v) + (sx1, sy1)·s,   s = u² + v²,
+  ///   g(s) = N(s) / D(s),  N = 1 + n1 s + … + n4 s⁴,  D = 1 + d1 s + d2 s² + d3 s³,
+  ///   tangential = (2 p1 u v + p2 (s + 2u²), 2 p2 u v + p1 (s + 2v²)).
+  struct Terms {
+    double num[5] = {1, 0, 0, 0, 0};  ///< N's coefficients by power of s
+    double den[4] = {1, 0, 0, 0};     ///< D's (FULL_OPENCV's k4, k5, k6)
+    double p1 = 0, p2 = 0;            ///< tangential (OpenCV's p1, p2)
+    double sx1 = 0, sy1 = 0;          ///< thin prism
+    bool identity = true;             ///< no distortion at all: (u', v') = (u, v)
+    bool rational = false;            ///< D is not 1
+    bool radialOnly = true;           ///< no tangential or thin-prism term
+  };
+  static Terms termsOf(LensModelId model, const std::vector<double>& distortion);
+  /// g(s) and dg/ds.
+  void gain(double s, double& g, double& dg) const;
+  /// The radial profile ρ(r) = r·g(r²) and its derivative.
+  void radialProfile(double r, double& rho, double& drho) const;
+  /// The r in the valid region with ρ(r) = t (t >= 0), by bracketed Newton; nothing past it.
+  /// Not `exact`: the table's first guess where it has one (for the 2D Newton to refine).
+  std::optional<double> invertRadialProfile(double t, bool exact = true) const;
+  /// Fills inverseRadius_ and inverseSlope_ (after valid_).
+  void tabulateInverse();
+  /// Newton's method on the 2D map from `start`; nothing without convergence, outside the
+  /// valid region or where the Jacobian's determinant is not positive.
+  std::optional<glm::dvec2> newton(const glm::dvec2& distorted, glm::dvec2 start) const;
+  LensValidRegion findValidRegion() const;
+  /// How far the tangential and thin-prism terms can move a point of the valid region.
+  double nonRadialReach() const;
+
   LensModelId model_;
   std::vector<double> params_;
+  double fx_ = 0, fy_ = 0, cx_ = 0, cy_ = 0;  ///< from params_, read per pixel
+  bool fisheye_ = false;
+  Terms terms_;
   LensValidRegion valid_;
+  /// The radial profile's inverse r(t) and dr/dt at evenly spaced distorted radii t = k·step:
+  /// the first guess of Newton's method (empty for a lens without distortion).
+  std::vector<double> inverseRadius_, inverseSlope_;
+  double inverseStep_ = 0;
 };
 
 }  // namespace aperture
