@@ -31,6 +31,16 @@ json readJsonFile(const std::string& path) {
   }
 }
 
+std::string shown(const json& j) { return j.dump(-1, ' ', false, json::error_handler_t::replace); }
+
+std::string jsonFileText(const json& doc, const std::string& path) {
+  try {
+    return doc.dump(2) + "\n";
+  } catch (const json::exception& e) {
+    throw Error(cat(path, ": cannot be written as JSON (", e.what(), ")"));
+  }
+}
+
 int shareSensor(CameraFile& file, const CalibratedSensor& sensor) {
   for (size_t i = 0; i < file.sensors.size(); ++i)
     if (file.sensors[i] == sensor) return int(i);
@@ -92,11 +102,11 @@ json rowMajorJson(const glm::dmat4& m) {
 
 glm::dmat4 dmat4FromJson(const json& j, const std::string& context) {
   if (!j.is_array() || j.size() != 4)
-    throw Error(cat(context, ": expected a 4×4 matrix as a list of 4 rows, got ", j.dump()));
+    throw Error(cat(context, ": expected a 4×4 matrix as a list of 4 rows, got ", shown(j)));
   glm::dmat4 m(1.0);
   for (int r = 0; r < 4; ++r) {
     if (!j[r].is_array() || j[r].size() != 4)
-      throw Error(cat(context, ": row ", r, " of the 4×4 matrix is ", j[r].dump(),
+      throw Error(cat(context, ": row ", r, " of the 4×4 matrix is ", shown(j[r]),
                       " (expected 4 numbers)"));
     for (int c = 0; c < 4; ++c)
       m[c][r] = finiteNumber(j[r][c], cat(context, " row ", r, " column ", c));
@@ -105,7 +115,7 @@ glm::dmat4 dmat4FromJson(const json& j, const std::string& context) {
 }
 
 double finiteNumber(const json& value, const std::string& context) {
-  if (!value.is_number()) throw Error(cat(context, ": expected a number, got ", value.dump()));
+  if (!value.is_number()) throw Error(cat(context, ": expected a number, got ", shown(value)));
   const double v = value.get<double>();
   if (!std::isfinite(v)) throw Error(cat(context, ": ", v, " is not finite"));
   return v;
@@ -114,7 +124,7 @@ double finiteNumber(const json& value, const std::string& context) {
 int imageSide(const json& value, const std::string& context) {
   const double v = finiteNumber(value, context);
   if (v != std::floor(v) || v < 1 || v > double(kMaxImageSide))
-    throw Error(cat(context, ": image size ", value.dump(), " must be an integer in [1, ",
+    throw Error(cat(context, ": image size ", shown(value), " must be an integer in [1, ",
                     kMaxImageSide, "]"));
   return int(v);
 }
@@ -143,7 +153,10 @@ namespace {
 
 // A COLMAP model folder: binary wins when both are there, as in COLMAP's own reader.
 CameraFile readColmapFolder(const std::string& dir) {
-  const auto has = [&](const char* name) { return fs::is_regular_file(fs::path(dir) / name); };
+  const auto has = [&](const char* name) {
+    std::error_code ec;
+    return fs::is_regular_file(fs::path(dir) / name, ec);
+  };
   if (has("cameras.bin") && has("images.bin")) return camera_files::readColmapBinary(dir);
   if (has("cameras.txt") && has("images.txt")) return camera_files::readColmapText(dir);
   throw Error(cat(dir,
@@ -196,7 +209,7 @@ std::string cameraSidecarJson(const CalibratedSensor& sensor, const glm::dmat4& 
       camera_files::rowMajorJson(poseInConvention(worldToCameraCv, AxisConvention::OpenCV, true));
   j["camera_to_world_opengl"] =
       camera_files::rowMajorJson(poseInConvention(worldToCameraCv, AxisConvention::OpenGL, true));
-  return j.dump(2) + "\n";
+  return camera_files::jsonFileText(j, "the sidecar JSON");
 }
 
 }  // namespace aperture

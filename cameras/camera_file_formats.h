@@ -41,6 +41,13 @@ struct OpenCVLens {
 };
 std::optional<OpenCVLens> openCVLens(const Lens& lens);
 
+/// A JSON value for an error message (bytes that are not UTF-8 shown as U+FFFD: text from YAML
+/// or a hostile file need not be UTF-8, and json::dump would throw on it).
+std::string shown(const nlohmann::json& j);
+/// The text of a JSON file to write; Error naming `path` when a string is not UTF-8 (a name
+/// read from YAML).
+std::string jsonFileText(const nlohmann::json& doc, const std::string& path);
+
 /// 4×4 row-major nested list.
 nlohmann::json rowMajorJson(const glm::dmat4& m);
 /// A 4×4 matrix from a row-major nested list of numbers; Error naming `context` otherwise.

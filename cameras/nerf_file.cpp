@@ -87,7 +87,8 @@ std::optional<glm::ivec2> imageFileSize(const fs::path& path) {
       candidates.push_back(fs::path(path).concat(ext));
   for (const fs::path& p : candidates) {
     std::error_code ec;
-    if (!fs::is_regular_file(p, ec)) continue;  // never a device or a folder
+    // Never a device, a folder or a /proc file (size 0), which could block a read.
+    if (!fs::is_regular_file(p, ec) || fs::file_size(p, ec) == 0 || ec) continue;
     auto in = OIIO::ImageInput::open(p.string());
     if (!in) continue;
     const glm::ivec2 size(in->spec().width, in->spec().height);
@@ -107,7 +108,7 @@ NerfIntrinsics frameIntrinsics(const json& doc, const json& frame, bool angles,
                                                  : nullptr;
   if (m) {
     if (!m->is_string())
-      throw Error(cat(context, ": camera_model must be a string, got ", m->dump()));
+      throw Error(cat(context, ": camera_model must be a string, got ", shown(*m)));
     in.model = m->get<std::string>();
     const auto& names = nerfModelNames();
     if (std::find(names.begin(), names.end(), in.model) == names.end())
@@ -115,7 +116,7 @@ NerfIntrinsics frameIntrinsics(const json& doc, const json& frame, bool angles,
                       join(names, ", "), ")", didYouMean(in.model, names)));
     const json& top = doc.contains("camera_model") ? doc["camera_model"] : *m;
     if (!top.is_string() || isFisheyeName(top.get<std::string>()) != isFisheyeName(in.model))
-      throw Error(cat(context, ": camera_model '", in.model, "' and the top level's ", top.dump(),
+      throw Error(cat(context, ": camera_model '", in.model, "' and the top level's ", shown(top),
                       " differ in kind (perspective or fisheye); nerfstudio uses the top level's"));
   }
 
@@ -292,7 +293,7 @@ CameraFile readNerfJson(const std::string& path, const json& doc) {
   for (size_t i = 0; i < frames.size(); ++i) {
     const json& frame = frames[i];
     std::string context = cat(path, ": frame ", i);
-    if (!frame.is_object()) throw Error(cat(context, ": expected an object, got ", frame.dump()));
+    if (!frame.is_object()) throw Error(cat(context, ": expected an object, got ", shown(frame)));
     if (!frame.contains("file_path") || !frame["file_path"].is_string())
       throw Error(cat(context, ": needs a file_path (a string)"));
     const std::string name = frame["file_path"].get<std::string>();
@@ -369,7 +370,7 @@ void writeNerfstudioJson(const CameraFile& file, const std::string& path) {
   const fs::path parent = fs::path(path).parent_path();
   std::error_code ec;
   if (!parent.empty()) fs::create_directories(parent, ec);
-  writeTextAtomically(path, doc.dump(2) + "\n");
+  writeTextAtomically(path, camera_files::jsonFileText(doc, path));
 }
 
 }  // namespace aperture

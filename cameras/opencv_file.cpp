@@ -93,15 +93,18 @@ std::vector<double> numbers(const json& j, size_t rows, size_t cols, const std::
   std::vector<double> out;
   const json* flat = &j;
   if (j.is_object() && j.contains("data")) {
-    if (j.contains("rows") && j.contains("cols") &&
-        (!j["rows"].is_number_integer() || !j["cols"].is_number_integer() ||
-         j["rows"].get<int64_t>() * j["cols"].get<int64_t>() != int64_t(n)))
-      throw Error(cat(context, ": an OpenCV matrix of ", j["rows"].dump(), " × ", j["cols"].dump(),
+    const auto side = [](const json& v) {
+      return v.is_number_integer() && v.get<int64_t>() >= 0 && v.get<int64_t>() <= 16
+                 ? v.get<int64_t>()
+                 : int64_t(-1);
+    };
+    if (j.contains("rows") && j.contains("cols") && side(j["rows"]) * side(j["cols"]) != int64_t(n))
+      throw Error(cat(context, ": an OpenCV matrix of ", shown(j["rows"]), " × ", shown(j["cols"]),
                       ", expected ", rows, " × ", cols));
     flat = &j["data"];
   }
   if (!flat->is_array())
-    throw Error(cat(context, ": expected ", rows, " × ", cols, " numbers, got ", j.dump()));
+    throw Error(cat(context, ": expected ", rows, " × ", cols, " numbers, got ", shown(j)));
   for (const json& item : *flat) {
     if (item.is_array()) {
       for (const json& x : item) out.push_back(finiteNumber(x, context));
@@ -119,7 +122,7 @@ std::vector<double> numbers(const json& j, size_t rows, size_t cols, const std::
 // Any number of coefficients (dist), from the same shapes.
 std::vector<double> coefficientList(const json& j, const std::string& context) {
   const json& flat = j.is_object() && j.contains("data") ? j["data"] : j;
-  if (!flat.is_array()) throw Error(cat(context, ": expected a list of numbers, got ", j.dump()));
+  if (!flat.is_array()) throw Error(cat(context, ": expected a list of numbers, got ", shown(j)));
   std::vector<double> out;
   for (const json& item : flat) {
     if (item.is_array()) {
@@ -229,7 +232,7 @@ CameraFile readOpenCVDocument(const std::string& path, const json& doc, CameraFi
   for (const NamedCamera& nc : camerasOf(doc, path)) {
     const json& c = *nc.camera;
     const std::string& context = nc.context;
-    if (!c.is_object()) throw Error(cat(context, ": expected an object, got ", c.dump()));
+    if (!c.is_object()) throw Error(cat(context, ": expected an object, got ", shown(c)));
     const auto [it, fresh] = contextOfName.emplace(nc.name, context);
     if (!fresh)
       throw Error(
@@ -324,7 +327,7 @@ void writeOpenCVJson(const CameraFile& file, const std::string& path) {
   const std::filesystem::path parent = std::filesystem::path(path).parent_path();
   std::error_code ec;
   if (!parent.empty()) std::filesystem::create_directories(parent, ec);
-  writeTextAtomically(path, doc.dump(2) + "\n");
+  writeTextAtomically(path, camera_files::jsonFileText(doc, path));
 }
 
 }  // namespace aperture

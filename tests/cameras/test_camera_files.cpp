@@ -228,6 +228,32 @@ TEST(CameraFileColmap, WritersRoundTripAndAgree) {
   EXPECT_EQ(readFile(dir + "/bin2/cameras.bin"), readFile(dir + "/bin/cameras.bin"));
 }
 
+TEST(CameraFileColmap, HalfTurnsGoThroughEveryQuaternionBranch) {
+  // Half turns about x, y and z (trace −1: the largest component is x, y or z in turn) and a
+  // turn of 2 rad about (1, 1, 1) survive R → q → R.
+  CameraFile f;
+  f.sensors = {{8, 8, Lens(LensModelId::SimplePinhole, {4, 4, 4}), PixelCentre::HalfInteger}};
+  f.sensorIds = {"1"};
+  const auto rotation = [](glm::dvec3 axis, double angle) {
+    const glm::dvec3 k = glm::normalize(axis);
+    const double c = std::cos(angle), s = std::sin(angle);
+    glm::dmat4 m(1.0);
+    const double cross[3][3] = {{0, -k.z, k.y}, {k.z, 0, -k.x}, {-k.y, k.x, 0}};
+    for (int r = 0; r < 3; ++r)
+      for (int col = 0; col < 3; ++col)
+        m[col][r] = (r == col ? c : 0.0) + (1 - c) * k[r] * k[col] + s * cross[r][col];
+    m[3] = glm::dvec4(0.5, -1, 2, 1);
+    return m;
+  };
+  const std::vector<glm::dmat4> poses = {rotation({1, 0, 0}, kPi), rotation({0, 1, 0}, kPi),
+                                         rotation({0, 0, 1}, kPi), rotation({1, 1, 1}, 2.0)};
+  for (size_t k = 0; k < poses.size(); ++k)
+    f.images.push_back({"i" + std::to_string(k) + ".png", 0, poses[k]});
+  const std::string dir = scratchDir();
+  writeColmapBinary(f, dir);
+  expectSamePoses(readCameraFile(dir), f, 1e-15);
+}
+
 TEST(CameraFileColmap, MalformedFilesNameTheFileAndTheEntry) {
   const std::string dir = scratchDir();
   const auto textModel = [&](const std::string& name, const std::string& cameras,
@@ -626,6 +652,19 @@ TEST(CameraFileOpenCV, UnsupportedTermsAndMalformedCamerasAreNamed) {
       readCameraFile(
           camera("dup.json", R"("name": "good", "width": 4, "height": 4, )" + k + ", " + pose)),
       "dup.json", "'good' is given twice");
+  // A name that is not UTF-8 (Latin-1 'é') reads, and cannot go into a JSON file: an Error.
+  writeFile(dir + "/latin1.yaml",
+            "%YAML:1.0\ncaf\xe9:\n  width: 4\n  height: 4\n"
+            "  K: [2, 0, 2, 0, 2, 2, 0, 0, 1]\n  rvec: [0, 0, 0]\n"
+            "  t: [0, 0, 0]\n  dist: [0, 0, 0, 0, 0x]\n");
+  EXPECT_ERROR_MENTIONS(readCameraFile(dir + "/latin1.yaml"), "latin1.yaml", "dist");
+  writeFile(dir + "/latin1.yaml",
+            "%YAML:1.0\ncaf\xe9:\n  width: 4\n  height: 4\n"
+            "  K: [2, 0, 2, 0, 2, 2, 0, 0, 1]\n  rvec: [0, 0, 0]\n"
+            "  t: [0, 0, 0]\n");
+  const CameraFile latin1 = readCameraFile(dir + "/latin1.yaml");
+  EXPECT_EQ(latin1.images[0].name, "caf\xe9");
+  EXPECT_ERROR_MENTIONS(writeOpenCVJson(latin1, dir + "/latin1.json"), "latin1.json", "UTF-8");
   writeFile(dir + "/broken.yaml", "%YAML:1.0\nK: [1, 2\n");
   EXPECT_ERROR_MENTIONS(readCameraFile(dir + "/broken.yaml"), "broken.yaml", "YAML");
 }
