@@ -7,6 +7,7 @@ pkgs=(
   libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev libglm-dev
   googletest libgtest-dev libbenchmark-dev
   nlohmann-json3-dev libcli11-dev
+  libyaml-cpp-dev  # OpenCV FileStorage YAML camera files
   clang-format  # the Format test enforces .clang-format
   openimageio-tools  # Debian's OpenImageIO CMake config references its binaries
 )
