@@ -3,9 +3,13 @@
 #include <algorithm>
 #include <cctype>
 #include <climits>
+#include <cmath>
 
 #include "apps/camera_paths.h"
+#include "cameras/conventions.h"
 #include "cameras/registry.h"
+#include "core/spelling.h"
+#include "core/units.h"
 
 namespace aperture::app {
 
@@ -25,6 +29,50 @@ ParamSet givenParams(const Object& c) {
     if (const ParamSpec* spec = findCameraParamSpec(item.key()))
       given.set(*spec, paramFromJson(c, *spec, item.value()), c.keyPath(item.key()));
   return given;
+}
+
+/// The entry's "blender" block, a camera in bpy.types.Camera's property names, as schema
+/// parameters of `given`: lens (mm, default 50; or angle, radians across the fitted sensor
+/// side, as Camera.angle) → focal_length, sensor_width/sensor_height → sensor, sensor_fit →
+/// sensor_fit, shift_x/shift_y → blender_shift, clip_start/clip_end → clip. Keys not given
+/// keep Blender's defaults (aperture's: 36 x 24 mm, AUTO, no shift); no clip_* key, no
+/// clipping (one of them: the other is Blender's default, 0.1 or 1000).
+void addBlenderParams(const Object& c, ParamSet& given) {
+  const json* block = c.find("blender");
+  if (!block) return;
+  const Object b(c.file(), c.keyPath("blender"), *block,
+                 {"lens", "angle", "sensor_width", "sensor_height", "sensor_fit", "shift_x",
+                  "shift_y", "clip_start", "clip_end"});
+  auto put = [&](const char* name, ParamValue v, const char* keyA, const char* keyB) {
+    const char* key = b.has(keyA) || !*keyB ? keyA : keyB;
+    if (given.has(name))
+      b.fail(b.keyPath(key), cat("sets ", name, ", which ", given.label(name), " sets as well"));
+    given.set(*findCameraParamSpec(name), std::move(v), b.keyPath(key));
+  };
+  const glm::dvec2 sensor(b.number("sensor_width", 36.0), b.number("sensor_height", 24.0));
+  SensorFit fit = SensorFit::Auto;
+  try {
+    fit = parseBlenderSensorFit(b.string("sensor_fit").value_or("AUTO"));
+  } catch (const Error& e) {
+    b.fail(b.keyPath("sensor_fit"), e.what());
+  }
+  if (b.has("sensor_width") || b.has("sensor_height"))
+    put("sensor", sensor, "sensor_width", "sensor_height");
+  if (b.has("sensor_fit"))
+    put("sensor_fit", toLowerAscii(*b.string("sensor_fit")), "sensor_fit", "");
+  if (b.has("lens") && b.has("angle")) b.fail(b.path(), "give lens or angle, not both");
+  if (const std::optional<double> angle = b.number("angle")) {
+    if (!(*angle > 0 && *angle < kPi)) b.fail(b.keyPath("angle"), "must be in (0, pi) radians");
+    put("focal_length", fittedSensorMm(fit, sensor) / (2.0 * std::tan(*angle / 2.0)), "angle", "");
+  } else {
+    put("focal_length", b.number("lens", 50.0), "lens", "");
+  }
+  if (b.has("shift_x") || b.has("shift_y"))
+    put("blender_shift", glm::dvec2(b.number("shift_x", 0.0), b.number("shift_y", 0.0)), "shift_x",
+        "shift_y");
+  if (b.has("clip_start") || b.has("clip_end"))
+    put("clip", glm::dvec2(b.number("clip_start", 0.1), b.number("clip_end", 1000.0)), "clip_start",
+        "clip_end");
 }
 
 void checkFrameKeys(const Object& c, bool orbit, bool keyed) {
@@ -91,6 +139,7 @@ std::vector<std::pair<int, CameraParams>> keyframeFrames(const Object& c, const 
 std::vector<std::string> jobCameraKeys() {
   std::vector<std::string> keys = {"name", "orbit", "keyframes", "frames"};
   for (const ParamSpec* s : allCameraParamSpecs()) keys.emplace_back(s->name);
+  keys.emplace_back("blender");
   return keys;
 }
 
@@ -133,9 +182,12 @@ JobCamera parseJobCamera(const Object& c, const CameraParams& defaults, size_t f
     c.fail(c.keyPath("name"), cat("'", cam.name, "': use 1-128 letters, digits, '_', '-', '.'"));
   const bool orbit = c.has("orbit"), keyed = c.has("keyframes");
   checkFrameKeys(c, orbit, keyed);
+  // givenParams and addBlenderParams name the file themselves.
+  ParamSet given = givenParams(c);
+  addBlenderParams(c, given);
   CameraParams base;
   try {
-    base = resolveCameraParams(givenParams(c), defaults);
+    base = resolveCameraParams(given, defaults);
   } catch (const Error& e) {
     throw Error(cat(c.file(), ": ", e.what()));
   }

@@ -20,7 +20,8 @@ struct JobCamera {
   std::vector<std::pair<int, CameraParams>> frames;
 };
 
-/// Keys a camera entry accepts: name, orbit, keyframes, frames and every camera parameter.
+/// Keys a camera entry accepts: name, orbit, keyframes, frames, every camera parameter and
+/// "blender" (a camera in Blender's property names; see docs/cameras.md).
 std::vector<std::string> jobCameraKeys();
 
 /// A JSON value as a value of `spec`'s kind (numbers, [x, y(, z)], [w, h], true/false, a

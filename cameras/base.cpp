@@ -121,15 +121,10 @@ void resolveImagePlane(const CameraParams& p, double& d, double& vw, double& vh)
     vw = p.viewport->x;
     vh = p.viewport->y;
   } else if (p.focalLengthMm) {
-    // Crop the sensor to the image's aspect ratio (largest centred window that fits).
-    const double aspect = double(p.width) / double(p.height);
-    double cropW = p.sensorMm.x, cropH = p.sensorMm.y;
-    if (cropW / cropH > aspect)
-      cropW = cropH * aspect;
-    else
-      cropH = cropW / aspect;
-    vw = d * cropW / *p.focalLengthMm;
-    vh = d * cropH / *p.focalLengthMm;
+    const glm::dvec2 v =
+        viewportOfSensor(*p.focalLengthMm, p.sensorMm, p.sensorFit, p.width, p.height, d);
+    vw = v.x;
+    vh = v.y;
   } else {
     const glm::dvec2 v =
         viewportOfFov(p.fovDeg.value_or(kDefaultFovDeg), p.fovAxis, p.width, p.height, d);
@@ -158,7 +153,10 @@ CameraBase::CameraBase(const CameraParams& p, const glm::dvec3& renderOrigin, co
   width_ = p.width;
   height_ = p.height;
   spp_ = p.spp;
-  shift_ = p.shift;
+  if (p.blenderShift && p.shift != glm::dvec2(0.0))
+    throw Error("camera: give either a shift or a Blender shift, not both");
+  shift_ =
+      p.blenderShift ? shiftOfBlenderShift(*p.blenderShift, p.sensorFit, width_, height_) : p.shift;
   if (p.architectural) {
     // Keep the image plane parallel to up. With Y = normalize(up) and the requested view
     // direction D = −W0 = cos(t)·H + sin(t)·Y (H horizontal, t the tilt above the horizon),
@@ -186,10 +184,11 @@ CameraBase::CameraBase(const CameraParams& p, const glm::dvec3& renderOrigin, co
 }
 
 void CameraBase::rejectShift() const {
-  if (params_.shift != glm::dvec2(0.0) || params_.architectural)
+  if (params_.shift != glm::dvec2(0.0) || params_.blenderShift || params_.architectural ||
+      params_.clip)
     throw Error(
-        cat("camera: --shift and --architectural apply to perspective and thinlens "
-            "cameras, not to '",
+        cat("camera: --shift, --blender-shift, --architectural and --clip apply to perspective "
+            "and thinlens cameras, not to '",
             type_, "'"));
 }
 

@@ -15,10 +15,9 @@ namespace aperture {
 
 /// Image-plane distance and viewport from whichever convention the parameters use:
 /// explicit d + viewport, else focal length + sensor, else fov on fovAxis at d (default d = 1,
-/// default fov 45° vertical). Focal length + sensor: the image is the largest centred window
-/// of the image's aspect ratio inside the sensor (as a camera crops its sensor), so
-/// vw = d·cropW/f and vh = d·cropH/f with cropW/cropH = width/height. Throws Error for
-/// d <= 0, viewport <= 0, non-finite values or fov outside (0°, 180°).
+/// default fov 45° vertical). Focal length + sensor: the sensor spans the image dimension
+/// sensorFit chooses, as Blender's sensor_fit (viewportOfSensor, cameras/conventions.h).
+/// Throws Error for d <= 0, viewport <= 0, non-finite values or fov outside (0°, 180°).
 void resolveImagePlane(const CameraParams& p, double& d, double& vw, double& vh);
 
 /// Builds the frame from eye + at / dir + up (errors as CameraFrame).
@@ -77,7 +76,8 @@ class CameraBase : public Camera {
   double vh() const { return vh_; }
   int width() const { return width_; }
   int height() const { return height_; }
-  /// Effective shift in viewport units (params.shift plus the architectural tilt shift).
+  /// Effective shift in viewport units (params.shift or params.blenderShift converted, plus
+  /// the architectural tilt shift).
   const glm::dvec2& shift() const { return shift_; }
   /// The image window on the plane at distance d: u in [uLo, uHi], v in [vLo, vHi].
   double uLo() const { return window().uLo(); }
@@ -102,7 +102,8 @@ class CameraBase : public Camera {
   /// and where they differ from the planar defaults, the screen window, the pixel aspect ratio
   /// and the panorama projection.
   virtual void describeExtra(CameraDescription&) const {}
-  /// Throws Error naming the model if a shift or the architectural flag was given.
+  /// Throws Error naming the model if a shift, a Blender shift, the architectural flag or a
+  /// clip was given (parameters of the perspective and thin-lens models only).
   void rejectShift() const;
 
   CameraParams params_;

@@ -77,34 +77,59 @@ ImagePlane fromMitsuba(double fovDeg, MitsubaFovAxis axis, int width, int height
   return {d, v.x, v.y, glm::dvec2(0.0)};
 }
 
-BlenderSensorFit parseBlenderSensorFit(const std::string& name) {
-  const std::string n = toLowerAscii(name);
-  if (n == "auto") return BlenderSensorFit::Auto;
-  if (n == "horizontal") return BlenderSensorFit::Horizontal;
-  if (n == "vertical") return BlenderSensorFit::Vertical;
-  throw Error(cat("unknown Blender sensor_fit '", name, "' (known: AUTO, HORIZONTAL, VERTICAL)"));
+bool sensorFitsWidth(SensorFit fit, int width, int height) {
+  switch (fit) {
+    case SensorFit::Horizontal:
+      return true;
+    case SensorFit::Vertical:
+      return false;
+    case SensorFit::Auto:
+      break;
+  }
+  return width >= height;
 }
 
-ImagePlane fromBlender(double focalMm, double sensorWidthMm, double sensorHeightMm,
-                       BlenderSensorFit fit, int width, int height, double d) {
+double fittedSensorMm(SensorFit fit, const glm::dvec2& sensorMm) {
+  return fit == SensorFit::Vertical ? sensorMm.y : sensorMm.x;
+}
+
+glm::dvec2 viewportOfSensor(double focalMm, const glm::dvec2& sensorMm, SensorFit fit, int width,
+                            int height, double d) {
+  const double extent = d * fittedSensorMm(fit, sensorMm) / focalMm;
+  const double aspect = double(width) / double(height);
+  if (sensorFitsWidth(fit, width, height)) return {extent, extent / aspect};
+  return {extent * aspect, extent};
+}
+
+glm::dvec2 shiftOfBlenderShift(const glm::dvec2& blenderShift, SensorFit fit, int width,
+                               int height) {
+  const double spanned = sensorFitsWidth(fit, width, height) ? width : height;
+  return ImageWindow::shiftForPixelOffset(blenderShift.x * spanned, blenderShift.y * spanned, width,
+                                          height);
+}
+
+SensorFit parseBlenderSensorFit(const std::string& name) {
+  const std::string n = toLowerAscii(name);
+  if (n == "auto") return SensorFit::Auto;
+  if (n == "horizontal") return SensorFit::Horizontal;
+  if (n == "vertical") return SensorFit::Vertical;
+  throw Error(cat("unknown Blender sensor_fit '", name, "' (known: AUTO, HORIZONTAL, VERTICAL)",
+                  didYouMean(name, {"AUTO", "HORIZONTAL", "VERTICAL"})));
+}
+
+ImagePlane fromBlender(double focalMm, double sensorWidthMm, double sensorHeightMm, SensorFit fit,
+                       int width, int height, double d, const glm::dvec2& blenderShift) {
   checkImage(width, height, d);
   if (!(focalMm > 0 && sensorWidthMm > 0 && sensorHeightMm > 0 && std::isfinite(focalMm) &&
         std::isfinite(sensorWidthMm) && std::isfinite(sensorHeightMm)))
     throw Error(cat("conventions: focal length ", focalMm, " mm and sensor ", sensorWidthMm, "x",
                     sensorHeightMm, " mm must be positive"));
-  const double aspect = double(width) / height;
-  ImagePlane p;
-  p.d = d;
-  const bool horizontal =
-      fit == BlenderSensorFit::Horizontal || (fit == BlenderSensorFit::Auto && width >= height);
-  if (horizontal) {
-    p.vw = d * sensorWidthMm / focalMm;
-    p.vh = p.vw / aspect;
-  } else {
-    p.vh = d * (fit == BlenderSensorFit::Vertical ? sensorHeightMm : sensorWidthMm) / focalMm;
-    p.vw = p.vh * aspect;
-  }
-  return p;
+  if (!(std::isfinite(blenderShift.x) && std::isfinite(blenderShift.y)))
+    throw Error(
+        cat("conventions: Blender shift ", blenderShift.x, ",", blenderShift.y, " must be finite"));
+  const glm::dvec2 v =
+      viewportOfSensor(focalMm, {sensorWidthMm, sensorHeightMm}, fit, width, height, d);
+  return {d, v.x, v.y, shiftOfBlenderShift(blenderShift, fit, width, height)};
 }
 
 ImagePlane fromOpenCV(double fx, double fy, double cx, double cy, int width, int height, double d) {

@@ -29,13 +29,31 @@ enum class MitsubaFovAxis { X, Y, Diagonal, Smaller, Larger };
 MitsubaFovAxis parseMitsubaFovAxis(const std::string& name);  ///< x|y|diagonal|smaller|larger
 ImagePlane fromMitsuba(double fovDeg, MitsubaFovAxis axis, int width, int height, double d = 1);
 
-/// Blender: focal length and sensor size (mm) with sensor_fit. AUTO fits sensor_width to the
-/// larger image dimension; HORIZONTAL fits sensor_width to the width; VERTICAL fits
-/// sensor_height to the height. Square pixels; Blender's lens shift is not converted.
-enum class BlenderSensorFit { Auto, Horizontal, Vertical };
-BlenderSensorFit parseBlenderSensorFit(const std::string& name);  ///< AUTO|HORIZONTAL|VERTICAL
-ImagePlane fromBlender(double focalMm, double sensorWidthMm, double sensorHeightMm,
-                       BlenderSensorFit fit, int width, int height, double d = 1);
+/// Blender's sensor fit (Blender's BKE_camera_sensor_fit / BKE_camera_sensor_size): whether
+/// the sensor spans the image width (Auto: when width >= height; Horizontal: always;
+/// Vertical: never), and the sensor extent it spans (the width, the height for Vertical:
+/// Auto uses the sensor width on the larger dimension whatever the sensor's aspect).
+bool sensorFitsWidth(SensorFit fit, int width, int height);
+double fittedSensorMm(SensorFit fit, const glm::dvec2& sensorMm);
+
+/// The viewport (vw, vh) at distance d of focal length focalMm on a sensor of sensorMm
+/// (width, height) under `fit`: the spanned image dimension gets d·fittedSensorMm / f, the
+/// other follows the image's aspect ratio. The one sensor-fit conversion (resolveImagePlane
+/// and fromBlender).
+glm::dvec2 viewportOfSensor(double focalMm, const glm::dvec2& sensorMm, SensorFit fit, int width,
+                            int height, double d);
+
+/// Blender's lens shift (shift_x, shift_y: fractions of the image dimension the fit spans,
+/// x right, y up; Blender moves the view plane by shift·that dimension) in viewport units.
+glm::dvec2 shiftOfBlenderShift(const glm::dvec2& blenderShift, SensorFit fit, int width,
+                               int height);
+
+/// Blender: focal length and sensor size (mm) with sensor_fit and lens shift (see above).
+/// Square pixels.
+SensorFit parseBlenderSensorFit(const std::string& name);  ///< AUTO|HORIZONTAL|VERTICAL
+ImagePlane fromBlender(double focalMm, double sensorWidthMm, double sensorHeightMm, SensorFit fit,
+                       int width, int height, double d = 1,
+                       const glm::dvec2& blenderShift = glm::dvec2(0.0));
 
 /// OpenCV pinhole intrinsics (pixels): x = fx·X/Z + cx, y = fy·Y/Z + cy in a camera with
 /// x right, y down, z forward, pixel centres at integer coordinates. aperture's raster

@@ -25,6 +25,10 @@ struct ImageWindow {
   double vHi() const { return (shift.y + 0.5) * vh; }
   /// The raster position of the principal point (the plane's origin).
   glm::dvec2 principalPoint() const { return raster(0.0, 0.0); }
+  /// The shift that moves the window by dx pixels right and dy pixels up: (dx / W, dy / H).
+  static glm::dvec2 shiftForPixelOffset(double dx, double dy, int width, int height) {
+    return {dx / width, dy / height};
+  }
   /// The shift that puts the principal point at raster position (px, py).
   static glm::dvec2 shiftForPrincipalPoint(double px, double py, int width, int height) {
     return {0.5 - px / width, py / height - 0.5};

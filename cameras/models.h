@@ -23,7 +23,8 @@ const std::vector<const ParamSpec*>& commonParamSpecs();
 /// The image-plane window of the planar models: d and viewport (declared in base.cpp).
 const ParamSpec& distanceParamSpec();
 const ParamSpec& viewportParamSpec();
-/// fov, fov_axis, focal_length, sensor, shift, architectural (declared in perspective.cpp).
+/// fov, fov_axis, focal_length, sensor, sensor_fit, shift, blender_shift, architectural, clip
+/// (declared in perspective.cpp).
 const std::vector<const ParamSpec*>& perspectiveParamSpecs();
 
 /// The concatenation of spec lists (a model's parameters from shared groups).

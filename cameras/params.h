@@ -13,6 +13,12 @@ namespace aperture {
 
 enum class FovAxis { X, Y, Diagonal };
 
+/// Which image dimension the sensor spans (Blender's sensor_fit): Auto the larger one (the
+/// width of a square image) with the sensor width, Horizontal the width with the sensor width,
+/// Vertical the height with the sensor height. Resolved by sensorFitsWidth() and
+/// viewportOfSensor() (cameras/conventions.h).
+enum class SensorFit { Auto, Horizontal, Vertical };
+
 /// Field of view when none of fov, viewport and focal length is given: 45 degrees vertical.
 inline constexpr double kDefaultFovDeg = 45.0;
 
@@ -28,18 +34,27 @@ struct CameraParams {
   std::optional<glm::dvec3> dir;  ///< view direction (any length > 0)
   glm::dvec3 up{0.0, 1.0, 0.0};
 
-  // Image plane. At most one of: viewport (with d, default 1), focal length (with sensor),
-  // fov (on fovAxis); with none, kDefaultFovDeg vertical.
-  std::optional<double> d;              ///< image-plane distance, scene units (> 0)
-  std::optional<glm::dvec2> viewport;   ///< vw, vh on the image plane, scene units (> 0)
-  std::optional<double> fovDeg;         ///< field of view, degrees, in (0, 180)
-  FovAxis fovAxis = FovAxis::Y;         ///< which extent fovDeg spans
-  std::optional<double> focalLengthMm;  ///< 35 mm style focal length, millimetres
-  glm::dvec2 sensorMm{36.0, 24.0};      ///< sensor width, height, millimetres
+  // Image plane. At most one of: viewport (with d, default 1), focal length (with sensor and
+  // sensorFit), fov (on fovAxis); with none, kDefaultFovDeg vertical.
+  std::optional<double> d;                ///< image-plane distance, scene units (> 0)
+  std::optional<glm::dvec2> viewport;     ///< vw, vh on the image plane, scene units (> 0)
+  std::optional<double> fovDeg;           ///< field of view, degrees, in (0, 180)
+  FovAxis fovAxis = FovAxis::Y;           ///< which extent fovDeg spans
+  std::optional<double> focalLengthMm;    ///< 35 mm style focal length, millimetres
+  glm::dvec2 sensorMm{36.0, 24.0};        ///< sensor width, height, millimetres
+  SensorFit sensorFit = SensorFit::Auto;  ///< how the sensor fits the image (focal length)
 
   // Shifted perspective.
   glm::dvec2 shift{0.0, 0.0};  ///< image-window offset in viewport units (0.5 = half a viewport)
+  /// Blender's lens shift (shift_x, shift_y) instead of `shift`: fractions of the image
+  /// dimension the sensor fit spans (the larger one for SensorFit::Auto), x right, y up.
+  std::optional<glm::dvec2> blenderShift;
   bool architectural = false;  ///< keep the image plane parallel to up; tilt becomes shift
+
+  /// Clipping (perspective and thin lens): near and far planar depth along the view axis,
+  /// scene units, as Blender's clip_start and clip_end; not set: no clipping (see
+  /// core/camera.h for the rays' tnear and tfar).
+  std::optional<glm::dvec2> clip;
 
   // Oblique parallel: one of these (direction in world space, or shear angles in degrees).
   std::optional<glm::dvec3> obliqueDir;

@@ -2,6 +2,7 @@
 // window may be shifted (params.shift, or the tilt of the architectural mode).
 #include "cameras/perspective.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -16,11 +17,21 @@ PerspectiveCamera::PerspectiveCamera(const CameraParams& p, const glm::dvec3& re
     : PacketCamera(p, renderOrigin, typeName),
       lensRadius_(lensRadius),
       focusDistance_(focusDistance),
-      focusOverD_(focusDistance / d_) {
+      focusOverD_(focusDistance / d_),
+      clip_(p.clip) {
   pinholeCentres_ = spp_ == 1 && lensRadius_ == 0;
+  if (clip_ && !(clip_->x >= 0 && clip_->x < clip_->y && std::isfinite(clip_->y)))
+    throw Error(cat("camera: clip ", clip_->x, ",", clip_->y,
+                    ": needs 0 <= near < far, both finite (planar depths, scene units)"));
 }
 
 void PerspectiveCamera::generate(const PacketRequest& req, RayLanes& out, int* valid) const {
+  generateUnclipped(req, out, valid);
+  if (clip_) clipLanes(out, req.lanes());
+}
+
+void PerspectiveCamera::generateUnclipped(const PacketRequest& req, RayLanes& out,
+                                          int* valid) const {
   // Pinhole rays through pixel centres: every sample at spp 1, the centre ray at any spp.
   if (pinholeCentres_ || (req.centreRay() && lensRadius_ == 0)) {
     // The frame loop's block shapes get loops with constant trip counts.
@@ -30,6 +41,22 @@ void PerspectiveCamera::generate(const PacketRequest& req, RayLanes& out, int* v
     if (req.blockW == 1 && req.blockH == 1) return generatePinholeCentres<1, 1>(req, out, valid);
   }
   PacketCamera::generate(req, out, valid);
+}
+
+void PerspectiveCamera::clipLanes(RayLanes& out, int lanes) const {
+  // Every origin lies on the plane through e perpendicular to the axis (the eye, or a lens
+  // point), so a ray reaches depth z at t = z / cos, cos its direction's cosine with the axis:
+  // the clip planes are planes of constant depth, as Blender's clip_start and clip_end. The
+  // cosine is taken of the float direction Embree traces. Perspective and thin-lens rays
+  // always point forwards (cos > 0); the floor only keeps invalid lanes finite.
+  const glm::dvec3 axis = -frame_.w;
+  for (int k = 0; k < lanes; ++k) {
+    const double cosine =
+        double(out.dirX[k]) * axis.x + double(out.dirY[k]) * axis.y + double(out.dirZ[k]) * axis.z;
+    const double c = std::max(cosine, 1e-9);
+    out.tnear[k] = float(clip_->x / c);
+    out.tfar[k] = float(clip_->y / c);
+  }
 }
 
 template <int kBW, int kBH>
@@ -144,6 +171,7 @@ void PerspectiveCamera::describeExtra(CameraDescription& c) const {
   c.screenWindowWidth = vw_ / d_;
   c.extra.emplace_back("fov_x_deg", cat(2.0 * std::atan(0.5 * vw_ / d_) * kDegPerRad));
   c.extra.emplace_back("fov_y_deg", cat(2.0 * std::atan(0.5 * vh_ / d_) * kDegPerRad));
+  if (clip_) c.extra.emplace_back("clip", cat(clip_->x, ",", clip_->y));
   if (lensRadius_ > 0 || type_ == "thinlens") {
     c.extra.emplace_back("aperture_radius", cat(lensRadius_));
     c.extra.emplace_back("focus_distance", cat(focusDistance_));
@@ -180,6 +208,20 @@ const ParamSpec kFov{"fov",
 const ParamSpec kFovAxis{
     "fov_axis", K::Choice,      "", "The extent fov spans", nullptr, {}, {"x", "y", "diagonal"}, {},
     {},         fovAxisAccess()};
+ParamAccess sensorFitAccess() {
+  return {[](const CameraParams& p) -> std::optional<ParamValue> {
+            return ParamValue(std::string(p.sensorFit == SensorFit::Auto         ? "auto"
+                                          : p.sensorFit == SensorFit::Horizontal ? "horizontal"
+                                                                                 : "vertical"));
+          },
+          [](CameraParams& p, const ParamValue& v) {
+            const std::string& f = std::get<std::string>(v);
+            p.sensorFit = f == "auto"         ? SensorFit::Auto
+                          : f == "horizontal" ? SensorFit::Horizontal
+                                              : SensorFit::Vertical;
+          }};
+}
+
 const ParamSpec kFocalLength{"focal_length",
                              K::Number,
                              "mm",
@@ -193,16 +235,52 @@ const ParamSpec kFocalLength{"focal_length",
 const ParamSpec kSensor{"sensor",
                         K::Vec2,
                         "mm",
-                        "Sensor W,H for focal_length (the image crops it to its aspect)",
+                        "Sensor W,H for focal_length (sensor_fit says which image side it spans)",
                         nullptr,
                         kPositive,
                         {},
                         {},
                         {"focal_length"},
                         fieldAccess<&CameraParams::sensorMm>()};
-const ParamSpec kShift{
-    "shift", K::Vec2, "viewports", "Lens shift SX,SY (0.5 = half a viewport)", nullptr, {},
-    {},      {},      {},          fieldAccess<&CameraParams::shift>()};
+const ParamSpec kSensorFit{"sensor_fit",
+                           K::Choice,
+                           "",
+                           "Image side the sensor spans, as Blender: auto = sensor width on the "
+                           "larger side, horizontal = width on the width, vertical = height on "
+                           "the height",
+                           nullptr,
+                           {},
+                           {"auto", "horizontal", "vertical"},
+                           {},
+                           {"focal_length"},
+                           sensorFitAccess()};
+const ParamSpec kShift{"shift",     K::Vec2,
+                       "viewports", "Lens shift SX,SY (0.5 = half a viewport)",
+                       nullptr,     {},
+                       {},          {"blender_shift"},
+                       {},          fieldAccess<&CameraParams::shift>()};
+const ParamSpec kBlenderShift{"blender_shift",
+                              K::Vec2,
+                              "fitted sides",
+                              "Blender's lens shift shift_x,shift_y: fractions of the image side "
+                              "the sensor fit spans (the larger one for auto)",
+                              "none",
+                              {},
+                              {},
+                              {"shift"},
+                              {},
+                              fieldAccess<&CameraParams::blenderShift>()};
+const ParamSpec kClip{"clip",
+                      K::Vec2,
+                      "scene units",
+                      "Near,far clipping: planar depths along the view axis (Blender's "
+                      "clip_start, clip_end); near < far",
+                      "none (no clipping)",
+                      {0.0, std::nullopt},
+                      {},
+                      {},
+                      {},
+                      fieldAccess<&CameraParams::clip>()};
 const ParamSpec kArchitectural{
     "architectural",
     K::Flag,
@@ -225,8 +303,9 @@ std::unique_ptr<CameraBase> makePerspectiveCamera(const CameraParams& p,
 }  // namespace
 
 const std::vector<const ParamSpec*>& perspectiveParamSpecs() {
-  static const std::vector<const ParamSpec*> v = {&kFov,    &kFovAxis, &kFocalLength,
-                                                  &kSensor, &kShift,   &kArchitectural};
+  static const std::vector<const ParamSpec*> v = {&kFov,          &kFovAxis,       &kFocalLength,
+                                                  &kSensor,       &kSensorFit,     &kShift,
+                                                  &kBlenderShift, &kArchitectural, &kClip};
   return v;
 }
 

@@ -42,6 +42,8 @@ class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
   /// Pinhole rays through pixel centres (every sample at 1 spp, the centre ray at any spp)
   /// take a vectorised SoA path that computes exactly rayAt()'s expressions; everything else
   /// the shared packet loop.
+  /// With a clip, every lane then gets tnear = near / cos and tfar = far / cos (cos: the
+  /// direction's cosine with the view axis), so depth, not distance, is clipped.
   void generate(const PacketRequest& req, RayLanes& out, int* valid) const override;
 
   bool stochastic() const override { return spp_ > 1 || lensRadius_ > 0; }
@@ -55,10 +57,14 @@ class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
   void describeExtra(CameraDescription& c) const override;
 
  private:
+  void generateUnclipped(const PacketRequest& req, RayLanes& out, int* valid) const;
   template <int kBW, int kBH>
   void generatePinholeCentres(const PacketRequest& req, RayLanes& out, int* valid) const;
+  /// Sets tnear and tfar of lanes [0, lanes) from the clip depths.
+  void clipLanes(RayLanes& out, int lanes) const;
 
   double lensRadius_ = 0, focusDistance_ = 1, focusOverD_ = 1;
+  std::optional<glm::dvec2> clip_;  ///< near, far planar depth (CameraParams::clip)
   /// 1 spp without a lens: rays through pixel centres, the vectorised path.
   bool pinholeCentres_ = false;
 };

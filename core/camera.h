@@ -12,7 +12,11 @@
 //  - origins are in *render space*: world minus the scene's render origin (the mesh anchor),
 //    computed in double and rounded to float once;
 //  - directions are unit length (normalised in double, then rounded), so t is a distance;
-//  - tnear = 0, tfar = +inf, time = 0, mask = 0xFFFFFFFF, flags = 0, id = lane;
+//  - tnear = 0, tfar = +inf, time = 0, mask = 0xFFFFFFFF, flags = 0, id = lane. The one
+//    exception: a perspective or thin-lens camera with a clip (near, far planar depths) sets
+//    tnear = near / cos and tfar = far / cos, cos the direction's cosine with the view axis,
+//    so exactly the depths in [near, far] are hit. The frame loop traces tnear and tfar as
+//    given and never resets them;
 //  - valid[k] = -1 for a lane to trace, 0 for a lane outside the image or without a ray
 //    (a fisheye pixel outside its circle). Invalid lanes still get finite values.
 #include <cstdint>

@@ -42,13 +42,13 @@ TEST(Conventions, MitsubaFovAxes) {
 
 TEST(Conventions, BlenderSensorFit) {
   // 50 mm on 36 x 24 mm: 36/50 = 0.72, 24/50 = 0.48.
-  expectPlane(fromBlender(50, 36, 24, BlenderSensorFit::Auto, 1920, 1080), 0.72, 0.405);
-  expectPlane(fromBlender(50, 36, 24, BlenderSensorFit::Auto, 1080, 1920), 0.405, 0.72);
-  expectPlane(fromBlender(50, 36, 24, BlenderSensorFit::Horizontal, 1080, 1920), 0.72, 1.28);
-  expectPlane(fromBlender(50, 36, 24, BlenderSensorFit::Vertical, 1920, 1080), 0.48 * 16 / 9, 0.48);
-  EXPECT_EQ(parseBlenderSensorFit("VERTICAL"), BlenderSensorFit::Vertical);
+  expectPlane(fromBlender(50, 36, 24, SensorFit::Auto, 1920, 1080), 0.72, 0.405);
+  expectPlane(fromBlender(50, 36, 24, SensorFit::Auto, 1080, 1920), 0.405, 0.72);
+  expectPlane(fromBlender(50, 36, 24, SensorFit::Horizontal, 1080, 1920), 0.72, 1.28);
+  expectPlane(fromBlender(50, 36, 24, SensorFit::Vertical, 1920, 1080), 0.48 * 16 / 9, 0.48);
+  EXPECT_EQ(parseBlenderSensorFit("VERTICAL"), SensorFit::Vertical);
   EXPECT_THROW(parseBlenderSensorFit("FILL"), Error);
-  EXPECT_THROW(fromBlender(0, 36, 24, BlenderSensorFit::Auto, 10, 10), Error);
+  EXPECT_THROW(fromBlender(0, 36, 24, SensorFit::Auto, 10, 10), Error);
 }
 
 TEST(Conventions, OpenCVIntrinsics) {

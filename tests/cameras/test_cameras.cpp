@@ -229,7 +229,7 @@ TEST(PerspectiveCamera, DegenerateInputsThrow) {
   for (const auto& [what, p] : bad) EXPECT_THROW(makeCamera(p), Error) << what;
 }
 
-TEST(PerspectiveCamera, FocalLengthAndSensorCropToTheImageAspect) {
+TEST(PerspectiveCamera, FocalLengthAndSensorFitLikeBlendersAuto) {
   CameraParams p;
   p.width = 300;
   p.height = 200;
@@ -237,10 +237,10 @@ TEST(PerspectiveCamera, FocalLengthAndSensorCropToTheImageAspect) {
   auto cam = make(p);
   EXPECT_DOUBLE_EQ(cam->vw(), 36.0 / 50);
   EXPECT_DOUBLE_EQ(cam->vh(), 24.0 / 50);
-  p.width = 200;  // square image: the centred 24 x 24 mm window
+  p.width = 200;  // square image: the 36 mm sensor width spans both sides (Blender's AUTO)
   cam = make(p);
-  EXPECT_DOUBLE_EQ(cam->vw(), 24.0 / 50);
-  EXPECT_DOUBLE_EQ(cam->vh(), 24.0 / 50);
+  EXPECT_DOUBLE_EQ(cam->vw(), 36.0 / 50);
+  EXPECT_DOUBLE_EQ(cam->vh(), 36.0 / 50);
   p.width = 400;  // 2:1: 36 x 18 mm
   cam = make(p);
   EXPECT_DOUBLE_EQ(cam->vw(), 36.0 / 50);
