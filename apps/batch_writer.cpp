@@ -7,9 +7,10 @@
 namespace aperture::app {
 
 void writeImageFiles(ImageResult& r, const RenderedView& view, const ExrMetadata& meta,
-                     const ExrOptions& options, const PreviewOptions& preview) {
+                     const ExrOptions& options, const PreviewOptions& preview, bool cameraSidecar) {
   try {
-    writeViewOutputs(view, meta, options, r.image->output, r.image->preview, preview);
+    writeViewOutputs(view, meta, options, r.image->output, r.image->preview, preview,
+                     cameraSidecar);
     r.status = ImageStatus::Ok;
   } catch (const std::exception& e) {
     r.status = ImageStatus::Failed;

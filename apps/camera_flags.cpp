@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "apps/camera_files.h"
 #include "core/error.h"
 
 namespace aperture::app {
@@ -22,6 +23,8 @@ std::string valueShape(const ParamSpec& spec) {
       return "W,H";
     case ParamKind::Flag:
       return "";
+    case ParamKind::Numbers:
+      return spec.count == 4 ? "A,B,C,D" : spec.count == 16 ? "16 NUMBERS" : "A,B,...";
     case ParamKind::Choice:
       break;
   }
@@ -40,10 +43,30 @@ void CameraFlags::add(CLI::App& app, const CameraParams& defaults) {
     else
       slot.option = app.add_option(spec->flag(), slot.text, help)->type_name(valueShape(*spec));
   }
+  app.add_option("--cameras", cameraFile_,
+                 "Camera file: a COLMAP model folder (text or binary), a transforms.json "
+                 "(nerfstudio, NeRF, instant-ngp) or an OpenCV JSON/YAML; with --image")
+      ->type_name("PATH");
+  app.add_option("--image", images_, "The image of --cameras whose camera to use")
+      ->type_name("NAME");
 }
 
+namespace {
+/// The parameters of the one image of a camera file the command line selects.
+ParamSet cameraFileParams(const std::string& path, const std::vector<std::string>& images) {
+  const CameraFile file = readCameraFile(path);
+  if (images.size() > 1) throw Error(cat("--image: give one image (got ", images.size(), ")"));
+  if (images.empty() && file.images.size() != 1)
+    throw Error(cat("--cameras ", path, ": the file has ", file.images.size(),
+                    " images; choose one with --image NAME (first: '",
+                    file.images.empty() ? "" : file.images.front().name, "')"));
+  return imageParamSet(file, *selectImages(file, images, "--image").front());
+}
+}  // namespace
+
 ParamSet CameraFlags::given() const {
-  ParamSet set;
+  if (!images_.empty() && cameraFile_.empty()) throw Error("--image needs --cameras PATH");
+  ParamSet set = cameraFile_.empty() ? ParamSet() : cameraFileParams(cameraFile_, images_);
   for (const Slot& s : slots_)
     if (s.option->count() > 0)
       set.set(*s.spec, parseParamText(*s.spec, s.text, s.spec->flag()), s.spec->flag());
@@ -53,6 +76,7 @@ ParamSet CameraFlags::given() const {
 CameraParams resolveCommandCamera(const ParamSet& given, const CameraParams& defaults,
                                   const glm::dvec3& lo, const glm::dvec3& hi) {
   CameraParams p = resolveCameraParams(given, defaults);
+  if (p.worldToCamera || p.cameraToWorld) return p;  // posed by its matrix
   const glm::dvec3 centre = 0.5 * (lo + hi);
   if (given.has("eye")) {
     if (!p.at && !p.dir) p.at = centre;

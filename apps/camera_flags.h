@@ -16,6 +16,8 @@ class CameraFlags {
   /// the schema; `defaults` are the command's own (e.g. bench renders 1920x1080).
   void add(CLI::App& app, const CameraParams& defaults = {});
   /// What the command line gave (call after parsing), each value with its flag as source.
+  /// With --cameras, the parameters of the one image --image names come first (from the
+  /// camera file) and the flags given override them.
   ParamSet given() const;
   CameraParams& defaults() { return defaults_; }
   const CameraParams& defaults() const { return defaults_; }
@@ -29,6 +31,8 @@ class CameraFlags {
   };
   std::deque<Slot> slots_;  // stable addresses: CLI11 writes into text and present
   CameraParams defaults_;
+  std::string cameraFile_;
+  std::vector<std::string> images_;
 };
 
 /// The camera of a command: `given` over `defaults`, checked by the schema. With no --eye it

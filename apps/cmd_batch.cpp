@@ -12,6 +12,7 @@
 #include "apps/batch_result.h"
 #include "apps/batch_summary.h"
 #include "apps/batch_writer.h"
+#include "apps/camera_files.h"
 #include "apps/commands.h"
 #include "apps/job.h"
 #include "apps/merge_summaries.h"
@@ -21,6 +22,8 @@
 #include "apps/scene_setup.h"
 #include "apps/shard.h"
 #include "apps/view.h"
+#include "cameras/calibrated.h"
+#include "cameras/camera_file.h"
 #include "core/error.h"
 #include "core/limits.h"
 
@@ -30,6 +33,7 @@ namespace {
 
 struct BatchArgs {
   std::vector<std::string> files;  ///< the job, or with --merge-summaries the summaries
+  CameraFileBatch cameraFile;      ///< the one-line form: --mesh, --cameras, --out, --aov
   std::string shard, summary, maxMemory, mergeOut;
   bool resume = false, quiet = false, dryRun = false, noOverlap = false;
 };
@@ -139,7 +143,7 @@ std::string summaryPathOf(const BatchArgs& a, const BatchPlan& plan) {
 BatchPlan planBatch(const BatchArgs& a) {
   BatchPlan plan;
   plan.shard = parseShard(a.shard);
-  plan.job = parseJob(a.files.front());
+  plan.job = a.files.empty() ? cameraFileJob(a.cameraFile) : parseJob(a.files.front());
   checkJobMemory(plan.job, a.maxMemory);
   if (!a.quiet && !plan.shard.origin.empty())
     std::fprintf(stderr, "aperture: shard %zu of %zu from %s\n", plan.shard.k, plan.shard.n,
@@ -181,7 +185,7 @@ double renderImages(BatchPlan& plan, const LoadedScene& scene, const BatchArgs& 
     writeImageFiles(
         *task.result, task.view,
         viewMetadata(task.view, scene.names, job.aovs, job.build.quality, job.placement), job.exr,
-        preview);
+        preview, job.cameraFiles);
     task.result->writeSeconds = secondsSince(t0);
     task.view = RenderedView();
     progress.finished(*task.result);
@@ -238,6 +242,36 @@ LoadedScene loadBatchScene(const Device& device, const BatchPlan& plan, bool qui
   return s;
 }
 
+/// "camera_files": the COLMAP text model of every image of this run whose EXR exists (rendered
+/// now or reused), in the output directory's sparse/ (sparse.shard-K-of-N/ for a shard).
+void writeRenderedCameras(const BatchPlan& plan, bool quiet) {
+  CameraFile file;
+  for (const ImageResult& r : plan.results) {
+    if (r.status != ImageStatus::Ok && r.status != ImageStatus::Skipped) continue;
+    const std::optional<CalibratedView> view = calibratedViewOf(r.image->params);
+    if (!view) continue;
+    auto same = std::find(file.sensors.begin(), file.sensors.end(), view->sensor);
+    if (same == file.sensors.end()) {
+      file.sensors.push_back(view->sensor);
+      file.sensorIds.push_back(std::to_string(file.sensors.size()));
+      same = file.sensors.end() - 1;
+    }
+    const std::string name = std::filesystem::path(r.image->output)
+                                 .lexically_relative(plan.job.outputDirectory)
+                                 .generic_string();
+    file.images.push_back({name, int(same - file.sensors.begin()), view->worldToCamera});
+  }
+  if (file.images.empty()) return;
+  const std::string name = plan.shard.n > 1
+                               ? cat("sparse.shard-", plan.shard.k, "-of-", plan.shard.n)
+                               : std::string("sparse");
+  file.path = (std::filesystem::path(plan.job.outputDirectory) / name).string();
+  writeColmapText(file, file.path);
+  if (!quiet)
+    std::fprintf(stderr, "aperture: wrote the COLMAP model of %zu images to %s\n",
+                 file.images.size(), file.path.c_str());
+}
+
 int runBatch(const BatchArgs& a) {
   BatchPlan plan = planBatch(a);
   if (a.dryRun) return printDryRun(plan);
@@ -257,12 +291,20 @@ int runBatch(const BatchArgs& a) {
   progress.end();
   run.elapsedSeconds = secondsSince(start);
   run.interrupted = gInterrupted != 0;
+  if (plan.job.cameraFiles) writeRenderedCameras(plan, a.quiet);
   return reportBatch(run, plan.results, batchSummary(run, plan.results), summaryPathOf(a, plan));
 }
 
 /// Checks the positional files against the mode; false after a usage message.
 bool checkFiles(const BatchArgs& a) {
   if (!a.mergeOut.empty() || a.files.size() == 1) return true;
+  if (a.files.empty() && !a.cameraFile.cameras.empty()) return true;
+  if (a.files.empty()) {
+    std::fprintf(stderr,
+                 "aperture batch: give a job file, or --mesh MESH --cameras PATH --out DIR "
+                 "(see aperture batch --help)\n");
+    return false;
+  }
   std::fprintf(stderr,
                "aperture batch: give one job file (got %zu files; several only with "
                "--merge-summaries OUT.json IN...)\n",
@@ -283,8 +325,28 @@ Command addBatchCommand(CLI::App& app) {
   CLI::App* sub =
       app.add_subcommand("batch", "Render every image of a job file (docs/batch.md) over one BVH");
   sub->add_option("job", args->files,
-                  "Job file (JSON); with --merge-summaries, the summaries to merge")
-      ->required();
+                  "Job file (JSON); with --merge-summaries, the summaries to merge");
+  CameraFileBatch& cf = args->cameraFile;
+  const char* const group = "Without a job file: the images of a camera file";
+  sub->add_option("--cameras", cf.cameras,
+                  "Camera file: a COLMAP model folder (text or binary), a transforms.json "
+                  "(nerfstudio, NeRF, instant-ngp) or an OpenCV JSON/YAML")
+      ->group(group)
+      ->type_name("PATH");
+  sub->add_option("--mesh", cf.meshes, "Mesh (PLY, OBJ or procedural:NAME); repeatable")
+      ->group(group);
+  sub->add_option("--out", cf.outDir, "Output folder: DIR/<image name>.exr, subfolders kept")
+      ->group(group)
+      ->type_name("DIR");
+  sub->add_option("--image", cf.images, "Render only this image (repeatable)")
+      ->group(group)
+      ->type_name("NAME");
+  sub->add_option("--aov", cf.aovs,
+                  "AOVs: color, depth, distance, normal, position, primid, geomid, all")
+      ->group(group)
+      ->capture_default_str();
+  sub->add_option("--spp", cf.spp, "Samples per pixel")->group(group);
+  sub->add_flag("--preview", cf.preview, "Also write DIR/<image name>.png")->group(group);
   sub->add_flag("--resume", args->resume,
                 "Skip images whose EXR (and preview) is complete and matches the job; remove "
                 "temporaries of this shard's files left by processes that no longer exist");
@@ -307,6 +369,10 @@ Command addBatchCommand(CLI::App& app) {
                 "Write each image before rendering the next (to measure what overlap gains)");
   return [args] {
     if (!checkFiles(*args)) return 2;
+    if (!args->files.empty() && !args->cameraFile.cameras.empty()) {
+      std::fprintf(stderr, "aperture batch: give a job file or --cameras, not both\n");
+      return 2;
+    }
     if (!args->mergeOut.empty()) return mergeSummaries(args->mergeOut, args->files, args->quiet);
     return runBatch(*args);
   };

@@ -53,7 +53,7 @@ int runRender(const RenderArgs& a) {
   const RenderSettings settings = a.render.settings(unframed.spp);
   checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs, a.preview.empty() ? 0 : 4);
   const PreviewOptions preview = checkRenderOutputs(a, aovs);
-  if (given.has("eye")) makeCamera(unframed);
+  if (given.has("eye") || unframed.worldToCamera || unframed.cameraToWorld) makeCamera(unframed);
 
   ThreadLimit threads(a.render.threads);
   Device device;

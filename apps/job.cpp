@@ -12,10 +12,12 @@
 #include <set>
 #include <sstream>
 
+#include "apps/camera_files.h"
 #include "apps/job_camera.h"
 #include "apps/job_json.h"
 #include "apps/outputs.h"
 #include "apps/presets.h"
+#include "cameras/calibrated.h"
 #include "cameras/registry.h"
 #include "core/error.h"
 #include "core/units.h"
@@ -98,7 +100,8 @@ std::string resolve(const std::string& baseDir, const std::string& p) {
 
 }  // namespace
 
-std::string expandOutputPattern(const std::string& pattern, const std::string& camera, int frame) {
+std::string expandOutputPattern(const std::string& pattern, const std::string& camera, int frame,
+                                const std::string& image) {
   std::string out;
   for (size_t i = 0; i < pattern.size(); ++i) {
     const char ch = pattern[i];
@@ -113,6 +116,11 @@ std::string expandOutputPattern(const std::string& pattern, const std::string& c
     const std::string field = pattern.substr(i + 1, close - i - 1);
     if (field == "camera") {
       out += camera;
+    } else if (field == "image") {
+      if (image.empty())
+        throw Error(cat("'", pattern, "': {image} needs cameras from a file (\"cameras\": ",
+                        "{\"from\": PATH})"));
+      out += renderNameOf(image, "");
     } else if (field == "frame") {
       out += std::to_string(frame);
     } else if (field.size() >= 9 && field.compare(0, 7, "frame:0") == 0 && field.back() == 'd') {
@@ -129,7 +137,7 @@ std::string expandOutputPattern(const std::string& pattern, const std::string& c
       out += n;
     } else {
       throw Error(cat("'", pattern, "': unknown placeholder '{", field,
-                      "}' (known: {camera}, {frame}, {frame:0Nd})"));
+                      "}' (known: {camera}, {frame}, {frame:0Nd}, {image})"));
     }
     i = close;
   }
@@ -290,11 +298,51 @@ void readScene(const Object& top, const std::string& baseDir, Job& job) {
 }
 
 std::string expandFor(const Object& top, const char* key, const std::string& pattern,
-                      const std::string& baseDir, const std::string& camera, int frame) {
+                      const std::string& baseDir, const std::string& camera, int frame,
+                      const std::string& image = "") {
   try {
-    return resolve(baseDir, expandOutputPattern(pattern, camera, frame));
+    return resolve(baseDir, expandOutputPattern(pattern, camera, frame, image));
   } catch (const Error& e) {
     top.fail(key, e.what());
+  }
+}
+
+/// "cameras": {"from": PATH, "images": [NAME, ...]}: every image of a camera file (or those
+/// listed), in the file's order, each a calibrated camera named by its image name.
+void readCameraFileImages(const Object& top, const CameraParams& defaults,
+                          const std::string& baseDir, Job& job) {
+  const Object c(top.file(), "cameras", top.required("cameras"), {"from", "images"});
+  const std::optional<std::string> from = c.string("from");
+  if (!from) c.fail(c.keyPath("from"), "required key is missing");
+  std::vector<std::string> names;
+  if (const json* list = c.find("images")) {
+    if (!list->is_array()) c.fail(c.keyPath("images"), "expected an array of image names");
+    for (size_t k = 0; k < list->size(); ++k) {
+      if (!(*list)[k].is_string())
+        c.fail(indexPath(c.keyPath("images"), k), "expected an image name (a string)");
+      names.push_back((*list)[k].get<std::string>());
+    }
+  }
+  try {
+    const CameraFile file = readCameraFile(resolve(baseDir, *from));
+    const std::vector<const CalibratedImage*> images =
+        selectImages(file, names, c.keyPath("images"));
+    if (images.size() > kMaxJobImages)
+      c.fail(c.keyPath("from"), cat(images.size(), " images; at most ", kMaxJobImages));
+    for (const CalibratedImage* im : images) {
+      JobImage image;
+      image.index = job.images.size();
+      image.camera = im->name;
+      image.params = resolveCameraParams(imageParamSet(file, *im), defaults);
+      calibratedSensorOf(image.params);  // the lens is checked now; its table is built later
+      image.output = expandFor(top, "output", job.outputPattern, baseDir, im->name, 0, im->name);
+      if (!job.previewPattern.empty())
+        image.preview =
+            expandFor(top, "preview", job.previewPattern, baseDir, im->name, 0, im->name);
+      job.images.push_back(std::move(image));
+    }
+  } catch (const Error& e) {
+    throw Error(cat(top.file(), ": cameras: ", e.what()));
   }
 }
 
@@ -302,6 +350,7 @@ std::string expandFor(const Object& top, const char* key, const std::string& pat
 void readCameras(const Object& top, const CameraParams& defaults, const std::string& baseDir,
                  Job& job) {
   if (!top.has("cameras")) top.fail("cameras", "required key is missing");
+  if (top.required("cameras").is_object()) return readCameraFileImages(top, defaults, baseDir, job);
   const json& cameras = top.array("cameras");
   if (cameras.empty()) top.fail("cameras", "needs at least one camera");
   std::set<std::string> names;
@@ -363,7 +412,7 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
   const json root = parseJsonText(text, name);
   const Object top(name, "", root,
                    {"scene", "cameras", "aovs", "size", "spp", "output", "preview", "preview_range",
-                    "compression", "half", "performance", "preset"});
+                    "compression", "half", "performance", "preset", "camera_files"});
   Job job;
   job.path = name;
   const Preset* preset = readPreset(top, job);
@@ -376,8 +425,24 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
   readPerformance(top, job);
   readScene(top, baseDir, job);
   readCameras(top, defaults, baseDir, job);
+  job.cameraFiles = top.boolean("camera_files", top.required("cameras").is_object());
   checkOutputs(top, baseDir, job);
   return job;
+}
+
+Job cameraFileJob(const CameraFileBatch& b) {
+  if (b.meshes.empty()) throw Error("batch --cameras: give the scene with --mesh MESH");
+  if (b.outDir.empty()) throw Error("batch --cameras: give the output folder with --out DIR");
+  json meshes = json::array();
+  for (const std::string& m : b.meshes) meshes.push_back({{"path", m}});
+  json job = {{"scene", {{"meshes", meshes}}},
+              {"cameras", {{"from", b.cameras}}},
+              {"aovs", b.aovs},
+              {"output", (fs::path(b.outDir) / "{image}.exr").generic_string()}};
+  if (!b.images.empty()) job["cameras"]["images"] = b.images;
+  if (b.spp) job["spp"] = *b.spp;
+  if (b.preview) job["preview"] = (fs::path(b.outDir) / "{image}.png").generic_string();
+  return parseJobText(job.dump(), "batch --cameras " + b.cameras, "");
 }
 
 Job parseJob(const std::string& path) {

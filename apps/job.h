@@ -43,6 +43,10 @@ struct Job {
   /// The scene to load and build: meshes, placement, BVH options and culling.
   SceneSpec sceneSpec() const { return {meshes, placement, build, cull}; }
   ExrOptions exr;
+  /// "camera_files": beside each EXR a camera sidecar (<name>.camera.json) and, after the
+  /// run, a COLMAP text model of every image rendered (<output directory>/sparse). Default:
+  /// on for cameras from a camera file, off otherwise.
+  bool cameraFiles = false;
   std::string outputPattern;   ///< as written in the job file
   std::string previewPattern;  ///< as written; "" for none
   /// "preview_range": the depth range of every preview; without it, `aperture batch` uses
@@ -63,8 +67,25 @@ Job parseJob(const std::string& path);
 /// against `baseDir`.
 Job parseJobText(const std::string& text, const std::string& name, const std::string& baseDir);
 
-/// Expands {camera}, {frame} and {frame:0Nd} (N in 1..20) in `pattern`. Throws Error for
+/// The one-line form `aperture batch --mesh MESH --cameras PATH --out DIR --aov LIST`: every
+/// image of a camera file (or those --image names) to DIR/<image name>.exr, subfolders kept.
+struct CameraFileBatch {
+  std::vector<std::string> meshes;
+  std::string cameras;
+  std::vector<std::string> images;
+  std::string outDir;
+  std::string aovs = "depth";
+  std::optional<int> spp;
+  bool preview = false;  ///< also DIR/<image name>.png
+};
+/// The job of a CameraFileBatch: written as a job file's JSON and read by parseJobText, so the
+/// one-line form and job files share every check.
+Job cameraFileJob(const CameraFileBatch& b);
+
+/// Expands {camera}, {frame}, {frame:0Nd} (N in 1..20) and, for an image of a camera file,
+/// {image} (its name without the extension, subfolders kept) in `pattern`. Throws Error for
 /// any other brace.
-std::string expandOutputPattern(const std::string& pattern, const std::string& camera, int frame);
+std::string expandOutputPattern(const std::string& pattern, const std::string& camera, int frame,
+                                const std::string& image = "");
 
 }  // namespace aperture::app

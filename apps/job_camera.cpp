@@ -143,6 +143,24 @@ std::vector<std::string> jobCameraKeys() {
   return keys;
 }
 
+namespace {
+/// A list of numbers: flat, or (for a 4x4 matrix) four rows of four, read row by row.
+std::vector<double> numbersFromJson(const Object& entry, const std::string& where, const json& v,
+                                    size_t count) {
+  if (!v.is_array() || v.empty())
+    entry.fail(where, cat("expected a list of numbers, got ", Object::typeName(v)));
+  if (count == 16 && v.size() == 4 && v[0].is_array()) {
+    std::vector<double> all;
+    for (size_t r = 0; r < 4; ++r) {
+      const std::vector<double> row = entry.toNumbers(indexPath(where, r), v[r], 4);
+      all.insert(all.end(), row.begin(), row.end());
+    }
+    return all;
+  }
+  return entry.toNumbers(where, v, count ? count : v.size());
+}
+}  // namespace
+
 ParamValue paramFromJson(const Object& entry, const ParamSpec& spec, const json& v) {
   const std::string where = entry.keyPath(spec.name);
   switch (spec.kind) {
@@ -170,6 +188,8 @@ ParamValue paramFromJson(const Object& entry, const ParamSpec& spec, const json&
     case ParamKind::Choice:
       if (!v.is_string()) entry.fail(where, cat("expected a string, got ", Object::typeName(v)));
       return v.get<std::string>();
+    case ParamKind::Numbers:
+      return numbersFromJson(entry, where, v, spec.count);
   }
   entry.fail(where, "unsupported parameter kind");
 }

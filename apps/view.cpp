@@ -2,7 +2,10 @@
 
 #include <filesystem>
 
+#include "cameras/calibrated.h"
+#include "cameras/camera_file.h"
 #include "cameras/registry.h"
+#include "core/atomic_file.h"
 #include "core/error.h"
 
 namespace aperture::app {
@@ -43,13 +46,23 @@ void ensureParentDirectory(const std::string& path, const std::string& what) {
                     "': ", ec.message()));
 }
 
+std::string cameraSidecarPath(const std::string& exrPath) {
+  return std::filesystem::path(exrPath).replace_extension(".camera.json").string();
+}
+
 void writeViewOutputs(const RenderedView& view, const ExrMetadata& meta, const ExrOptions& exr,
                       const std::string& exrPath, const std::string& previewPath,
-                      const PreviewOptions& preview) {
+                      const PreviewOptions& preview, bool cameraSidecar) {
   if (!previewPath.empty()) {
     ensureParentDirectory(previewPath, "preview");
     writePreview(previewPath, view.fb, preview);
   }
+  if (cameraSidecar)
+    if (const std::optional<CalibratedView> cal = calibratedViewOf(view.camera)) {
+      const std::string path = cameraSidecarPath(exrPath);
+      ensureParentDirectory(path, "camera sidecar");
+      writeTextAtomically(path, cameraSidecarJson(cal->sensor, cal->worldToCamera));
+    }
   ensureParentDirectory(exrPath, "output");
   writeExr(exrPath, view.fb, meta, exr);
 }

@@ -34,14 +34,18 @@ ExrMetadata viewMetadata(const RenderedView& view, const std::vector<std::string
 /// directory ...").
 void ensureParentDirectory(const std::string& path, const std::string& what);
 
+/// Where the camera sidecar of an EXR goes: its path with ".camera.json" for ".exr".
+std::string cameraSidecarPath(const std::string& exrPath);
+
 /// Writes the files of a rendered view in a fixed order: first the preview (when
-/// `previewPath` is not empty, with `preview`), then the EXR, each atomically and each after
-/// creating its directory. A preview that cannot be written throws before the EXR is
+/// `previewPath` is not empty, with `preview`), then (with `cameraSidecar`, for a camera that
+/// has a calibrated form: calibratedViewOf) the camera sidecar JSON, then the EXR, each atomically
+/// and each after creating its directory. A preview that cannot be written throws before the EXR is
 /// started, so a complete EXR always has its preview beside it and `batch --resume`, which
 /// looks at the EXR, renders a frame whose preview failed again. (A preview may remain when
 /// the EXR then fails.) Throws Error naming the file that failed.
 void writeViewOutputs(const RenderedView& view, const ExrMetadata& meta, const ExrOptions& exr,
                       const std::string& exrPath, const std::string& previewPath,
-                      const PreviewOptions& preview = {});
+                      const PreviewOptions& preview = {}, bool cameraSidecar = false);
 
 }  // namespace aperture::app

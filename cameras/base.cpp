@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "cameras/calibrated.h"
 #include "cameras/conventions.h"
 #include "cameras/models.h"
 #include "core/error.h"
@@ -138,6 +139,7 @@ void resolveImagePlane(const CameraParams& p, double& d, double& vw, double& vh)
 }
 
 CameraFrame frameFromParams(const CameraParams& p) {
+  if (p.worldToCamera || p.cameraToWorld) return frameOfWorldToCamera(calibratedWorldToCamera(p));
   if (p.at && p.dir)
     throw Error("camera: give either a look-at point or a view direction, not both");
   if (p.at) return CameraFrame::fromLookAt(p.eye, *p.at, p.up);

@@ -104,6 +104,12 @@ std::string describeCamera(const CameraParams& params, double nearDist, double f
       << "  OpenCV fx " << c.fx << ", fy " << c.fy << ", cx " << c.cx << ", cy " << c.cy
       << " (pixels, y down, pixel centres at integers)\n";
   }
+  if (desc.lens) {
+    s << "lens: " << desc.lens->model << ",";
+    for (size_t k = 0; k < desc.lens->params.size(); ++k)
+      s << " " << desc.lens->paramNames[k] << " = " << desc.lens->params[k];
+    s << " (pixel centres " << desc.lens->pixelCentre << ")\n";
+  }
   for (const auto& [k, v] : desc.extra) s << "  " << k << " = " << v << "\n";
   describeExrHeader(s, desc);
   const ViewVolume vv = cam->viewVolume(nearDist, farDist);

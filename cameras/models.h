@@ -17,6 +17,7 @@ const CameraModel& orthographicModel();
 const CameraModel& obliqueModel();
 const CameraModel& equirectModel();
 const CameraModel& fisheyeModel();
+const CameraModel& calibratedModel();
 
 /// type, size, spp, eye, at, dir, up: read by every model (declared in base.cpp).
 const std::vector<const ParamSpec*>& commonParamSpecs();

@@ -27,6 +27,7 @@ std::vector<double> components(const ParamValue& v) {
   if (auto* x = std::get_if<glm::dvec2>(&v)) return {x->x, x->y};
   if (auto* x = std::get_if<glm::dvec3>(&v)) return {x->x, x->y, x->z};
   if (auto* x = std::get_if<glm::ivec2>(&v)) return {double(x->x), double(x->y)};
+  if (auto* x = std::get_if<std::vector<double>>(&v)) return *x;
   return {};
 }
 
@@ -46,17 +47,21 @@ const char* shapeOf(ParamKind k) {
       return "a flag";
     case ParamKind::Choice:
       return "one word";
+    case ParamKind::Numbers:
+      return "comma-separated numbers";
   }
   return "";
 }
 
-size_t componentCount(ParamKind k) {
-  switch (k) {
+size_t componentCount(const ParamSpec& spec) {
+  switch (spec.kind) {
     case ParamKind::Vec2:
     case ParamKind::Size:
       return 2;
     case ParamKind::Vec3:
       return 3;
+    case ParamKind::Numbers:
+      return spec.count;
     default:
       return 1;
   }
@@ -68,7 +73,7 @@ std::vector<double> parseNumberList(const ParamSpec& spec, const std::string& te
   std::string t = text;
   if (spec.kind == ParamKind::Size && t.find(',') == std::string::npos)
     std::replace(t.begin(), t.end(), 'x', ',');
-  return parseNumbers(source, t, componentCount(spec.kind), shapeOf(spec.kind));
+  return parseNumbers(source, t, componentCount(spec), shapeOf(spec.kind));
 }
 
 bool isWhole(double x) { return std::isfinite(x) && x == std::floor(x) && std::abs(x) < 2e9; }
@@ -82,6 +87,8 @@ ParamValue valueFromNumbers(const ParamSpec& spec, const std::vector<double>& v,
       return glm::dvec2(v[0], v[1]);
     case ParamKind::Vec3:
       return glm::dvec3(v[0], v[1], v[2]);
+    case ParamKind::Numbers:
+      return v;
     default:
       break;
   }
@@ -106,6 +113,13 @@ std::vector<std::string> modelsReading(const std::string& name) {
   for (const CameraModel* m : cameraModels())
     if (m->accepts(name)) users.emplace_back(m->name);
   return users;
+}
+
+/// The model a given parameter selects (ParamSpec::selectsModel) when no type is given.
+const char* modelSelectedBy(const ParamSet& given) {
+  for (const ParamSet::Entry& e : given.entries())
+    if (e.spec->selectsModel) return e.spec->selectsModel;
+  return nullptr;
 }
 
 void checkApplies(const ParamSet& given, const CameraModel& model) {
@@ -249,6 +263,16 @@ std::string ParamSet::label(const std::string& name) const {
   return e ? e->source : flagOf(name);
 }
 
+ParamSet paramSetOf(const CameraParams& p, const std::string& source) {
+  const CameraParams defaults;
+  ParamSet set;
+  for (const ParamSpec* s : findCameraModel(p.type).params) {
+    const std::optional<ParamValue> v = s->access.get(p);
+    if (v && v != s->access.get(defaults)) set.set(*s, *v, source);
+  }
+  return set;
+}
+
 const std::vector<const ParamSpec*>& allCameraParamSpecs() {
   static const std::vector<const ParamSpec*> all = [] {
     std::vector<const ParamSpec*> v;
@@ -276,7 +300,10 @@ CameraParams resolveCameraParams(const ParamSet& given, CameraParams base) {
     }
   }
   CameraParams p = std::move(base);
-  if (const ParamSet::Entry* t = given.find("type")) p.type = std::get<std::string>(t->value);
+  if (const ParamSet::Entry* t = given.find("type"))
+    p.type = std::get<std::string>(t->value);
+  else if (const char* selected = modelSelectedBy(given))
+    p.type = selected;
   checkApplies(given, findCameraModel(p.type));
   for (const ParamSet::Entry& e : given.entries()) checkRange(*e.spec, e.value, e.source);
   checkConflictsAndCompanions(given);

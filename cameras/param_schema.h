@@ -24,9 +24,11 @@ enum class ParamKind {
   Size,     ///< "W,H" or "WxH", whole numbers
   Flag,     ///< present or not (true / false in job files)
   Choice,   ///< one word of a fixed list
+  Numbers,  ///< "A,B,C,..." (ParamSpec::count of them, or any number when 0)
 };
 
-using ParamValue = std::variant<double, int, glm::dvec2, glm::dvec3, glm::ivec2, bool, std::string>;
+using ParamValue = std::variant<double, int, glm::dvec2, glm::dvec3, glm::ivec2, bool, std::string,
+                                std::vector<double>>;
 
 /// Bounds of a numeric value, applied to every component; values must also be finite.
 struct ParamRange {
@@ -59,6 +61,11 @@ struct ParamSpec {
   ParamAccess access;
   /// The command-line flag when it is not "--" + name with '_' as '-' (only `type`: --camera).
   const char* flagOverride = nullptr;
+  /// For Numbers: how many (0: any number, at least one).
+  size_t count = 0;
+  /// A model this parameter selects when given without `type` (the pose matrices and
+  /// intrinsics select "calibrated"); null: the default type applies.
+  const char* selectsModel = nullptr;
 
   std::string flag() const;  ///< "--fov", "--focal-length", "--camera"
   /// The rule, or the value `defaults` holds (a command's own defaults, e.g. its size).
@@ -95,6 +102,10 @@ class ParamSet {
  private:
   std::vector<Entry> entries_;
 };
+
+/// The parameters of `p` that differ from a default-constructed CameraParams, among those its
+/// model reads (type included), each with `source`: resolving them gives `p` back.
+ParamSet paramSetOf(const CameraParams& p, const std::string& source);
 
 /// Every parameter of every registered camera model, each once, in a stable order (common
 /// parameters first). What the command line registers as flags and job files accept as keys.

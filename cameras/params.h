@@ -8,6 +8,7 @@
 #include <glm/glm.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace aperture {
 
@@ -70,6 +71,16 @@ struct CameraParams {
   glm::dvec2 longitudeRangeDeg{-180.0, 180.0};  ///< equirect horizontal extent, degrees
   glm::dvec2 latitudeRangeDeg{-90.0, 90.0};     ///< equirect vertical extent, degrees
   double fisheyeFovDeg = 180.0;                 ///< fisheye full field of view, (0, 360]
+
+  // Calibrated (cameras/calibrated.cpp): a lens in a source's conventions and, instead of
+  // eye / at / up, optionally a pose matrix (16 numbers, row-major).
+  std::optional<std::vector<double>> intrinsics;  ///< fx, fy, cx, cy, pixels
+  std::string lensModel = "PINHOLE";              ///< a COLMAP model name (cameras/lens_model.h)
+  std::optional<std::vector<double>> distortion;  ///< the model's coefficients, COLMAP's order
+  std::string pixelCentre = "half-integer";       ///< "half-integer" (COLMAP) or "integer" (OpenCV)
+  std::optional<std::vector<double>> worldToCamera;
+  std::optional<std::vector<double>> cameraToWorld;
+  std::string convention = "opencv";  ///< axes of the pose matrix: opencv, opengl, blender
 };
 
 /// The thin lens's focus distance: given, else |at − eye| with a look-at point, else 1.

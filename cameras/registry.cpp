@@ -16,8 +16,8 @@ bool CameraModel::accepts(const std::string& paramName) const {
 const std::vector<const CameraModel*>& cameraModels() {
   // Explicit registration: every model is listed here.
   static const std::vector<const CameraModel*> models = {
-      &perspectiveModel(), &orthographicModel(), &obliqueModel(),
-      &thinLensModel(),    &equirectModel(),     &fisheyeModel(),
+      &perspectiveModel(), &orthographicModel(), &obliqueModel(),    &thinLensModel(),
+      &equirectModel(),    &fisheyeModel(),      &calibratedModel(),
   };
   return models;
 }

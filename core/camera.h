@@ -99,6 +99,15 @@ struct FisheyeProjection {
   double radiusPx = 1;       ///< R, pixels
 };
 
+/// The lens of a calibrated camera (cameras/calibrated.h): no 4x4 matrix expresses a
+/// distorted projection, so the model and its parameters are carried as they are.
+struct LensProjection {
+  std::string model;                    ///< COLMAP's model name: "OPENCV"
+  std::vector<std::string> paramNames;  ///< COLMAP's order: fx, fy, cx, cy, k1, ...
+  std::vector<double> params;           ///< pixels for focal lengths and principal point
+  std::string pixelCentre;  ///< where params put pixel (i, j)'s centre: "half-integer", "integer"
+};
+
 /// Everything a file header or --describe needs to reproduce and re-project an image. The
 /// matrices follow OpenEXR's standard attributes (which take Pixar RenderMan's spaces); GLM
 /// column-vector convention here (p' = M p), written to the EXR transposed (Imath row vectors).
@@ -130,6 +139,7 @@ struct CameraDescription {
   double screenWindowWidth = 1;
   std::optional<EquirectProjection> equirect;  ///< set for the equirect camera only
   std::optional<FisheyeProjection> fisheye;    ///< set for the fisheye camera only
+  std::optional<LensProjection> lens;          ///< set for the calibrated camera only
   /// Extra parameters as (name, value) text pairs: fov, shift, aperture, focus, ...
   std::vector<std::pair<std::string, std::string>> extra;
 };

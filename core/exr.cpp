@@ -88,6 +88,33 @@ void addChannel(Imf::Header& header, Imf::FrameBuffer& frame, const char* name, 
                                 xStride * size_t(width)));
 }
 
+/// A calibrated camera's lens: aperture.lens.model and .pixelCentre (strings), .paramNames
+/// (COLMAP's order, space-separated) and one double per parameter (aperture.lens.fx, ...).
+void addLensAttributes(Imf::Header& header, const LensProjection& lens) {
+  header.insert("aperture.lens.model", Imf::StringAttribute(lens.model));
+  header.insert("aperture.lens.pixelCentre", Imf::StringAttribute(lens.pixelCentre));
+  header.insert("aperture.lens.paramNames", Imf::StringAttribute(join(lens.paramNames, " ")));
+  for (size_t k = 0; k < lens.params.size(); ++k)
+    header.insert("aperture.lens." + lens.paramNames[k], Imf::DoubleAttribute(lens.params[k]));
+}
+
+std::optional<LensProjection> readLensAttributes(const Imf::Header& header) {
+  using S = Imf::StringAttribute;
+  auto* model = header.findTypedAttribute<S>("aperture.lens.model");
+  auto* centre = header.findTypedAttribute<S>("aperture.lens.pixelCentre");
+  auto* names = header.findTypedAttribute<S>("aperture.lens.paramNames");
+  if (!model || !centre || !names) return std::nullopt;
+  LensProjection lens{model->value(), {}, {}, centre->value()};
+  std::istringstream words(names->value());
+  for (std::string name; words >> name;) {
+    auto* v = header.findTypedAttribute<Imf::DoubleAttribute>("aperture.lens." + name);
+    if (!v) throw Error(cat("aperture.lens.paramNames names '", name, "' but the header lacks it"));
+    lens.paramNames.push_back(name);
+    lens.params.push_back(v->value());
+  }
+  return lens;
+}
+
 /// The standard worldToCamera and worldToNDC (float) with their double copies, and the
 /// projection attributes of the panoramas, which have no worldToNDC (README, "EXR channels").
 void addProjectionAttributes(Imf::Header& header, const CameraDescription& cam) {
@@ -111,6 +138,7 @@ void addProjectionAttributes(Imf::Header& header, const CameraDescription& cam) 
     header.insert("aperture.fisheye.center", Imf::V2dAttribute(Imath::V2d(centre.x, centre.y)));
     header.insert("aperture.fisheye.radius", Imf::DoubleAttribute(cam.fisheye->radiusPx));
   }
+  if (cam.lens) addLensAttributes(header, *cam.lens);
 }
 
 void addHeaderAttributes(Imf::Header& header, const ExrMetadata& meta) {
@@ -179,6 +207,7 @@ void readProjection(const Imf::Header& header, CameraDescription& cam) {
     throw Error(cat("aperture.fisheye.mapping '", *mapping, "' is not '", kFisheyeMapping, "'"));
   if (mapping && fov && centre && radius)
     cam.fisheye = FisheyeProjection{*fov, glm::dvec2(centre->x, centre->y), *radius};
+  cam.lens = readLensAttributes(header);
 }
 
 void readHeaderAttributes(const Imf::Header& header, int width, int height, ExrMetadata* meta) {
@@ -210,7 +239,8 @@ void readHeaderAttributes(const Imf::Header& header, int width, int height, ExrM
     const auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute());
     if (!s) continue;
     const std::string name = it.name();
-    if (name == "aperture.camera.type" || name == "software" || name == "aperture.fisheye.mapping")
+    if (name == "aperture.camera.type" || name == "software" ||
+        name == "aperture.fisheye.mapping" || name.compare(0, 14, "aperture.lens.") == 0)
       continue;
     if (name.compare(0, extraPrefix.size(), extraPrefix) == 0)
       cam.extra.emplace_back(name.substr(extraPrefix.size()), s->value());

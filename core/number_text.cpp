@@ -25,7 +25,8 @@ std::vector<double> parseNumbers(const std::string& source, const std::string& t
           cat(source, ": '", item, "' in '", text, "' is not a number (expected ", shape, ")"));
     v.push_back(x);
   }
-  if (v.size() != count)
+  if (count == 0 && v.empty()) throw Error(cat(source, ": expected ", shape, ", got '", text, "'"));
+  if (count != 0 && v.size() != count)
     throw Error(cat(source, ": expected ", shape, " (", count, " comma-separated number",
                     count == 1 ? "" : "s", "), got '", text, "'"));
   return v;

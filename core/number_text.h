@@ -7,8 +7,9 @@
 
 namespace aperture {
 
-/// Parses `count` comma-separated numbers; throws Error naming `source` (a flag or key), the
-/// text and the expected `shape` ("X,Y,Z") for anything else. Values may be non-finite.
+/// Parses `count` comma-separated numbers (count 0: any number, at least one); throws Error naming
+/// `source` (a flag or key), the text and the expected `shape` ("X,Y,Z") for anything else. Values
+/// may be non-finite.
 std::vector<double> parseNumbers(const std::string& source, const std::string& text, size_t count,
                                  const char* shape);
 

@@ -167,7 +167,11 @@ TEST(JobParse, WrongTypesAndRangesNameKeyAndReason) {
       {"/scene/meshes/0/matrix",
        {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 1, 1}},
        "scene.meshes[0].matrix: the last row must be [0, 0, 0, 1]"},
-      {"/cameras", json::object(), "cameras: expected an array, got an object"},
+      {"/cameras", 3, "cameras: expected an array, got an integer"},
+      {"/cameras", json::object(), "cameras.from: required key is missing"},
+      {"/cameras",
+       {{"from", "x"}, {"image", 1}},
+       "cameras.image: unknown key (did you mean 'images'?)"},
   };
   for (const Case& c : cases) {
     json j = baseJob();

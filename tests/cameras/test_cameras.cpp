@@ -764,8 +764,8 @@ INSTANTIATE_TEST_SUITE_P(Sweep, EveryCameraProjection,
                          ::testing::Range(0, int(test::everyCamera().size())));
 
 TEST(CameraRegistry, ListsEveryModelAndRejectsUnknownNames) {
-  const std::vector<std::string> expected = {"perspective", "orthographic", "oblique",
-                                             "thinlens",    "equirect",     "fisheye"};
+  const std::vector<std::string> expected = {"perspective", "orthographic", "oblique",   "thinlens",
+                                             "equirect",    "fisheye",      "calibrated"};
   EXPECT_EQ(cameraTypeNames(), expected);
   CameraParams p;
   p.type = "nope";

@@ -46,6 +46,8 @@ ParamValue valueOf(const ParamSpec& s, double x) {
       return glm::dvec3(x);
     case ParamKind::Size:
       return glm::ivec2(int(x), 1);  // the pixel-count limit stays clear
+    case ParamKind::Numbers:
+      return std::vector<double>(s.count ? s.count : 1, x);
     default:
       break;
   }
@@ -244,6 +246,7 @@ std::string baseFlags(const CameraModel& m) {
   std::string f = std::string("--camera ") + m.name + " --eye 0.3,0.4,5 --at 0,0,0 --size 64,48";
   if (m.accepts("viewport") && !m.accepts("fov")) f += " --viewport 2,1.5";
   if (m.accepts("oblique_dir")) f += " --oblique-angles 10,5";
+  if (m.accepts("intrinsics")) f += " --intrinsics 60,60,32,24";
   return f;
 }
 

@@ -1,0 +1,27 @@
+#pragma once
+// Camera files on the command line and in job files: `--cameras PATH` with `--image NAME`,
+// and a job's "cameras": {"from": PATH, "images": [...]}. Each image of the file becomes the
+// parameters of a calibrated camera (cameras/calibrated.h), so it is checked, described and
+// rendered like any other camera.
+#include <string>
+#include <vector>
+
+#include "cameras/camera_file.h"
+#include "cameras/param_schema.h"
+
+namespace aperture::app {
+
+/// The images of `file` named in `names` (all of them when `names` is empty), in the file's
+/// order. An unknown name is an Error naming `flag`, the file and the closest image name.
+std::vector<const CalibratedImage*> selectImages(const CameraFile& file,
+                                                 const std::vector<std::string>& names,
+                                                 const std::string& flag);
+
+/// The calibrated camera parameters of one image, each with the source "PATH image 'NAME'".
+ParamSet imageParamSet(const CameraFile& file, const CalibratedImage& image);
+
+/// Where an image's render goes below an output directory: its name with the extension
+/// replaced by `extension`, subfolders kept ("left/0001.jpg" -> "left/0001.exr").
+std::string renderNameOf(const std::string& imageName, const std::string& extension);
+
+}  // namespace aperture::app

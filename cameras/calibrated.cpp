@@ -1,0 +1,366 @@
+// The calibrated camera: rays of a COLMAP lens model, posed by a matrix or by eye / at / up.
+//
+// Raster position (x, y) (pixel (i, j) centre at (j + ½, i + ½)) → the source's pixel
+// coordinates (sourcePixelOfRaster) → the lens's exact inverse (Lens::unproject) → a unit
+// camera-space direction d (OpenCV axes: x right, y down, z forward) → the world direction
+// d.x·U − d.y·V − d.z·W, normalised. Origin e. Pixel centres read d from the sensor's
+// DirectionTable; other samples compute it. A pixel the lens maps no ray to is a miss.
+#include "cameras/calibrated.h"
+
+#include <cmath>
+
+#include "cameras/direction_table.h"
+#include "cameras/models.h"
+#include "core/error.h"
+#include "core/units.h"
+
+namespace aperture {
+
+std::vector<double> rowMajor(const glm::dmat4& m) {
+  std::vector<double> v(16);
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) v[size_t(4 * r + c)] = m[c][r];
+  return v;
+}
+
+glm::dmat4 matrixOfRowMajor(const std::vector<double>& v) {
+  glm::dmat4 m(1.0);
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) m[c][r] = v.at(size_t(4 * r + c));
+  return m;
+}
+
+namespace {
+
+PixelCentre parsePixelCentre(const std::string& name) {
+  return name == "integer" ? PixelCentre::Integer : PixelCentre::HalfInteger;
+}
+
+}  // namespace
+
+CalibratedSensor calibratedSensorOf(const CameraParams& p) {
+  if (!p.intrinsics) throw Error("calibrated camera: --intrinsics fx,fy,cx,cy is required");
+  const LensModelInfo& model = findLensModel(p.lensModel);
+  const std::vector<double>& k = *p.intrinsics;
+  const double fx = k[0], fy = k[1], cx = k[2], cy = k[3];
+  std::vector<double> params;
+  if (model.singleFocal()) {
+    if (fx != fy)
+      throw Error(cat("--intrinsics: camera model ", model.name,
+                      " has one focal length, but fx = ", fx, " and fy = ", fy, " differ"));
+    params = {fx, cx, cy};
+  } else {
+    params = {fx, fy, cx, cy};
+  }
+  const size_t takes = model.paramNames.size() - params.size();
+  const std::vector<double> dist = p.distortion.value_or(std::vector<double>(takes, 0.0));
+  if (dist.size() != takes)
+    throw Error(cat(
+        "--distortion: camera model ", model.name, " takes ", takes, " coefficient",
+        takes == 1 ? "" : "s", " (",
+        join(std::vector<const char*>(model.paramNames.end() - long(takes), model.paramNames.end()),
+             ","),
+        "), got ", dist.size()));
+  params.insert(params.end(), dist.begin(), dist.end());
+  CalibratedSensor s;
+  s.width = p.width;
+  s.height = p.height;
+  s.lens = Lens(model.id, params);
+  s.pixelCentre = parsePixelCentre(p.pixelCentre);
+  return s;
+}
+
+CameraFrame frameOfWorldToCamera(const glm::dmat4& m) {
+  // GLM m[column][row]: row r of R is (m[0][r], m[1][r], m[2][r]); t is column 3.
+  const glm::dvec3 x(m[0][0], m[1][0], m[2][0]), y(m[0][1], m[1][1], m[2][1]),
+      z(m[0][2], m[1][2], m[2][2]);
+  const glm::dvec3 t(m[3][0], m[3][1], m[3][2]);
+  CameraFrame f;
+  f.e = -(t.x * x + t.y * y + t.z * z);  // −Rᵀt
+  f.u = x;
+  f.v = -y;
+  f.w = -z;
+  return f;
+}
+
+glm::dmat4 calibratedWorldToCamera(const CameraParams& p) {
+  const AxisConvention axes = parseAxisConvention(p.convention);
+  if (p.worldToCamera)
+    return worldToCameraOpenCV(matrixOfRowMajor(*p.worldToCamera), axes, false,
+                               "--world-to-camera");
+  if (p.cameraToWorld)
+    return worldToCameraOpenCV(matrixOfRowMajor(*p.cameraToWorld), axes, true, "--camera-to-world");
+  const CameraFrame f = frameFromParams(p);
+  glm::dmat4 m(1.0);
+  const glm::dvec3 rows[3] = {f.u, -f.v, -f.w};
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) m[c][r] = rows[r][c];
+    m[3][r] = -glm::dot(rows[r], f.e);
+  }
+  return m;
+}
+
+CameraParams calibratedCameraParams(const CalibratedSensor& sensor,
+                                    const glm::dmat4& worldToCameraCv) {
+  CameraParams p;
+  p.type = "calibrated";
+  p.width = sensor.width;
+  p.height = sensor.height;
+  const Lens& lens = sensor.lens;
+  p.lensModel = lens.info().name;
+  p.intrinsics = std::vector<double>{lens.fx(), lens.fy(), lens.cx(), lens.cy()};
+  const std::vector<double> dist = lens.distortion();
+  if (!dist.empty()) p.distortion = dist;
+  p.pixelCentre = pixelCentreName(sensor.pixelCentre);
+  p.worldToCamera = rowMajor(worldToCameraCv);
+  p.convention = axisConventionName(AxisConvention::OpenCV);
+  return p;
+}
+
+std::optional<CalibratedView> calibratedViewOf(const CameraDescription& c) {
+  // OpenEXR's camera space (x right, y up, z forward) to OpenCV's: y flips.
+  glm::dmat4 flipY(1.0);
+  flipY[1][1] = -1.0;
+  CalibratedView view;
+  view.worldToCamera = flipY * c.cameraFromWorld;
+  view.sensor.width = c.width;
+  view.sensor.height = c.height;
+  if (c.lens) {
+    view.sensor.lens = Lens(findLensModel(c.lens->model).id, c.lens->params);
+    view.sensor.pixelCentre = parsePixelCentre(c.lens->pixelCentre);
+    return view;
+  }
+  if (c.type != "perspective" || !c.ndcFromWorld) return std::nullopt;
+  // The window's centre is (sx·vw, sy·vh) / d on the plane z = 1 (screenWindowCenter), so the
+  // principal point, raster ((½ − sx)·W, (½ + sy)·H), follows from it (ImageWindow).
+  const double fx = c.width * c.d / c.vw, fy = c.height * c.d / c.vh;
+  const double px = (0.5 - c.screenWindowCenter.x * c.d / c.vw) * c.width;
+  const double py = (0.5 + c.screenWindowCenter.y * c.d / c.vh) * c.height;
+  view.sensor.lens = Lens(LensModelId::Pinhole, {fx, fy, px, py});
+  view.sensor.pixelCentre = PixelCentre::HalfInteger;
+  return view;
+}
+
+std::optional<CalibratedView> calibratedViewOf(const CameraParams& p) {
+  if (p.type == "calibrated")
+    return CalibratedView{calibratedSensorOf(p), calibratedWorldToCamera(p)};
+  if (p.type != "perspective") return std::nullopt;
+  return calibratedViewOf(makeCameraModel(p)->describe());
+}
+
+namespace {
+
+class CalibratedCamera final : public CameraBase {
+ public:
+  CalibratedCamera(const CameraParams& p, const glm::dvec3& renderOrigin)
+      : CameraBase(p, renderOrigin, "calibrated"),
+        sensor_(calibratedSensorOf(p)),
+        table_(DirectionTable::of(sensor_)) {
+    rejectShift();
+    // The pinhole part of the lens as the lecture's image plane at d = 1: u = (x − px) / fx,
+    // v = (py − y) / fy for raster (x, y) and the principal point (px, py) in raster terms.
+    const Lens& lens = sensor_.lens;
+    const glm::dvec2 pp = rasterOfSourcePixel({lens.cx(), lens.cy()}, sensor_.pixelCentre);
+    d_ = 1.0;
+    vw_ = width_ / lens.fx();
+    vh_ = height_ / lens.fy();
+    shift_ = ImageWindow::shiftForPrincipalPoint(pp.x, pp.y, width_, height_);
+  }
+
+  void generate(const PacketRequest& req, RayLanes& out, int* valid) const override {
+    const bool centres = req.centreRay() || spp_ == 1;
+    for (int k = 0; k < req.lanes(); ++k) {
+      const LanePixel px = req.pixel(k);
+      glm::dvec3 dir = -frame_.w;
+      bool hasRay = false;
+      if (px.inImage(width_, height_)) {
+        if (centres) {
+          hasRay = table_->valid(px.row, px.column);
+          if (hasRay) dir = worldDirection(table_->at(px.row, px.column));
+        } else {
+          double x, y;
+          samplePosition(px.row, px.column, req.sample, x, y);
+          hasRay = rayAt(x, y, dir);
+        }
+      }
+      valid[k] = hasRay ? -1 : 0;
+      setLane(out, k, renderEyeD_, dir);
+    }
+  }
+
+  bool ray(double x, double y, double, double, glm::dvec3& renderOrg,
+           glm::dvec3& dir) const override {
+    renderOrg = renderEyeD_;
+    return rayAt(x, y, dir);
+  }
+
+  std::optional<glm::dvec2> project(const glm::dvec3& worldPoint) const override {
+    const glm::dvec3 p = worldPoint - frame_.e;
+    const glm::dvec3 cv(glm::dot(p, frame_.u), -glm::dot(p, frame_.v), -glm::dot(p, frame_.w));
+    const std::optional<glm::dvec2> s = sensor_.lens.project(cv);
+    if (!s) return std::nullopt;
+    return rasterOfSourcePixel(*s, sensor_.pixelCentre);
+  }
+
+  ViewVolume viewVolume(double nearDist, double farDist) const override {
+    // Distortion bends the frustum's planes; the whole space around e is a safe bound.
+    return ViewVolume::allSpace(frame_.e, frame_.u, frame_.v, frame_.w, nearDist, farDist);
+  }
+
+ protected:
+  std::optional<glm::dmat4> planeFromCamera() const override {
+    if (sensor_.lens.distorted()) return std::nullopt;  // not projective: no worldToNDC
+    glm::dmat4 m(0.0);  // as the perspective camera at d = 1 (GLM m[column][row])
+    m[0][0] = 1.0;
+    m[1][1] = 1.0;
+    m[3][2] = 1.0;
+    m[2][3] = 1.0;
+    return m;
+  }
+
+  void describeExtra(CameraDescription& c) const override {
+    const Lens& lens = sensor_.lens;
+    if (!lens.distorted()) {
+      c.screenWindowCenter = glm::dvec2(0.5 * (uLo() + uHi()), 0.5 * (vLo() + vHi()));
+      c.screenWindowWidth = vw_;
+    }
+    LensProjection lp;
+    lp.model = lens.info().name;
+    lp.paramNames.assign(lens.info().paramNames.begin(), lens.info().paramNames.end());
+    lp.params = lens.params();
+    lp.pixelCentre = pixelCentreName(sensor_.pixelCentre);
+    c.lens = lp;
+    c.extra.emplace_back("valid_region", lens.validRegion().text(lens.info().fisheye));
+    c.extra.emplace_back("valid_pixels",
+                         cat(table_->validCount(), " of ", size_t(width_) * size_t(height_)));
+  }
+
+ private:
+  glm::dvec3 worldDirection(const glm::dvec3& d) const {
+    const glm::dvec3 g = (d.x * frame_.u - d.y * frame_.v) - d.z * frame_.w;
+    return g / glm::length(g);
+  }
+
+  bool rayAt(double x, double y, glm::dvec3& dir) const {
+    const std::optional<glm::dvec3> d = sensorDirection(sensor_, x, y);
+    dir = d ? worldDirection(*d) : -frame_.w;
+    return d.has_value();
+  }
+
+  CalibratedSensor sensor_;
+  std::shared_ptr<const DirectionTable> table_;
+};
+
+std::unique_ptr<CameraBase> makeCalibratedCamera(const CameraParams& p,
+                                                 const glm::dvec3& renderOrigin) {
+  return std::make_unique<CalibratedCamera>(p, renderOrigin);
+}
+
+using K = ParamKind;
+
+std::vector<const char*> lensModelNames() {
+  std::vector<const char*> v;
+  for (const LensModelInfo& m : lensModels()) v.push_back(m.name);
+  return v;
+}
+
+const ParamSpec kIntrinsics{"intrinsics",
+                            K::Numbers,
+                            "pixels",
+                            "Focal lengths and principal point fx,fy,cx,cy (pixel convention: "
+                            "pixel_centre); selects the calibrated camera",
+                            "none (required)",
+                            {},
+                            {},
+                            {},
+                            {},
+                            fieldAccess<&CameraParams::intrinsics>(),
+                            nullptr,
+                            4,
+                            "calibrated"};
+const ParamSpec kLensModel{"lens_model",
+                           K::Choice,
+                           "",
+                           "COLMAP camera model of the lens (src/colmap/sensor/models.h)",
+                           nullptr,
+                           {},
+                           lensModelNames(),
+                           {},
+                           {},
+                           fieldAccess<&CameraParams::lensModel>()};
+const ParamSpec kDistortion{"distortion",
+                            K::Numbers,
+                            "",
+                            "The lens model's distortion coefficients in COLMAP's order (OPENCV: "
+                            "k1,k2,p1,p2; OPENCV_FISHEYE: k1,k2,k3,k4; ...)",
+                            "all zero",
+                            {},
+                            {},
+                            {},
+                            {"lens_model"},
+                            fieldAccess<&CameraParams::distortion>()};
+const ParamSpec kPixelCentre{"pixel_centre",
+                             K::Choice,
+                             "",
+                             "Where the intrinsics put pixel (i, j)'s centre: half-integer = "
+                             "(j + 0.5, i + 0.5) as COLMAP and nerfstudio, integer = (j, i) as "
+                             "OpenCV",
+                             nullptr,
+                             {},
+                             {"half-integer", "integer"},
+                             {},
+                             {},
+                             fieldAccess<&CameraParams::pixelCentre>()};
+const ParamSpec kWorldToCamera{"world_to_camera",
+                               K::Numbers,
+                               "",
+                               "4x4 world-to-camera matrix, row-major, in `convention` axes",
+                               "none (eye, at / dir and up pose the camera)",
+                               {},
+                               {},
+                               {"camera_to_world", "eye", "at", "dir", "up"},
+                               {},
+                               fieldAccess<&CameraParams::worldToCamera>(),
+                               nullptr,
+                               16,
+                               "calibrated"};
+const ParamSpec kCameraToWorld{"camera_to_world",
+                               K::Numbers,
+                               "",
+                               "4x4 camera-to-world matrix, row-major, in `convention` axes "
+                               "(nerfstudio's transform_matrix, Blender's matrix_world)",
+                               "none (eye, at / dir and up pose the camera)",
+                               {},
+                               {},
+                               {"world_to_camera", "eye", "at", "dir", "up"},
+                               {},
+                               fieldAccess<&CameraParams::cameraToWorld>(),
+                               nullptr,
+                               16,
+                               "calibrated"};
+const ParamSpec kConvention{"convention",
+                            K::Choice,
+                            "",
+                            "Camera axes of the pose matrix: opencv = x right, y down, z forward "
+                            "(COLMAP); opengl, blender = x right, y up, z backwards",
+                            nullptr,
+                            {},
+                            {"opencv", "opengl", "blender"},
+                            {},
+                            {},
+                            fieldAccess<&CameraParams::convention>()};
+
+}  // namespace
+
+const CameraModel& calibratedModel() {
+  static const CameraModel m{
+      "calibrated",
+      "a calibrated lens (COLMAP's models, exact inverse distortion) posed by a matrix",
+      makeCalibratedCamera,
+      joinParamSpecs({commonParamSpecs(),
+                      {&kIntrinsics, &kLensModel, &kDistortion, &kPixelCentre, &kWorldToCamera,
+                       &kCameraToWorld, &kConvention}})};
+  return m;
+}
+
+}  // namespace aperture
