@@ -171,19 +171,18 @@ class CalibratedCamera final : public CameraBase {
     const bool centres = req.centreRay() || spp_ == 1;
     for (int k = 0; k < req.lanes(); ++k) {
       const LanePixel px = req.pixel(k);
-      glm::dvec3 dir = -frame_.w;
-      bool hasRay = false;
-      if (px.inImage(width_, height_)) {
-        if (centres) {
-          hasRay = table_->valid(px.row, px.column);
-          if (hasRay) dir = worldDirection(table_->at(px.row, px.column));
-        } else {
-          double x, y;
-          samplePosition(px.row, px.column, req.sample, x, y);
-          hasRay = rayAt(x, y, dir);
-        }
+      const bool inImage = px.inImage(width_, height_);
+      glm::dvec3 dir;
+      bool hasRay;
+      if (centres && inImage) {  // the table holds exactly what rayAt computes here
+        hasRay = table_->valid(px.row, px.column);
+        dir = hasRay ? worldDirection(table_->at(px.row, px.column)) : -frame_.w;
+      } else {
+        double x, y;
+        samplePosition(px.row, px.column, req.sample, x, y);
+        hasRay = rayAt(x, y, dir);
       }
-      valid[k] = hasRay ? -1 : 0;
+      valid[k] = (hasRay && inImage) ? -1 : 0;
       setLane(out, k, renderEyeD_, dir);
     }
   }

@@ -101,6 +101,16 @@ inline CameraParams tiltedParams(const char* type) {
   return p;
 }
 
+/// Calibrated intrinsics in everyCamera() are fractions of the image size (fx, cx of the width,
+/// fy, cy of the height): this scales them to p's size.
+inline CameraParams sizedCamera(CameraParams p) {
+  if (p.intrinsics) {
+    std::vector<double>& k = *p.intrinsics;
+    k = {k[0] * p.width, k[1] * p.height, k[2] * p.width, k[3] * p.height};
+  }
+  return p;
+}
+
 /// Parameters of every model in a usable configuration (shifted and lens cases included).
 inline std::vector<CameraParams> everyCamera() {
   std::vector<CameraParams> all;
@@ -131,6 +141,17 @@ inline std::vector<CameraParams> everyCamera() {
   CameraParams f = tiltedParams("fisheye");
   f.fisheyeFovDeg = 200;
   all.push_back(f);
+  // Calibrated: a distorted OPENCV lens with the principal point off-centre, and a 190°
+  // OPENCV_FISHEYE (pixels past its circle have no ray). Sizes are set by the tests.
+  CameraParams c = tiltedParams("calibrated");
+  c.lensModel = "OPENCV";
+  c.intrinsics = std::vector<double>{0.9, 0.8, 0.55, 0.45};  // times width and height below
+  c.distortion = std::vector<double>{-0.2, 0.05, 1e-3, -5e-4};
+  all.push_back(c);
+  c.lensModel = "OPENCV_FISHEYE";
+  c.intrinsics = std::vector<double>{0.3, 0.3, 0.5, 0.5};
+  c.distortion = std::vector<double>{0.0, 0.0, 0.0, 0.0};
+  all.push_back(c);
   return all;
 }
 

@@ -685,6 +685,7 @@ TEST_P(EveryCamera, PacketsEqualTheScalarPathTailsIncluded) {
   p.width = 13;  // not a multiple of any block width: tail lanes on the right and bottom
   p.height = 7;
   p.spp = spp;
+  p = test::sizedCamera(p);
   const glm::dvec3 renderOrigin(-2.0, 0.5, 1.5);
   const auto cam = make(p, renderOrigin);
   int blockW, blockH;
@@ -734,6 +735,7 @@ TEST_P(EveryCameraProjection, ProjectInvertsTheRay) {
   CameraParams p = test::everyCamera()[GetParam()];
   p.width = 120;
   p.height = 80;
+  p = test::sizedCamera(p);
   const auto cam = make(p);
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> ux(0.0, 120.0), uy(0.0, 80.0), ut(0.5, 20.0);

@@ -86,6 +86,7 @@ TEST(ViewVolume, ContainsEveryRayOfEveryCamera) {
       CameraParams p = base;
       p.width = 64;
       p.height = 48;
+      p = test::sizedCamera(p);
       const auto cam = makeCameraModel(p);
       const double nearDist = 0.25;
       const ViewVolume vv = viewVolumeFor(p, nearDist, farDist);
