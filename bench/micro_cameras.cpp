@@ -2,6 +2,7 @@
 // visible next to traversal cost. One 512x512 frame of packets per iteration.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,17 @@ CameraParams paramsFor(const std::string& type, int spp) {
     p.focusDistance = 8.0;
   }
   if (type == "fisheye") p.fisheyeFovDeg = 180;
+  if (type == "calibrated" || type == "calibrated-opencv") {
+    // The perspective camera's K (fov 50° over 512 px), undistorted or with an OPENCV lens.
+    p.type = "calibrated";
+    const double f = 0.5 * kSize / std::tan(25.0 * 3.14159265358979323846 / 180.0);
+    p.fovDeg.reset();
+    p.intrinsics = std::vector<double>{f, f, 0.5 * kSize, 0.5 * kSize};
+    if (type == "calibrated-opencv") {
+      p.lensModel = "OPENCV";
+      p.distortion = std::vector<double>{-0.1, 0.01, 1e-4, -1e-4};
+    }
+  }
   return p;
 }
 
@@ -55,8 +67,8 @@ void generateFrame(benchmark::State& state, const std::string& type, int spp) {
 }
 
 void registerAll() {
-  for (const std::string type :
-       {"perspective", "orthographic", "oblique", "thinlens", "equirect", "fisheye"})
+  for (const std::string type : {"perspective", "orthographic", "oblique", "thinlens", "equirect",
+                                 "fisheye", "calibrated", "calibrated-opencv"})
     for (int spp : {1, 4}) {
       const std::string suffix = "/" + type + "/spp" + std::to_string(spp);
       benchmark::RegisterBenchmark(("CameraGenerate/w1" + suffix).c_str(),

@@ -8,6 +8,7 @@
 #include "cameras/calibrated.h"
 
 #include <cmath>
+#include <limits>
 
 #include "cameras/direction_table.h"
 #include "cameras/models.h"
@@ -169,6 +170,13 @@ class CalibratedCamera final : public CameraBase {
 
   void generate(const PacketRequest& req, RayLanes& out, int* valid) const override {
     const bool centres = req.centreRay() || spp_ == 1;
+    const bool whole = req.x0 + req.blockW <= width_ && req.y0 + req.blockH <= height_;
+    // Whole blocks of pixel centres, in the frame loop's shapes: loops with constant trips.
+    if (centres && whole) {
+      if (req.blockW == 4 && req.blockH == 4) return generateCentres<4, 4>(req, out, valid);
+      if (req.blockW == 4 && req.blockH == 2) return generateCentres<4, 2>(req, out, valid);
+      if (req.blockW == 2 && req.blockH == 2) return generateCentres<2, 2>(req, out, valid);
+    }
     for (int k = 0; k < req.lanes(); ++k) {
       const LanePixel px = req.pixel(k);
       const bool inImage = px.inImage(width_, height_);
@@ -176,7 +184,7 @@ class CalibratedCamera final : public CameraBase {
       bool hasRay;
       if (centres && inImage) {  // the table holds exactly what rayAt computes here
         hasRay = table_->valid(px.row, px.column);
-        dir = hasRay ? worldDirection(table_->at(px.row, px.column)) : -frame_.w;
+        dir = worldDirection(table_->at(px.row, px.column));  // (0, 0, 1) where there is no ray
       } else {
         double x, y;
         samplePosition(px.row, px.column, req.sample, x, y);
@@ -235,14 +243,52 @@ class CalibratedCamera final : public CameraBase {
   }
 
  private:
+  /// The world direction of camera-space direction d (OpenCV axes): d.x·U − d.y·V − d.z·W,
+  /// normalised with one reciprocal (generateCentres computes the same, term by term).
   glm::dvec3 worldDirection(const glm::dvec3& d) const {
     const glm::dvec3 g = (d.x * frame_.u - d.y * frame_.v) - d.z * frame_.w;
-    return g / glm::length(g);
+    const double inv = 1.0 / std::sqrt((g.x * g.x + g.y * g.y) + g.z * g.z);
+    return g * inv;
+  }
+
+  /// A whole kBW x kBH block of pixel centres from the table (bit-identical to the generic
+  /// loop: the same operations in the same order).
+  template <int kBW, int kBH>
+  void generateCentres(const PacketRequest& req, RayLanes& out, int* valid) const {
+    constexpr int kLanes = kBW * kBH;
+    alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
+    for (int r = 0; r < kBH; ++r) {
+      const glm::dvec3* dirs = &table_->at(req.y0 + r, req.x0);
+      const unsigned char* has = &table_->validAt(req.y0 + r, req.x0);
+      for (int c = 0; c < kBW; ++c) {
+        const int k = r * kBW + c;
+        const glm::dvec3 dir = worldDirection(dirs[c]);  // (0, 0, 1) where there is no ray
+        dx[k] = float(dir.x);
+        dy[k] = float(dir.y);
+        dz[k] = float(dir.z);
+        valid[k] = has[c] ? -1 : 0;
+      }
+    }
+    const float ex = float(renderEyeD_.x), ey = float(renderEyeD_.y), ez = float(renderEyeD_.z);
+    for (int k = 0; k < kLanes; ++k) {
+      out.orgX[k] = ex;
+      out.orgY[k] = ey;
+      out.orgZ[k] = ez;
+      out.dirX[k] = dx[k];
+      out.dirY[k] = dy[k];
+      out.dirZ[k] = dz[k];
+      out.tnear[k] = 0.0f;
+      out.tfar[k] = std::numeric_limits<float>::infinity();
+      out.time[k] = 0.0f;
+      out.mask[k] = 0xFFFFFFFFu;
+      out.id[k] = unsigned(k);
+      out.flags[k] = 0;
+    }
   }
 
   bool rayAt(double x, double y, glm::dvec3& dir) const {
     const std::optional<glm::dvec3> d = sensorDirection(sensor_, x, y);
-    dir = d ? worldDirection(*d) : -frame_.w;
+    dir = worldDirection(d.value_or(glm::dvec3(0.0, 0.0, 1.0)));  // the axis where there is none
     return d.has_value();
   }
 

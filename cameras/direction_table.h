@@ -19,9 +19,14 @@ class DirectionTable {
   /// Computes the table (no cache).
   explicit DirectionTable(const CalibratedSensor& sensor);
 
-  /// The unit direction of pixel (row i, column j)'s centre; valid(i, j) false: no ray.
+  /// The unit direction of pixel (row i, column j)'s centre; where valid(i, j) is false (no
+  /// ray) it holds the optical axis (0, 0, 1), so a packet needs no branch.
   const glm::dvec3& at(int i, int j) const { return dirs_[size_t(i) * size_t(width_) + size_t(j)]; }
-  bool valid(int i, int j) const { return valid_[size_t(i) * size_t(width_) + size_t(j)] != 0; }
+  bool valid(int i, int j) const { return validAt(i, j) != 0; }
+  /// 1 where pixel (i, j) has a ray, 0 where not (rows are contiguous, like at()).
+  const unsigned char& validAt(int i, int j) const {
+    return valid_[size_t(i) * size_t(width_) + size_t(j)];
+  }
   /// Pixels with a ray, of width x height.
   size_t validCount() const;
   size_t bytes() const { return dirs_.size() * sizeof(glm::dvec3) + valid_.size(); }
