@@ -23,7 +23,7 @@ struct RenderArgs {
   CameraFlags camera;
   RenderOptions render;
   std::string out = "out/render.exr", preview, previewRange, compression = "zip", preset;
-  bool half = false, quiet = false;
+  bool half = false, quiet = false, cameraSidecar = false;
 };
 
 /// --out, --preview and --preview-range, checked before anything is loaded or rendered.
@@ -73,7 +73,7 @@ int runRender(const RenderArgs& a) {
   for (const Mesh& m : loaded.meshes) meshNames.push_back(m.name);
   const ExrMetadata meta = viewMetadata(view, meshNames, aovs, a.scene.buildOptions().quality,
                                         a.scene.loadOptions().placement);
-  writeViewOutputs(view, meta, exr, a.out, a.preview, preview);
+  writeViewOutputs(view, meta, exr, a.out, a.preview, preview, a.cameraSidecar);
   if (!a.quiet && !a.preview.empty())
     std::fprintf(stderr, "aperture: wrote %s\n", a.preview.c_str());
   if (!a.quiet) std::fprintf(stderr, "aperture: wrote %s\n", a.out.c_str());
@@ -100,6 +100,10 @@ Command addRenderCommand(CLI::App& app) {
   sub->add_option("--compression", args->compression,
                   "EXR compression: none rle zips zip piz pxr24 b44 b44a dwaa dwab")
       ->capture_default_str();
+  sub->add_flag("--camera-sidecar", args->cameraSidecar,
+                "Also write the camera as calibrated JSON (K, distortion, world-to-camera in "
+                "OpenCV and OpenGL axes) beside --out: NAME.camera.json (perspective and "
+                "calibrated cameras)");
   sub->add_flag("--quiet", args->quiet, "No log lines");
   addPresetOption(*sub, args->preset);
   return [args, sub] {
