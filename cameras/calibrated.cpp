@@ -256,33 +256,57 @@ class CalibratedCamera final : public CameraBase {
   template <int kBW, int kBH>
   void generateCentres(const PacketRequest& req, RayLanes& out, int* valid) const {
     constexpr int kLanes = kBW * kBH;
-    alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
+    // Gather the block's table entries ((0, 0, 1) where there is no ray), then one flat loop
+    // of constant trip count that vectorises: worldDirection term by term.
+    alignas(64) double cx[kLanes], cy[kLanes], cz[kLanes];
     for (int r = 0; r < kBH; ++r) {
-      const glm::dvec3* dirs = &table_->at(req.y0 + r, req.x0);
-      const unsigned char* has = &table_->validAt(req.y0 + r, req.x0);
+      const DirectionTable::Row row = table_->row(req.y0 + r, req.x0);
       for (int c = 0; c < kBW; ++c) {
-        const int k = r * kBW + c;
-        const glm::dvec3 dir = worldDirection(dirs[c]);  // (0, 0, 1) where there is no ray
-        dx[k] = float(dir.x);
-        dy[k] = float(dir.y);
-        dz[k] = float(dir.z);
-        valid[k] = has[c] ? -1 : 0;
+        cx[r * kBW + c] = row.x[c];
+        cy[r * kBW + c] = row.y[c];
+        cz[r * kBW + c] = row.z[c];
+        valid[r * kBW + c] = row.valid[c] ? -1 : 0;
       }
     }
-    const float ex = float(renderEyeD_.x), ey = float(renderEyeD_.y), ez = float(renderEyeD_.z);
+    const glm::dvec3 U = frame_.u, V = frame_.v, W = frame_.w;
+    alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
     for (int k = 0; k < kLanes; ++k) {
-      out.orgX[k] = ex;
-      out.orgY[k] = ey;
-      out.orgZ[k] = ez;
-      out.dirX[k] = dx[k];
-      out.dirY[k] = dy[k];
-      out.dirZ[k] = dz[k];
-      out.tnear[k] = 0.0f;
-      out.tfar[k] = std::numeric_limits<float>::infinity();
-      out.time[k] = 0.0f;
-      out.mask[k] = 0xFFFFFFFFu;
-      out.id[k] = unsigned(k);
-      out.flags[k] = 0;
+      const double gx = (cx[k] * U.x - cy[k] * V.x) - cz[k] * W.x;
+      const double gy = (cx[k] * U.y - cy[k] * V.y) - cz[k] * W.y;
+      const double gz = (cx[k] * U.z - cy[k] * V.z) - cz[k] * W.z;
+      const double inv = 1.0 / std::sqrt((gx * gx + gy * gy) + gz * gz);
+      dx[k] = float(gx * inv);
+      dy[k] = float(gy * inv);
+      dz[k] = float(gz * inv);
+    }
+    // Local restrict pointers: stores through one lane array cannot change the others.
+    float* __restrict ox = out.orgX;
+    float* __restrict oy = out.orgY;
+    float* __restrict oz = out.orgZ;
+    float* __restrict ddx = out.dirX;
+    float* __restrict ddy = out.dirY;
+    float* __restrict ddz = out.dirZ;
+    float* __restrict tnear = out.tnear;
+    float* __restrict tfar = out.tfar;
+    float* __restrict time = out.time;
+    unsigned* __restrict mask = out.mask;
+    unsigned* __restrict id = out.id;
+    unsigned* __restrict flags = out.flags;
+    const float ex = float(renderEyeD_.x), ey = float(renderEyeD_.y), ez = float(renderEyeD_.z);
+    const float inf = std::numeric_limits<float>::infinity();
+    for (int k = 0; k < kLanes; ++k) {
+      ddx[k] = dx[k];
+      ddy[k] = dy[k];
+      ddz[k] = dz[k];
+      ox[k] = ex;
+      oy[k] = ey;
+      oz[k] = ez;
+      tnear[k] = 0.0f;
+      tfar[k] = inf;
+      time[k] = 0.0f;
+      mask[k] = 0xFFFFFFFFu;
+      id[k] = unsigned(k);
+      flags[k] = 0;
     }
   }
 

@@ -15,14 +15,18 @@ std::optional<glm::dvec3> sensorDirection(const CalibratedSensor& sensor, double
 DirectionTable::DirectionTable(const CalibratedSensor& sensor)
     : sensor_(sensor), width_(sensor.width) {
   const size_t n = size_t(sensor.width) * size_t(sensor.height);
-  dirs_.assign(n, glm::dvec3(0.0, 0.0, 1.0));
+  x_.assign(n, 0.0);
+  y_.assign(n, 0.0);
+  z_.assign(n, 1.0);
   valid_.assign(n, 0);
   parallelFor(size_t(sensor.height), 8, [&](size_t rowBegin, size_t rowEnd) {
     for (size_t i = rowBegin; i < rowEnd; ++i)
       for (int j = 0; j < width_; ++j) {
         const size_t k = i * size_t(width_) + size_t(j);
         if (const auto d = sensorDirection(sensor_, j + 0.5, double(i) + 0.5)) {
-          dirs_[k] = *d;
+          x_[k] = d->x;
+          y_[k] = d->y;
+          z_[k] = d->z;
           valid_[k] = 1;
         }
       }

@@ -21,21 +21,32 @@ class DirectionTable {
 
   /// The unit direction of pixel (row i, column j)'s centre; where valid(i, j) is false (no
   /// ray) it holds the optical axis (0, 0, 1), so a packet needs no branch.
-  const glm::dvec3& at(int i, int j) const { return dirs_[size_t(i) * size_t(width_) + size_t(j)]; }
-  bool valid(int i, int j) const { return validAt(i, j) != 0; }
-  /// 1 where pixel (i, j) has a ray, 0 where not (rows are contiguous, like at()).
-  const unsigned char& validAt(int i, int j) const {
-    return valid_[size_t(i) * size_t(width_) + size_t(j)];
+  glm::dvec3 at(int i, int j) const {
+    const size_t k = index(i, j);
+    return {x_[k], y_[k], z_[k]};
+  }
+  bool valid(int i, int j) const { return valid_[index(i, j)] != 0; }
+  /// Row pointers (structure of arrays, so a block's loop vectorises): the components of the
+  /// directions and the validity (1: a ray, 0: none) of row i from column j on.
+  struct Row {
+    const double *x, *y, *z;
+    const unsigned char* valid;
+  };
+  Row row(int i, int j) const {
+    const size_t k = index(i, j);
+    return {&x_[k], &y_[k], &z_[k], &valid_[k]};
   }
   /// Pixels with a ray, of width x height.
   size_t validCount() const;
-  size_t bytes() const { return dirs_.size() * sizeof(glm::dvec3) + valid_.size(); }
+  size_t bytes() const { return 3 * x_.size() * sizeof(double) + valid_.size(); }
   const CalibratedSensor& sensor() const { return sensor_; }
 
  private:
+  size_t index(int i, int j) const { return size_t(i) * size_t(width_) + size_t(j); }
+
   CalibratedSensor sensor_;
   int width_ = 0;
-  std::vector<glm::dvec3> dirs_;
+  std::vector<double> x_, y_, z_;
   std::vector<unsigned char> valid_;
 };
 
