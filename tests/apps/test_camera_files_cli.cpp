@@ -287,6 +287,32 @@ TEST(CameraFilesCliBatch, IncompleteOrAmbiguousCommandLinesAreRefusedAndWriteNot
   EXPECT_FALSE(fs::exists(out));
 }
 
+TEST(CameraFilesCliBatch, ResumeRendersAgainWhenOnlyADistortionCoefficientChanged) {
+  // p1 moves pixels but neither the valid region (radial only) nor the frame, d, viewport or
+  // shift: only the lens attributes of the header tell the two files apart.
+  const std::string dir = test::scratchDir(), model = colmapModel(dir + "/model");
+  const std::string out = dir + "/out", exr = out + "/right/0001.exr";
+  const std::string image = " --image right/0001.jpg";
+  std::string log;
+  ASSERT_EQ(runCommand(batchOneLine(model, out, image), &log), 0) << log;
+  const std::string resume = apertureBinary() + " batch --mesh " + kSphere + " --cameras " + model +
+                             " --out " + out + " --aov depth,position --resume" + image;
+  ASSERT_EQ(runCommand(resume, &log), 0) << log;
+  EXPECT_NE(log.find("1 of 1 images up to date"), std::string::npos) << log;
+  std::string cameras = test::readFile(model + "/cameras.txt");
+  const std::string p1 = " 0.001 ";
+  ASSERT_NE(cameras.find(p1), std::string::npos);
+  cameras.replace(cameras.find(p1), p1.size(), " 0.004 ");
+  test::writeFile(model + "/cameras.txt", cameras);
+  ASSERT_EQ(runCommand(resume, &log), 0) << log;
+  EXPECT_NE(log.find("stale: camera lens OPENCV"), std::string::npos) << log;
+  EXPECT_NE(log.find("0 of 1 images up to date, 1 stale"), std::string::npos) << log;
+  InputCamera changed = kRight;
+  changed.params[6] = 0.004;
+  expectRenderedBy(exr, changed);
+  expectSidecarOf(exr, changed);
+}
+
 // ---- render --cameras --image ----
 
 TEST(CameraFilesCliRender, RendersTheNamedImageOfTheFile) {
