@@ -253,16 +253,16 @@ TEST(CameraFilesCliBatch, ImageSelectsAndAnUnknownNameGetsDidYouMean) {
   const std::string dir = test::scratchDir(), model = colmapModel(dir + "/model");
   const std::string out = dir + "/out";
   std::string log;
-  ASSERT_EQ(runCommand(batchOneLine(model, out, " --image right/0001.jpg --image top.png"), &log),
+  ASSERT_EQ(runCommand(batchOneLine(model, out, " --image top.png --image right/0001.jpg"), &log),
             0)
       << log;
   expectRenderedBy(out + "/right/0001.exr", kRight);
   expectRenderedBy(out + "/top.exr", kTop);
   EXPECT_FALSE(fs::exists(out + "/left")) << "left/0001.jpg was not asked for";
   const CameraFile sparse = readCameraFile(out + "/sparse");
-  ASSERT_EQ(sparse.images.size(), 2u);
-  EXPECT_EQ(sparse.images[0].name, "right/0001.exr");
-  EXPECT_EQ(sparse.images[1].name, "top.exr");
+  ASSERT_EQ(sparse.images.size(), 2u);  // in the order of the --image flags
+  EXPECT_EQ(sparse.images[0].name, "top.exr");
+  EXPECT_EQ(sparse.images[1].name, "right/0001.exr");
 
   const std::string out2 = dir + "/out2";
   expectRefused(batchOneLine(model, out2, " --image rigth/0001.jpg"),
@@ -490,6 +490,10 @@ TEST(CameraFilesCliExr, ADistortedRenderRecordsItsLensAndHasNoWorldToNdc) {
     ASSERT_NE(v, nullptr) << paramNames[k];
     EXPECT_EQ(v->value(), kRight.params[k]) << paramNames[k];
   }
+  const auto* region =
+      header.findTypedAttribute<Imf::StringAttribute>("aperture.camera.valid_region");
+  ASSERT_NE(region, nullptr);
+  EXPECT_EQ(region->value().rfind("r < 1.054 ", 0), 0u) << region->value();  // 1/√0.9
   EXPECT_FALSE(Imf::hasWorldToNDC(header)) << "a distorted lens is not a projective map";
   EXPECT_EQ(header.findTypedAttribute<Imf::M44dAttribute>("aperture.worldToNDC"), nullptr);
   // worldToCamera is OpenEXR's camera space (x right, y up, z forward; row vectors): the
