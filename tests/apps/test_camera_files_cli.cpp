@@ -1,7 +1,7 @@
 // Camera files on the command line, through the `aperture` binary: the one-line batch form
 // (`batch --mesh --cameras --out`), `render --cameras --image`, job files with "cameras":
-// {"from"} and {image}, the camera sidecars and the COLMAP model of a batch, the lens
-// attributes of the EXR header, `camera --export` and `camera --describe`.
+// {"from"} and {image}, the camera sidecars and the COLMAP model of a batch, `--resume` after a
+// lens change, the lens attributes of the EXR header, `camera --export` and `--describe`.
 //
 // The input camera files are written here as text, so every expected value comes from that
 // text and closed forms: the rotation of a quaternion, OpenCV's distortion formula (written out
