@@ -11,8 +11,9 @@
 
 namespace aperture::app {
 
-/// The images of `file` named in `names` (all of them when `names` is empty), in the file's
-/// order. An unknown name is an Error naming `flag`, the file and the closest image name.
+/// The images of `file` named in `names`, in the order of `names` (all of them, in the file's
+/// order, when `names` is empty). An unknown name is an Error naming `flag`, the file and the
+/// closest image name.
 std::vector<const CalibratedImage*> selectImages(const CameraFile& file,
                                                  const std::vector<std::string>& names,
                                                  const std::string& flag);

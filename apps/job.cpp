@@ -308,7 +308,7 @@ std::string expandFor(const Object& top, const char* key, const std::string& pat
 }
 
 /// "cameras": {"from": PATH, "images": [NAME, ...]}: every image of a camera file (or those
-/// listed), in the file's order, each a calibrated camera named by its image name.
+/// listed, in the order listed), each a calibrated camera named by its image name.
 void readCameraFileImages(const Object& top, const CameraParams& defaults,
                           const std::string& baseDir, Job& job) {
   const Object c(top.file(), "cameras", top.required("cameras"), {"from", "images"});

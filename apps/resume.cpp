@@ -43,6 +43,29 @@ std::vector<std::string> sortedExtras(const CameraDescription& c) {
   return items;
 }
 
+/// A calibrated camera's lens as text, "OPENCV fx=38 fy=39 ... (half-integer pixel centres)";
+/// "none" for the other cameras.
+std::string lensText(const std::optional<LensProjection>& lens) {
+  if (!lens) return "none";
+  std::vector<std::string> items{lens->model};
+  for (size_t k = 0; k < lens->params.size() && k < lens->paramNames.size(); ++k)
+    items.push_back(cat(lens->paramNames[k], "=", lens->params[k]));
+  items.push_back(cat("(", lens->pixelCentre, " pixel centres)"));
+  return join(items, " ");
+}
+
+/// "" when both lenses are equal (model, parameters compared exactly, pixel convention), else
+/// "lens <file>, job wants <job>". The extras hold only the valid region, which distortion
+/// coefficients can change without changing it (the tangential ones never do).
+std::string differsLens(const std::optional<LensProjection>& file,
+                        const std::optional<LensProjection>& job) {
+  const bool same =
+      file.has_value() == job.has_value() &&
+      (!file || (file->model == job->model && file->params == job->params &&
+                 file->paramNames == job->paramNames && file->pixelCentre == job->pixelCentre));
+  return same ? "" : cat("lens ", lensText(file), ", job wants ", lensText(job));
+}
+
 /// Size, channels and camera of the EXR header against the job; "" when they match.
 std::string headerMismatch(const Job& job, const JobImage& image) {
   ExrHeader header;
@@ -104,6 +127,7 @@ std::string cameraDifference(const CameraDescription& file, const CameraDescript
       differs("viewport", cat(file.vw, "x", file.vh), cat(job.vw, "x", job.vh)),
       differs("spp", file.spp, job.spp),
       differs("extras", joined(sortedExtras(file)), joined(sortedExtras(job))),
+      differsLens(file.lens, job.lens),
   };
   for (const std::string& d : differences)
     if (!d.empty()) return d;

@@ -26,8 +26,9 @@ struct OutputCheck {
 OutputCheck checkOutput(const Job& job, const JobImage& image);
 
 /// The first difference between the camera recorded in a file and the one the job wants, as
-/// "eye (0, 0, 5), job wants (0, 0, 6)"; "" when type, eye, U, V, W, d, viewport, spp and the
-/// extras (compared as sorted name/value pairs) are all equal. Matrices are not compared.
+/// "eye (0, 0, 5), job wants (0, 0, 6)"; "" when type, eye, U, V, W, d, viewport, spp, the
+/// extras (compared as sorted name/value pairs) and a calibrated camera's lens (model,
+/// parameters, pixel convention) are all equal. Matrices are not compared.
 std::string cameraDifference(const CameraDescription& file, const CameraDescription& job);
 
 /// True unless kill(pid, 0) says that no process `pid` exists (ESRCH); a PID that cannot be a

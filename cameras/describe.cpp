@@ -41,7 +41,10 @@ void describeExrHeader(std::ostream& s, const CameraDescription& desc) {
     s << "  worldToNDC (p' = p·M, then divide by w; NDC (0, 0) top-left, (1, 1) bottom-right):\n";
     printRowVectorMatrix(s, *desc.ndcFromWorld);
   } else {
-    s << "  worldToNDC: none (a panorama has no projective matrix)\n";
+    s << "  worldToNDC: none ("
+      << (desc.lens ? "a lens with distortion is not a projective map"
+                    : "a panorama has no projective matrix")
+      << ")\n";
   }
   if (const auto& e = desc.equirect)
     s << "  aperture.equirect.longitudeRange (" << e->longitudeDeg.x << ", " << e->longitudeDeg.y
