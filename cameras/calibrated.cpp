@@ -259,13 +259,26 @@ class CalibratedCamera final : public CameraBase {
     // Gather the block's table entries ((0, 0, 1) where there is no ray), then one flat loop
     // of constant trip count that vectorises: worldDirection term by term.
     alignas(64) double cx[kLanes], cy[kLanes], cz[kLanes];
-    for (int r = 0; r < kBH; ++r) {
-      const DirectionTable::Row row = table_->row(req.y0 + r, req.x0);
-      for (int c = 0; c < kBW; ++c) {
-        cx[r * kBW + c] = row.x[c];
-        cy[r * kBW + c] = row.y[c];
-        cz[r * kBW + c] = row.z[c];
-        valid[r * kBW + c] = row.valid[c] ? -1 : 0;
+    const double *tx = table_->x(), *ty = table_->y(), *tz = table_->z();
+    const unsigned char* tv = table_->validity();
+    constexpr int kB = DirectionTable::kBlock;
+    if (kBW == kB && req.x0 % kB == 0 && req.y0 % kB + kBH <= kB) {
+      // The packet is whole rows of one table block: kLanes contiguous entries.
+      const size_t t0 = table_->index(req.y0, req.x0);
+      for (int k = 0; k < kLanes; ++k) {
+        cx[k] = tx[t0 + size_t(k)];
+        cy[k] = ty[t0 + size_t(k)];
+        cz[k] = tz[t0 + size_t(k)];
+        valid[k] = tv[t0 + size_t(k)] ? -1 : 0;
+      }
+    } else {
+      for (int k = 0; k < kLanes; ++k) {
+        const LanePixel px = lanePixel(req.x0, req.y0, kBW, k);
+        const size_t t = table_->index(px.row, px.column);
+        cx[k] = tx[t];
+        cy[k] = ty[t];
+        cz[k] = tz[t];
+        valid[k] = tv[t] ? -1 : 0;
       }
     }
     const glm::dvec3 U = frame_.u, V = frame_.v, W = frame_.w;

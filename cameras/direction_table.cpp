@@ -13,16 +13,17 @@ std::optional<glm::dvec3> sensorDirection(const CalibratedSensor& sensor, double
 }
 
 DirectionTable::DirectionTable(const CalibratedSensor& sensor)
-    : sensor_(sensor), width_(sensor.width) {
-  const size_t n = size_t(sensor.width) * size_t(sensor.height);
+    : sensor_(sensor), blocksPerRow_(size_t((sensor.width + kBlock - 1) / kBlock)) {
+  const size_t blockRows = size_t((sensor.height + kBlock - 1) / kBlock);
+  const size_t n = blockRows * blocksPerRow_ * size_t(kBlock * kBlock);
   x_.assign(n, 0.0);
   y_.assign(n, 0.0);
   z_.assign(n, 1.0);
   valid_.assign(n, 0);
   parallelFor(size_t(sensor.height), 8, [&](size_t rowBegin, size_t rowEnd) {
     for (size_t i = rowBegin; i < rowEnd; ++i)
-      for (int j = 0; j < width_; ++j) {
-        const size_t k = i * size_t(width_) + size_t(j);
+      for (int j = 0; j < sensor_.width; ++j) {
+        const size_t k = index(int(i), j);
         if (const auto d = sensorDirection(sensor_, j + 0.5, double(i) + 0.5)) {
           x_[k] = d->x;
           y_[k] = d->y;
