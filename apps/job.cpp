@@ -342,7 +342,7 @@ void readCameraFileImages(const Object& top, const CameraParams& defaults,
       job.images.push_back(std::move(image));
     }
   } catch (const Error& e) {
-    throw Error(cat(top.file(), ": cameras: ", e.what()));
+    throw Error(cat(top.file(), ": ", e.what()));
   }
 }
 
