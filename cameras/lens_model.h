@@ -5,7 +5,7 @@
 // Pixel coordinates here are COLMAP's: the centre of pixel (row i, column j) is at
 // (j + 0.5, i + 0.5). Camera space is COLMAP's and OpenCV's: x right, y down, z forward.
 // Sources with another pixel convention (OpenCV: centre at (j, i)) are converted by
-// cameras/calibrated.h, not here.
+// cameras/calibration.h, not here.
 //
 // The inverse maps a pixel to its ray by Newton's method with the analytic Jacobian, in
 // double precision. Where the forward model is not invertible (past the first fold of the
