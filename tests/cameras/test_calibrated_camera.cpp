@@ -8,6 +8,7 @@
 
 #include "cameras/base.h"
 #include "cameras/calibrated.h"
+#include "cameras/direction_table.h"
 #include "cameras/param_schema.h"
 #include "cameras/registry.h"
 #include "core/error.h"
@@ -278,6 +279,37 @@ TEST(CalibratedCamera, DescriptionCarriesTheLensAndNdcOnlyWhenProjective) {
   bool region = false;
   for (const auto& [k, v] : dd.extra) region |= k == "valid_region";
   EXPECT_TRUE(region);
+}
+
+}  // namespace
+}  // namespace aperture
+
+namespace aperture {
+namespace {
+
+// Images of one sensor share its table (set up once); another lens or size gets its own, and
+// the table holds exactly the lens's inverse at every pixel centre.
+TEST(CalibratedCamera, ImagesOfOneSensorShareOneTable) {
+  CameraParams p = calibratedPinhole(30, 31, 18.5, 11.5);
+  p.lensModel = "OPENCV";
+  p.distortion = std::vector<double>{-0.2, 0.01, 1e-3, 0.0};
+  const CalibratedSensor sensor = calibratedSensorOf(p);
+  const auto a = DirectionTable::of(sensor);
+  CameraParams moved = p;
+  moved.eye = {4.0, 1.0, -2.0};
+  EXPECT_EQ(DirectionTable::of(calibratedSensorOf(moved)), a);  // a pose is not part of it
+  CameraParams other = p;
+  other.distortion = std::vector<double>{-0.2, 0.01, 1e-3, 1e-9};
+  EXPECT_NE(DirectionTable::of(calibratedSensorOf(other)), a);
+  for (int i = 0; i < p.height; ++i)
+    for (int j = 0; j < p.width; ++j) {
+      const std::optional<glm::dvec3> d =
+          sensor.lens.unproject(glm::dvec2(j + 0.5, i + 0.5));  // half-integer convention
+      ASSERT_EQ(a->valid(i, j), d.has_value());
+      if (d) {
+        ASSERT_EQ(a->at(i, j), *d) << i << "," << j;
+      }
+    }
 }
 
 }  // namespace
