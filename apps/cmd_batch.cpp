@@ -182,10 +182,9 @@ double renderImages(BatchPlan& plan, const LoadedScene& scene, const BatchArgs& 
   double renderSeconds = 0;
   auto write = [&](ImageWriter::Task& task) {
     const auto t0 = BatchClock::now();
-    writeImageFiles(
-        *task.result, task.view,
-        viewMetadata(task.view, scene.names, job.aovs, job.build.quality, job.placement), job.exr,
-        preview, job.cameraFiles);
+    writeImageFiles(*task.result, task.view,
+                    viewMetadata(task.view, scene.names, job.aovs, job.build, job.placement),
+                    job.exr, preview, job.cameraFiles);
     task.result->writeSeconds = secondsSince(t0);
     task.view = RenderedView();
     progress.finished(*task.result);

@@ -71,8 +71,8 @@ int runRender(const RenderArgs& a) {
 
   std::vector<std::string> meshNames;
   for (const Mesh& m : loaded.meshes) meshNames.push_back(m.name);
-  const ExrMetadata meta = viewMetadata(view, meshNames, aovs, a.scene.buildOptions().quality,
-                                        a.scene.loadOptions().placement);
+  const ExrMetadata meta =
+      viewMetadata(view, meshNames, aovs, a.scene.buildOptions(), a.scene.loadOptions().placement);
   writeViewOutputs(view, meta, exr, a.out, a.preview, preview, a.cameraSidecar);
   if (!a.quiet && !a.preview.empty())
     std::fprintf(stderr, "aperture: wrote %s\n", a.preview.c_str());

@@ -246,6 +246,7 @@ void readPerformance(const Object& top, Job& job) {
     } catch (const Error& e) {
       p.fail(p.keyPath("bvh_quality"), e.what());
     }
+    // Robust (watertight) traversal is the default; "robust": false opts out, as --no-robust.
     job.build.robust = p.boolean("robust", job.build.robust);
     job.build.compact = p.boolean("compact", false);
     job.cull = p.boolean("cull", false);

@@ -34,7 +34,8 @@ struct SceneSpec {
 struct SceneOptions {
   std::vector<std::string> meshes;  ///< empty: the default procedural scene
   std::string quality = "high";
-  bool robust = false, compact = false, worldSpace = false;
+  bool robust = true;  ///< --robust (the default) / --no-robust
+  bool compact = false, worldSpace = false;
   /// Leave triangles outside the cameras' view volumes out of the BVH (off by default).
   bool cull = false;
   std::string maxMemory;  ///< --max-memory: BYTES[K|M|G|T], auto, or "" for no limit

@@ -23,14 +23,15 @@ RenderedView renderView(const Scene& scene, const CameraParams& params,
 }
 
 ExrMetadata viewMetadata(const RenderedView& view, const std::vector<std::string>& meshNames,
-                         AovMask aovs, BvhQuality quality, Placement placement) {
+                         AovMask aovs, const BuildOptions& build, Placement placement) {
   ExrMetadata meta;
   meta.camera = view.camera;
   meta.renderSeconds = view.stats.seconds;
   const std::string meshes = join(meshNames, ";");
   meta.strings = {{"aperture.meshes", meshes},
                   {"aperture.aovs", aovListString(aovs)},
-                  {"aperture.bvhQuality", bvhQualityName(quality)},
+                  {"aperture.bvhQuality", bvhQualityName(build.quality)},
+                  {"aperture.robust", build.robust ? "true" : "false"},
                   {"aperture.placement",
                    placement == Placement::WorldSpace ? "world-space" : "camera-relative"}};
   return meta;

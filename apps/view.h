@@ -26,9 +26,10 @@ struct RenderedView {
 RenderedView renderView(const Scene& scene, const CameraParams& params,
                         const RenderSettings& settings, AovMask aovs);
 
-/// The header of a rendered view: camera, render time, meshes, AOVs, BVH quality, placement.
+/// The header of a rendered view: camera, render time, meshes, AOVs, BVH quality and
+/// traversal mode (robust or not), placement.
 ExrMetadata viewMetadata(const RenderedView& view, const std::vector<std::string>& meshNames,
-                         AovMask aovs, BvhQuality quality, Placement placement);
+                         AovMask aovs, const BuildOptions& build, Placement placement);
 
 /// Creates the parent directory of `path`; throws Error("<what>: '<path>': cannot create
 /// directory ...").
