@@ -11,6 +11,11 @@
 
 namespace aperture::app {
 
+/// What --cameras accepts (the help line of render, camera, bench, tradeoff and batch).
+inline constexpr const char* kCameraFileHelp =
+    "Camera file: a COLMAP model folder (text or binary), a transforms.json (nerfstudio, NeRF, "
+    "instant-ngp) or an OpenCV JSON/YAML";
+
 /// The images of `file` named in `names`, in the order of `names` (all of them, in the file's
 /// order, when `names` is empty). An unknown name is an Error naming `flag`, the file and the
 /// closest image name.

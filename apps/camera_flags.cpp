@@ -43,9 +43,7 @@ void CameraFlags::add(CLI::App& app, const CameraParams& defaults) {
     else
       slot.option = app.add_option(spec->flag(), slot.text, help)->type_name(valueShape(*spec));
   }
-  app.add_option("--cameras", cameraFile_,
-                 "Camera file: a COLMAP model folder (text or binary), a transforms.json "
-                 "(nerfstudio, NeRF, instant-ngp) or an OpenCV JSON/YAML; with --image")
+  app.add_option("--cameras", cameraFile_, std::string(kCameraFileHelp) + "; with --image")
       ->type_name("PATH");
   app.add_option("--image", images_, "The image of --cameras whose camera to use")
       ->type_name("NAME");

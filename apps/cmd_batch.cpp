@@ -327,11 +327,7 @@ Command addBatchCommand(CLI::App& app) {
                   "Job file (JSON); with --merge-summaries, the summaries to merge");
   CameraFileBatch& cf = args->cameraFile;
   const char* const group = "Without a job file: the images of a camera file";
-  sub->add_option("--cameras", cf.cameras,
-                  "Camera file: a COLMAP model folder (text or binary), a transforms.json "
-                  "(nerfstudio, NeRF, instant-ngp) or an OpenCV JSON/YAML")
-      ->group(group)
-      ->type_name("PATH");
+  sub->add_option("--cameras", cf.cameras, kCameraFileHelp)->group(group)->type_name("PATH");
   sub->add_option("--mesh", cf.meshes, "Mesh (PLY, OBJ or procedural:NAME); repeatable")
       ->group(group);
   sub->add_option("--out", cf.outDir, "Output folder: DIR/<image name>.exr, subfolders kept")

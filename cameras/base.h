@@ -134,6 +134,44 @@ inline void setLane(RayLanes& out, int k, const glm::dvec3& org, const glm::dvec
   out.flags[k] = 0;
 }
 
+/// Writes the kLanes lanes of a block of rays from one origin (double, rounded once) with
+/// directions already rounded to float, and the fixed fields as setLane. The fast paths of
+/// the perspective and calibrated cameras share it; a constant trip count and restrict
+/// pointers keep it vectorised.
+template <int kLanes>
+inline void writeBlockLanes(RayLanes& out, const glm::dvec3& org, const float* dx, const float* dy,
+                            const float* dz) {
+  // Local restrict pointers: stores through one lane array cannot change the others.
+  float* __restrict ox = out.orgX;
+  float* __restrict oy = out.orgY;
+  float* __restrict oz = out.orgZ;
+  float* __restrict ddx = out.dirX;
+  float* __restrict ddy = out.dirY;
+  float* __restrict ddz = out.dirZ;
+  float* __restrict tnear = out.tnear;
+  float* __restrict tfar = out.tfar;
+  float* __restrict time = out.time;
+  unsigned* __restrict mask = out.mask;
+  unsigned* __restrict id = out.id;
+  unsigned* __restrict flags = out.flags;
+  const float ex = float(org.x), ey = float(org.y), ez = float(org.z);
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int k = 0; k < kLanes; ++k) {
+    ddx[k] = dx[k];
+    ddy[k] = dy[k];
+    ddz[k] = dz[k];
+    ox[k] = ex;
+    oy[k] = ey;
+    oz[k] = ez;
+    tnear[k] = 0.0f;
+    tfar[k] = inf;
+    time[k] = 0.0f;
+    mask[k] = 0xFFFFFFFFu;
+    id[k] = unsigned(k);
+    flags[k] = 0;
+  }
+}
+
 /// The packet loop, shared by every model: Derived provides an inline
 /// `bool rayAt(x, y, lensX, lensY, org, dir) const` and `bool usesLens() const`. generate()
 /// and the scalar ray() both call rayAt, so packets equal the scalar path exactly.

@@ -292,35 +292,7 @@ class CalibratedCamera final : public CameraBase {
       dy[k] = float(gy * inv);
       dz[k] = float(gz * inv);
     }
-    // Local restrict pointers: stores through one lane array cannot change the others.
-    float* __restrict ox = out.orgX;
-    float* __restrict oy = out.orgY;
-    float* __restrict oz = out.orgZ;
-    float* __restrict ddx = out.dirX;
-    float* __restrict ddy = out.dirY;
-    float* __restrict ddz = out.dirZ;
-    float* __restrict tnear = out.tnear;
-    float* __restrict tfar = out.tfar;
-    float* __restrict time = out.time;
-    unsigned* __restrict mask = out.mask;
-    unsigned* __restrict id = out.id;
-    unsigned* __restrict flags = out.flags;
-    const float ex = float(renderEyeD_.x), ey = float(renderEyeD_.y), ez = float(renderEyeD_.z);
-    const float inf = std::numeric_limits<float>::infinity();
-    for (int k = 0; k < kLanes; ++k) {
-      ddx[k] = dx[k];
-      ddy[k] = dy[k];
-      ddz[k] = dz[k];
-      ox[k] = ex;
-      oy[k] = ey;
-      oz[k] = ez;
-      tnear[k] = 0.0f;
-      tfar[k] = inf;
-      time[k] = 0.0f;
-      mask[k] = 0xFFFFFFFFu;
-      id[k] = unsigned(k);
-      flags[k] = 0;
-    }
+    writeBlockLanes<kLanes>(out, renderEyeD_, dx, dy, dz);
   }
 
   bool rayAt(double x, double y, glm::dvec3& dir) const {

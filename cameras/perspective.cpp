@@ -83,35 +83,7 @@ void PerspectiveCamera::generatePinholeCentres(const PacketRequest& req, RayLane
     dy[k] = float(py * invLen);
     dz[k] = float(pz * invLen);
   }
-  // Local restrict pointers: stores through one lane array cannot change the others.
-  float* __restrict ox = out.orgX;
-  float* __restrict oy = out.orgY;
-  float* __restrict oz = out.orgZ;
-  float* __restrict ddx = out.dirX;
-  float* __restrict ddy = out.dirY;
-  float* __restrict ddz = out.dirZ;
-  float* __restrict tnear = out.tnear;
-  float* __restrict tfar = out.tfar;
-  float* __restrict time = out.time;
-  unsigned* __restrict mask = out.mask;
-  unsigned* __restrict id = out.id;
-  unsigned* __restrict flags = out.flags;
-  const float ex = float(renderEyeD_.x), ey = float(renderEyeD_.y), ez = float(renderEyeD_.z);
-  const float inf = std::numeric_limits<float>::infinity();
-  for (int k = 0; k < kLanes; ++k) {
-    ddx[k] = dx[k];
-    ddy[k] = dy[k];
-    ddz[k] = dz[k];
-    ox[k] = ex;
-    oy[k] = ey;
-    oz[k] = ez;
-    tnear[k] = 0.0f;
-    tfar[k] = inf;
-    time[k] = 0.0f;
-    mask[k] = 0xFFFFFFFFu;
-    id[k] = unsigned(k);
-    flags[k] = 0;
-  }
+  writeBlockLanes<kLanes>(out, renderEyeD_, dx, dy, dz);
   // Locals: the stores to valid[] could otherwise alias them and force reloads every lane.
   const int ix0 = req.x0, iy0 = req.y0, width = width_, height = height_;
   for (int k = 0; k < kLanes; ++k) valid[k] = laneInImage(ix0, iy0, kBW, k, width, height) ? -1 : 0;

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -152,6 +153,21 @@ std::string readFile(const std::string& path) {
   std::ostringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+int forEachHit(const Framebuffer& fb,
+               const std::function<void(int, int, const Imath::V3d&, double, double)>& f) {
+  int hits = 0;
+  for (int i = 0; i < fb.height; ++i)
+    for (int j = 0; j < fb.width; ++j) {
+      const size_t px = size_t(i) * size_t(fb.width) + size_t(j);
+      if (!std::isfinite(fb.depth[px])) continue;
+      const float* p = &fb.position[3 * px];
+      const double t = fb.distance.empty() ? std::nan("") : double(fb.distance[px]);
+      f(i, j, Imath::V3d(p[0], p[1], p[2]), fb.depth[px], t);
+      ++hits;
+    }
+  return hits;
 }
 
 }  // namespace aperture::test

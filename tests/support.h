@@ -1,7 +1,9 @@
 #pragma once
 // Helpers shared by the test files.
+#include <Imath/ImathVec.h>
 #include <gtest/gtest.h>
 
+#include <functional>
 #include <string>
 
 #include "cameras/params.h"
@@ -64,6 +66,11 @@ class Fnv1a {
 /// Camera parameters from command-line camera flags ("--camera thinlens --eye 0,0,5 ..."),
 /// parsed exactly as `aperture render` parses them (the flags must give --at or --dir).
 CameraParams cameraParamsFromFlags(const std::string& flags);
+
+/// Calls f(i, j, P, Z, T) for every hit pixel of `fb` (finite Z; P world position, T ray
+/// distance, NaN when `fb` has no distance AOV); returns their number.
+int forEachHit(const Framebuffer& fb,
+               const std::function<void(int, int, const Imath::V3d&, double, double)>& f);
 
 }  // namespace aperture::test
 

@@ -116,16 +116,10 @@ std::array<double, 2> projectInput(const InputCamera& c, const Vec3& world) {
 /// camera and the centre of its pixel placed at (j + offset, i + offset).
 double maxProjectionError(const Framebuffer& fb, const InputCamera& c, double offset, int* hits) {
   double worst = 0;
-  *hits = 0;
-  for (int i = 0; i < fb.height; ++i)
-    for (int j = 0; j < fb.width; ++j) {
-      const size_t px = size_t(i) * size_t(fb.width) + size_t(j);
-      if (!std::isfinite(fb.depth[px])) continue;
-      const float* p = &fb.position[3 * px];
-      const auto uv = projectInput(c, {p[0], p[1], p[2]});
-      worst = std::max(worst, std::hypot(uv[0] - (j + offset), uv[1] - (i + offset)));
-      ++*hits;
-    }
+  *hits = test::forEachHit(fb, [&](int i, int j, const Imath::V3d& p, double, double) {
+    const auto uv = projectInput(c, {p.x, p.y, p.z});
+    worst = std::max(worst, std::hypot(uv[0] - (j + offset), uv[1] - (i + offset)));
+  });
   return worst;
 }
 
@@ -534,19 +528,13 @@ TEST(CameraFilesCliExr, APinholeRenderHasAWorldToNdcThatLandsOnPixelCentres) {
   // NDC · (W, H) is pixel (i, j)'s centre (j + ½, i + ½).
   const Framebuffer fb = readExr(exr);
   double worst = 0, worstAtIntegers = 0;
-  int hits = 0;
-  for (int i = 0; i < fb.height; ++i)
-    for (int j = 0; j < fb.width; ++j) {
-      const size_t px = size_t(i) * size_t(fb.width) + size_t(j);
-      if (!std::isfinite(fb.depth[px])) continue;
-      const float* p = &fb.position[3 * px];
-      Imath::V3d n;
-      ndc->value().multVecMatrix(Imath::V3d(p[0], p[1], p[2]), n);
-      const double x = n.x * fb.width, y = n.y * fb.height;
-      worst = std::max(worst, std::hypot(x - (j + 0.5), y - (i + 0.5)));
-      worstAtIntegers = std::max(worstAtIntegers, std::hypot(x - j, y - i));
-      ++hits;
-    }
+  const int hits = test::forEachHit(fb, [&](int i, int j, const Imath::V3d& p, double, double) {
+    Imath::V3d n;
+    ndc->value().multVecMatrix(p, n);
+    const double x = n.x * fb.width, y = n.y * fb.height;
+    worst = std::max(worst, std::hypot(x - (j + 0.5), y - (i + 0.5)));
+    worstAtIntegers = std::max(worstAtIntegers, std::hypot(x - j, y - i));
+  });
   EXPECT_GT(hits, fb.width * fb.height / 10);
   EXPECT_LT(worst, kMaxPixelError);
   EXPECT_GT(worstAtIntegers, 0.4) << "a half-pixel slip must be caught";

@@ -57,21 +57,6 @@ Rendered render(const std::string& name, const std::string& flags) {
   return {readExr(exr), file.header()};
 }
 
-/// Calls f(i, j, P, Z, T) for every hit pixel (finite Z); returns their number.
-int forEachHit(const Framebuffer& fb,
-               const std::function<void(int, int, const Imath::V3d&, double, double)>& f) {
-  int hits = 0;
-  for (int i = 0; i < fb.height; ++i)
-    for (int j = 0; j < fb.width; ++j) {
-      const size_t px = size_t(i) * size_t(fb.width) + size_t(j);
-      if (!std::isfinite(fb.depth[px])) continue;
-      const float* p = &fb.position[3 * px];
-      f(i, j, Imath::V3d(p[0], p[1], p[2]), fb.depth[px], fb.distance[px]);
-      ++hits;
-    }
-  return hits;
-}
-
 /// p · M with the homogeneous divide (Imath's row-vector convention).
 Imath::V3d apply(const Imath::M44d& m, const Imath::V3d& p) {
   Imath::V3d q;
@@ -118,7 +103,7 @@ struct Counts {
 Counts countMatches(const Framebuffer& fb, const Imath::M44d& worldToCamera,
                     const Imath::M44d& worldToNdc) {
   Counts n;
-  n.hits = forEachHit(fb, [&](int i, int j, const Imath::V3d& p, double z, double) {
+  n.hits = test::forEachHit(fb, [&](int i, int j, const Imath::V3d& p, double z, double) {
     const Imath::V3d c = apply(worldToCamera, p);
     n.depth += c.z > 0 && std::abs(c.z - z) <= kMaxDepthError * z;
     const Imath::V3d ndc = apply(worldToNdc, p);
@@ -172,7 +157,7 @@ void expectScreenWindowHoldsThePixels(const Rendered& r) {
   const double hs = ws * r.fb.height / (r.fb.width * double(h.pixelAspectRatio()));
   const double sxPerPx = ws / r.fb.width, syPerPx = hs / r.fb.height;
   int ok = 0;
-  const int hits = forEachHit(r.fb, [&](int i, int j, const Imath::V3d& p, double, double) {
+  const int hits = test::forEachHit(r.fb, [&](int i, int j, const Imath::V3d& p, double, double) {
     const Imath::V3d c = apply(worldToCamera, p);
     const double sx = cx - 0.5 * ws + (j + 0.5) * sxPerPx;
     const double sy = cy + 0.5 * hs - (i + 0.5) * syPerPx;
@@ -243,7 +228,7 @@ void expectParallelCameraSpace(const Rendered& r, double vw, double vh, double t
   const Imath::M44d worldToCamera(Imf::worldToCamera(r.header));
   const double uPerPx = vw / r.fb.width, vPerPx = vh / r.fb.height;
   int ok = 0;
-  const int hits = forEachHit(r.fb, [&](int i, int j, const Imath::V3d& p, double, double) {
+  const int hits = test::forEachHit(r.fb, [&](int i, int j, const Imath::V3d& p, double, double) {
     const Imath::V3d c = apply(worldToCamera, p);
     const double u = -0.5 * vw + (j + 0.5) * uPerPx, v = 0.5 * vh - (i + 0.5) * vPerPx;
     ok += std::abs(c.x - c.z * tanX - u) <= kMaxPixelError * uPerPx &&
@@ -335,7 +320,7 @@ PanoramaProjection fisheyeFromHeader(const Imf::Header& h) {
 int countPanoramaMatches(const Rendered& r, const Imath::M44d& worldToCamera,
                          const PanoramaProjection& project) {
   int ok = 0;
-  forEachHit(r.fb, [&](int i, int j, const Imath::V3d& p, double z, double t) {
+  test::forEachHit(r.fb, [&](int i, int j, const Imath::V3d& p, double z, double t) {
     const Imath::V3d c = apply(worldToCamera, p);
     double x, y;
     ok += project(c, x, y) && std::abs(x - (j + 0.5)) <= kMaxPixelError &&
@@ -352,7 +337,7 @@ void expectPanorama(const Rendered& r, const PanoramaProjection& project, double
   ASSERT_TRUE(Imf::hasWorldToCamera(h));
   EXPECT_NEAR(h.pixelAspectRatio(), pixelAspect, 1e-6 * pixelAspect);
   const Imath::M44d worldToCamera(Imf::worldToCamera(h));
-  const int hits = forEachHit(r.fb, [](int, int, const Imath::V3d&, double, double) {});
+  const int hits = test::forEachHit(r.fb, [](int, int, const Imath::V3d&, double, double) {});
   EXPECT_GT(hits, r.fb.width * r.fb.height / 10);
   EXPECT_EQ(countPanoramaMatches(r, worldToCamera, project), hits);
   // The old −z camera space mirrors every direction front to back.
