@@ -27,7 +27,7 @@ struct RenderArgs {
 };
 
 /// --out, --preview and --preview-range, checked before anything is loaded or rendered.
-PreviewOptions checkRenderOutputs(const RenderArgs& a, AovMask aovs) {
+PreviewOptions checkRenderOutputs(const RenderArgs& a, const AovSet& aovs) {
   checkOutputPath("--out", a.out, OutputKind::Exr);
   PreviewOptions preview;
   if (!a.previewRange.empty()) {
@@ -37,13 +37,13 @@ PreviewOptions checkRenderOutputs(const RenderArgs& a, AovMask aovs) {
   }
   if (a.preview.empty()) return preview;
   checkOutputPath("--preview", a.preview, OutputKind::Preview);
-  checkPreviewable("--preview", a.preview, aovs);
+  checkPreviewable("--preview", a.preview, aovs.mask);
   return preview;
 }
 
 int runRender(const RenderArgs& a) {
   // Everything that can be checked is checked before loading the mesh.
-  const AovMask aovs = parseAovList(a.render.aovs);
+  const AovSet aovs = parseAovSet(a.render.aovs);
   ExrOptions exr;
   exr.compression = parseExrCompression(a.compression);
   exr.halfColor = a.half;

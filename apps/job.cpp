@@ -175,9 +175,9 @@ const Preset* readPreset(const Object& top, Job& job) {
 }
 
 /// "aovs": a comma-separated string or an array of names; default color,depth.
-AovMask readAovs(const Object& top) {
+AovSet readAovs(const Object& top) {
   const json* a = top.find("aovs");
-  if (!a) return parseAovList("color,depth");
+  if (!a) return parseAovSet("color,depth");
   std::string list;
   if (a->is_string()) {
     list = a->get<std::string>();
@@ -190,13 +190,13 @@ AovMask readAovs(const Object& top) {
   } else {
     top.fail("aovs", cat("expected a string or an array of strings, got ", Object::typeName(*a)));
   }
-  AovMask aovs = 0;
+  AovSet aovs;
   try {
-    aovs = parseAovList(list);
+    aovs = parseAovSet(list);
   } catch (const Error& e) {
     top.fail("aovs", e.what());
   }
-  if (aovs == 0) top.fail("aovs", "no AOV requested");
+  if (aovs.empty()) top.fail("aovs", "no AOV requested");
   return aovs;
 }
 

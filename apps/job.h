@@ -33,7 +33,7 @@ struct Job {
   std::string path;                   ///< the job file
   std::vector<MeshPlacement> meshes;  ///< scene.meshes, paths resolved against the job
   std::vector<JobImage> images;       ///< in job order: cameras as listed, path frames ascending
-  AovMask aovs = 0;
+  AovSet aovs;
   int width = 0, height = 0;
   RenderSettings render;  ///< packet, tile, spp
   int threads = 0;        ///< 0 = all cores

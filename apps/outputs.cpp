@@ -112,7 +112,7 @@ void checkJobOutputs(const Job& job, const std::string& outputDirectory,
   const bool previews = !job.previewPattern.empty();
   if (previews) {
     checkOutputName("preview", job.previewPattern, OutputKind::Preview);
-    checkPreviewable("preview", job.previewPattern, job.aovs);
+    checkPreviewable("preview", job.previewPattern, job.aovs.mask);
     checkOutputDirectory("preview", job.previewPattern, previewDirectory);
   }
   for (const JobImage& image : job.images) {
@@ -157,7 +157,7 @@ std::optional<glm::dvec2> depthRangeOfBox(const glm::dvec3& lo, const glm::dvec3
 
 PreviewOptions batchPreviewOptions(const Job& job, const glm::dvec3& lo, const glm::dvec3& hi) {
   PreviewOptions options = job.preview;
-  if (options.depthRange || job.previewPattern.empty() || previewAov(job.aovs) != kAovDepth)
+  if (options.depthRange || job.previewPattern.empty() || previewAov(job.aovs.mask) != kAovDepth)
     return options;
   if (!(lo.x <= hi.x)) return options;
   std::vector<CameraParams> cameras;

@@ -11,7 +11,7 @@
 
 namespace aperture::app {
 
-void checkMemoryBudget(const SceneOptions& o, glm::ivec2 size, AovMask aovs,
+void checkMemoryBudget(const SceneOptions& o, glm::ivec2 size, const AovSet& aovs,
                        uint64_t extraBytesPerPixel) {
   const uint64_t limit = parseMemoryLimit("--max-memory", o.maxMemory);
   if (limit == 0) return;

@@ -11,7 +11,7 @@
 namespace aperture::app {
 
 RenderedView renderView(const Scene& scene, const CameraParams& params,
-                        const RenderSettings& settings, AovMask aovs) {
+                        const RenderSettings& settings, const AovSet& aovs) {
   const auto camera = makeCamera(params, scene.renderOrigin());
   RenderedView view;
   view.fb = Framebuffer(params.width, params.height, aovs);
@@ -23,7 +23,7 @@ RenderedView renderView(const Scene& scene, const CameraParams& params,
 }
 
 ExrMetadata viewMetadata(const RenderedView& view, const std::vector<std::string>& meshNames,
-                         AovMask aovs, const BuildOptions& build, Placement placement) {
+                         const AovSet& aovs, const BuildOptions& build, Placement placement) {
   ExrMetadata meta;
   meta.camera = view.camera;
   meta.renderSeconds = view.stats.seconds;

@@ -24,12 +24,12 @@ struct RenderedView {
 /// Builds the camera of `params` in the scene's render space and renders it into a fresh
 /// framebuffer of the requested AOVs. Throws Error for a bad camera or settings.
 RenderedView renderView(const Scene& scene, const CameraParams& params,
-                        const RenderSettings& settings, AovMask aovs);
+                        const RenderSettings& settings, const AovSet& aovs);
 
 /// The header of a rendered view: camera, render time, meshes, AOVs, BVH quality and
 /// traversal mode (robust or not), placement.
 ExrMetadata viewMetadata(const RenderedView& view, const std::vector<std::string>& meshNames,
-                         AovMask aovs, const BuildOptions& build, Placement placement);
+                         const AovSet& aovs, const BuildOptions& build, Placement placement);
 
 /// Creates the parent directory of `path`; throws Error("<what>: '<path>': cannot create
 /// directory ...").

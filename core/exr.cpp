@@ -424,7 +424,8 @@ bool isCompleteExr(const std::string& path) {
   }
 }
 
-std::vector<std::string> exrChannelNames(AovMask aovs) {
+std::vector<std::string> exrChannelNames(const AovSet& set) {
+  const AovMask aovs = set.mask;
   std::vector<std::string> names;
   if (aovs & kAovColor) names.insert(names.end(), kColorNames, kColorNames + 4);
   if (aovs & kAovDepth) names.push_back("Z");

@@ -50,7 +50,7 @@ bool isCompleteExr(const std::string& path);
 
 /// The channel names writeExr gives the AOVs of `aovs` (R G B A, Z, T, N.X.., P.X.., primID,
 /// geomID), in the order of the AovMask bits.
-std::vector<std::string> exrChannelNames(AovMask aovs);
+std::vector<std::string> exrChannelNames(const AovSet& aovs);
 
 /// An EXR's header, read without decoding any pixel.
 struct ExrHeader {

@@ -248,7 +248,8 @@ MeshSizeEstimate estimateMeshSize(const std::string& spec) {
   return m;
 }
 
-uint64_t framebufferBytesPerPixel(AovMask aovs) {
+uint64_t framebufferBytesPerPixel(const AovSet& set) {
+  const AovMask aovs = set.mask;
   uint64_t b = 0;
   if (aovs & kAovColor) b += 16;
   if (aovs & kAovDepth) b += 4;
@@ -257,6 +258,9 @@ uint64_t framebufferBytesPerPixel(AovMask aovs) {
   if (aovs & kAovPosition) b += 12;
   if (aovs & kAovPrimId) b += 4;
   if (aovs & kAovGeomId) b += 4;
+  if (aovs & kAovShadingNormal) b += 12;
+  b += 4 * set.properties.size();
+  b += 16 * uint64_t(set.layers);
   return b;
 }
 
@@ -283,7 +287,7 @@ std::string MemoryEstimate::describe() const {
 }
 
 MemoryEstimate estimateMemory(const std::vector<std::string>& meshSpecs, uint64_t width,
-                              uint64_t height, AovMask aovs, uint64_t extraBytesPerPixel) {
+                              uint64_t height, const AovSet& aovs, uint64_t extraBytesPerPixel) {
   MemoryEstimate e;
   for (const std::string& spec : meshSpecs) {
     const MeshSizeEstimate m = estimateMeshSize(spec);

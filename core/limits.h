@@ -26,7 +26,7 @@ struct MeshSizeEstimate {
 MeshSizeEstimate estimateMeshSize(const std::string& spec);
 
 /// Bytes per pixel of the requested AOVs' framebuffers.
-uint64_t framebufferBytesPerPixel(AovMask aovs);
+uint64_t framebufferBytesPerPixel(const AovSet& aovs);
 
 /// Bytes of Embree BVH per triangle assumed by the estimate (a high-quality build with
 /// triangle4 leaves measures 70-80 bytes; low and medium builds use less).
@@ -51,7 +51,7 @@ struct MemoryEstimate {
 /// Estimates the memory of rendering `meshSpecs` at width x height with `aovs`;
 /// `extraBytesPerPixel` covers outputs made beside the framebuffer (a PNG preview: 4).
 MemoryEstimate estimateMemory(const std::vector<std::string>& meshSpecs, uint64_t width,
-                              uint64_t height, AovMask aovs, uint64_t extraBytesPerPixel = 0);
+                              uint64_t height, const AovSet& aovs, uint64_t extraBytesPerPixel = 0);
 
 /// MemAvailable from /proc/meminfo, in bytes. Throws Error if it cannot be read.
 uint64_t availableMemoryBytes();

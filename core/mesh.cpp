@@ -18,6 +18,12 @@ std::string lowerExtension(const std::string& path) {
   return toLowerAscii(path.substr(dot));
 }
 
+const MeshProperty* Mesh::property(PropertyDomain domain, const std::string& propertyName) const {
+  for (const MeshProperty& p : properties)
+    if (p.domain == domain && p.name == propertyName) return &p;
+  return nullptr;
+}
+
 void Mesh::bounds(glm::vec3& lo, glm::vec3& hi) const {
   lo = glm::vec3(std::numeric_limits<float>::max());
   hi = glm::vec3(-std::numeric_limits<float>::max());

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "core/framebuffer.h"
+
 namespace aperture {
 
 /// Embree reads up to 16 bytes at the address of the last vertex; positions carry this many
@@ -23,6 +25,17 @@ struct MeshStats {
   size_t degenerateTriangles = 0;  ///< triangles with a repeated index (kept; Embree skips them)
 };
 
+/// An integer property of faces or vertices (PLY), kept only when LoadOptions asks for it.
+/// Signed values are stored as their 32-bit two's complement (-1 becomes 0xFFFFFFFF, the
+/// value of a miss: documented for labels that use -1 as "none").
+struct MeshProperty {
+  PropertyDomain domain = PropertyDomain::Face;
+  std::string name;
+  /// Face domain: one value per triangle (after triangulation: a polygon's value on each of
+  /// its triangles, and dropped with a dropped triangle). Vertex domain: one per vertex.
+  std::vector<uint32_t> values;
+};
+
 /// An indexed triangle mesh. World position of vertex k is anchor + positions[3k..3k+2].
 /// The anchor is chosen at load (the bounding-box centre in camera-relative mode, the origin
 /// in world-space mode) and kept in double so far-from-origin meshes keep float precision.
@@ -35,12 +48,20 @@ struct Mesh {
   /// Optional: loaders of double-precision sources (PLY double properties, procedural scenes)
   /// fill this instead of `positions`; finishMesh() anchors it in double and clears it.
   std::vector<double> positionsDouble;
+  /// Per-vertex normals (3 per vertex, as in the file, not normalised), only when
+  /// LoadOptions::vertexNormals and the file has them (PLY nx ny nz, OBJ vn); else empty.
+  /// Transformed with the positions (by the inverse transpose) in finishMesh.
+  std::vector<float> vertexNormals;
+  /// The integer properties LoadOptions::properties asked for, in that order.
+  std::vector<MeshProperty> properties;
   MeshStats stats;
 
   size_t triangleCount() const { return indices.size() / 3; }
   glm::vec3 vertex(size_t k) const {
     return {positions[3 * k], positions[3 * k + 1], positions[3 * k + 2]};
   }
+  /// The property of `domain` named `name`, or nullptr.
+  const MeshProperty* property(PropertyDomain domain, const std::string& propertyName) const;
   /// Bounds of the finite vertices relative to the anchor; empty mesh gives min > max.
   void bounds(glm::vec3& lo, glm::vec3& hi) const;
 };
@@ -59,6 +80,12 @@ struct LoadOptions {
   /// Optional placement applied in double after scale and translate:
   /// x' = transform · (scale * x + translate, 1). Must be affine (last row 0 0 0 1).
   std::optional<glm::dmat4> transform;
+  /// Integer face/vertex properties to keep (requested AOVs "face.NAME", "vertex.NAME").
+  /// A name the file does not have is an Error naming the file and listing the integer
+  /// properties it has; a procedural mesh or an OBJ has none. Nothing is stored unasked.
+  std::vector<PropertyAov> properties;
+  /// Keep per-vertex normals when the file has them (the shading-normal AOV asks for them).
+  bool vertexNormals = false;
 };
 
 /// Loads `spec`: a path ending in .ply or .obj (case-insensitive), or "procedural:NAME?k=v&k=v"

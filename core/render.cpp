@@ -10,8 +10,28 @@
 #include "core/error.h"
 #include "core/packet.h"
 #include "core/parallel.h"
+#include "core/spelling.h"
 
 namespace aperture {
+
+NormalFrame parseNormalFrame(const std::string& name) {
+  for (NormalFrame f : {NormalFrame::World, NormalFrame::OpenCV, NormalFrame::OpenGL})
+    if (name == normalFrameName(f)) return f;
+  throw Error(cat("unknown normal frame '", name, "'",
+                  didYouMean(name, {"world", "opencv", "opengl"}),
+                  " (known: world, opencv, opengl)"));
+}
+
+const char* normalFrameName(NormalFrame frame) {
+  switch (frame) {
+    case NormalFrame::OpenCV:
+      return "opencv";
+    case NormalFrame::OpenGL:
+      return "opengl";
+    default:
+      return "world";
+  }
+}
 
 void validateRenderSettings(const RenderSettings& s) {
   if (s.packetWidth != 1 && s.packetWidth != 4 && s.packetWidth != 8 && s.packetWidth != 16)

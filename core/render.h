@@ -1,6 +1,9 @@
 #pragma once
 // The tiled, multithreaded frame loop: camera packets -> rtcIntersectN -> AOV framebuffers.
 #include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
 
 #include "core/camera.h"
 #include "core/framebuffer.h"
@@ -8,10 +11,18 @@
 
 namespace aperture {
 
+/// The frame the normal and shading-normal AOVs are written in. World: world space. OpenCV:
+/// the camera's axes x right, y down, z forward (along the view direction). OpenGL: x right,
+/// y up, z backwards (the lecture's U, V, W).
+enum class NormalFrame { World, OpenCV, OpenGL };
+NormalFrame parseNormalFrame(const std::string& name);  ///< world|opencv|opengl, else Error
+const char* normalFrameName(NormalFrame frame);
+
 struct RenderSettings {
   int packetWidth = 16;  ///< 1, 4, 8 or 16 rays per rtcIntersectN call (blocks 1x1, 2x2, 4x2, 4x4)
   int tileSize = 32;     ///< tile edge in pixels (a multiple of 4); tiles are the unit of TBB work
   int spp = 1;           ///< samples per pixel (must match the camera's)
+  NormalFrame normalFrame = NormalFrame::World;
 };
 
 struct RenderStats {
@@ -28,6 +39,18 @@ struct RenderStats {
 /// worker. Throws Error for bad settings.
 RenderStats renderImage(const Scene& scene, const Camera& camera, const RenderSettings& settings,
                         Framebuffer& fb);
+
+/// Renders several frames in one parallel loop over (camera, tile), so small images keep
+/// every core busy: frame k of `cameras` into `framebuffers[k]` (sizes as renderImage
+/// requires; spp from each camera's description). Each frame is bit-identical to renderImage
+/// of it alone; settings.spp is ignored (each camera's own spp is used). `progress`, when set,
+/// is called with the number of frames finished so far after each frame completes, from
+/// whichever thread finished it, never two calls at once. Returns each frame's stats
+/// (seconds: from the call's start to that frame's completion).
+std::vector<RenderStats> renderImages(const Scene& scene, const std::vector<const Camera*>& cameras,
+                                      const RenderSettings& settings,
+                                      std::vector<Framebuffer>& framebuffers,
+                                      const std::function<void(size_t)>& progress = {});
 
 /// Checks settings (packet width in {1,4,8,16}, tile size a positive multiple of 4 up to
 /// 4096); throws Error naming the bad value. spp is the camera's, checked by the camera

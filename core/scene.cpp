@@ -182,6 +182,7 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
   scene_ = newScene();
   std::map<const Mesh*, RTCScene> built;  // sub-scene of each instanced mesh
   normalFromMesh_.assign(objects.size(), glm::mat3(1.0f));
+  for (const SceneObject& o : objects) objectMeshes_.push_back(o.mesh);
   for (const SceneObject& o : objects)
     if (o.subset) primIdMaps_.assign(objects.size(), nullptr);
   for (size_t k = 0; k < objects.size(); ++k) {

@@ -102,6 +102,9 @@ class Scene {
   /// World-space normal of an instanced hit: Embree reports Ng in the mesh's space.
   /// Indexed by the top-level geomID (hit.instID[0]).
   const glm::mat3& normalFromMesh(unsigned object) const { return normalFromMesh_[object]; }
+  /// The mesh of object `object` (the top-level geomID, or the instance's): its properties
+  /// and vertex normals, indexed by originalPrimId().
+  const Mesh& objectMesh(unsigned object) const { return *objectMeshes_[object]; }
   /// True when some object was built from a TriangleSubset, so Embree's primID is an index
   /// into the subset and must go through originalPrimId().
   bool remapsPrimIds() const { return !primIdMaps_.empty(); }
@@ -120,6 +123,7 @@ class Scene {
   glm::dvec3 renderOrigin_{0.0};
   size_t instanced_ = 0;
   std::vector<glm::mat3> normalFromMesh_;
+  std::vector<const Mesh*> objectMeshes_;    ///< per object
   std::vector<const uint32_t*> primIdMaps_;  ///< per object; empty when nothing is culled
   std::vector<RTCScene> subScenes_;
 };
