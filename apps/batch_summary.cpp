@@ -27,6 +27,7 @@ nlohmann::json imageEntry(const ImageResult& r) {
                       {"mrays_per_s", r.mrays()},
                       {"eye", {eye.x, eye.y, eye.z}}};
   if (!image.preview.empty()) e["preview"] = image.preview;
+  e["files"] = image.files;
   if (!r.staleReason.empty()) e["stale"] = r.staleReason;
   if (!r.error.empty()) e["error"] = r.error;
   return e;

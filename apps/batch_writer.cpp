@@ -7,10 +7,11 @@
 namespace aperture::app {
 
 void writeImageFiles(ImageResult& r, const RenderedView& view, const ExrMetadata& meta,
-                     const ExrOptions& options, const PreviewOptions& preview, bool cameraSidecar) {
+                     const ExrOptions& options, const PreviewOptions& preview, bool cameraSidecar,
+                     bool writeExr, const DatasetWriteOptions& dataset) {
   try {
-    writeViewOutputs(view, meta, options, r.image->output, r.image->preview, preview,
-                     cameraSidecar);
+    writeViewOutputs(view, meta, options, writeExr ? r.image->output : std::string(),
+                     r.image->preview, preview, cameraSidecar, r.image->datasets, dataset);
     r.status = ImageStatus::Ok;
   } catch (const std::exception& e) {
     r.status = ImageStatus::Failed;

@@ -13,13 +13,15 @@
 
 namespace aperture::app {
 
-/// Writes `r`'s preview (when the job has one, with `preview`), its camera sidecar (with
-/// `cameraSidecar`) and then its EXR (header `meta`) through writeViewOutputs, and sets r.status to
-/// Ok, or to Failed with r.error when either write throws: a failed preview leaves no new EXR, and
+/// Writes `r`'s preview (when the job has one, with `preview`), its dataset files (with
+/// `dataset`), its camera sidecar (with `cameraSidecar`) and then its EXR (header `meta`; none
+/// unless `writeExr`) through writeViewOutputs, and sets r.status to Ok, or to Failed with
+/// r.error when a write throws: a failed preview or dataset file leaves no new EXR, and
 /// --resume renders it again.
 void writeImageFiles(ImageResult& r, const RenderedView& view, const ExrMetadata& meta,
                      const ExrOptions& options, const PreviewOptions& preview,
-                     bool cameraSidecar = false);
+                     bool cameraSidecar = false, bool writeExr = true,
+                     const DatasetWriteOptions& dataset = {});
 
 /// Encodes and writes rendered images. Threaded, it holds at most `capacity` images waiting,
 /// so the renderer blocks instead of piling up framebuffers; unthreaded, push() writes inline.

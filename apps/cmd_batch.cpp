@@ -83,13 +83,12 @@ void checkJobMemory(const Job& job, const std::string& maxMemory) {
   checkMemoryLimit(estimateMemory(specs, pixels, 1, 0, perPixel), limit, "--max-memory", maxMemory);
 }
 
-/// The outputs and previews of the plan's images (what the temporary sweep looks after).
+/// Every file of the plan's images (EXR, dataset files, previews) (what the temporary sweep looks
+/// after).
 std::vector<std::string> plannedFiles(const BatchPlan& plan) {
   std::vector<std::string> files;
-  for (const ImageResult& r : plan.results) {
-    files.push_back(r.image->output);
-    if (!r.image->preview.empty()) files.push_back(r.image->preview);
-  }
+  for (const ImageResult& r : plan.results)
+    files.insert(files.end(), r.image->files.begin(), r.image->files.end());
   return files;
 }
 
@@ -184,7 +183,7 @@ double renderImages(BatchPlan& plan, const LoadedScene& scene, const BatchArgs& 
     const auto t0 = BatchClock::now();
     writeImageFiles(*task.result, task.view,
                     viewMetadata(task.view, scene.names, job.aovs, job.build, job.placement),
-                    job.exr, preview, job.cameraFiles);
+                    job.exr, preview, job.cameraFiles, job.writesExr, job.dataset);
     task.result->writeSeconds = secondsSince(t0);
     task.view = RenderedView();
     progress.finished(*task.result);
@@ -341,9 +340,20 @@ Command addBatchCommand(CLI::App& app) {
       ->group(group)
       ->capture_default_str();
   sub->add_option("--spp", cf.spp, "Samples per pixel")->group(group);
+  sub->add_option("--format", cf.format,
+                  "exr: every AOV in DIR/<image name>.exr; png (16-bit depth), pfm, npy, tif: "
+                  "the one AOV of --aov in DIR/<image name>.<format>")
+      ->group(group)
+      ->capture_default_str();
+  sub->add_option("--depth-scale", cf.depthScale,
+                  "16-bit PNG: value = round(depth * S), 0 for misses and out of range "
+                  "(default 1000: millimetres per metre)")
+      ->group(group)
+      ->type_name("S");
   sub->add_flag("--preview", cf.preview, "Also write DIR/<image name>.png")->group(group);
   sub->add_flag("--resume", args->resume,
-                "Skip images whose EXR (and preview) is complete and matches the job; remove "
+                "Skip images whose EXR is complete and matches the job and whose other files "
+                "(preview, dataset files) exist; remove "
                 "temporaries of this shard's files left by processes that no longer exist");
   sub->add_option("--shard", args->shard, kShardHelp);
   sub->add_option("--summary", args->summary,

@@ -1,4 +1,5 @@
-// `aperture render`: one frame of a mesh from one camera into a multi-channel EXR.
+// `aperture render`: one frame of a mesh from one camera into a multi-channel EXR, or one AOV
+// into a dataset file (16-bit PNG depth, PFM, NPY, float TIFF) when --out has that extension.
 #include <cstdio>
 #include <vector>
 
@@ -10,6 +11,7 @@
 #include "apps/scene_setup.h"
 #include "apps/view.h"
 #include "cameras/registry.h"
+#include "core/dataset_image.h"
 #include "core/error.h"
 #include "core/exr.h"
 #include "core/image.h"
@@ -24,11 +26,30 @@ struct RenderArgs {
   RenderOptions render;
   std::string out = "out/render.exr", preview, previewRange, compression = "zip", preset;
   bool half = false, quiet = false, cameraSidecar = false;
+  double depthScale = 1000.0;
 };
 
-/// --out, --preview and --preview-range, checked before anything is loaded or rendered.
+/// --out with a dataset extension: the one AOV requested, written alone in that format.
+/// Refuses several AOVs, and an AOV the format cannot hold, before anything is rendered.
+std::vector<DatasetOutput> datasetOutputsOf(const RenderArgs& a, const AovSet& aovs) {
+  const std::optional<DatasetFormat> format = datasetFormatOf(a.out);
+  if (!format) return {};
+  const std::string names = aovListString(aovs);
+  if (names.find(',') != std::string::npos || aovs.layers > 0)
+    throw Error(cat("--out: '", a.out, "': a ", datasetFormatName(*format),
+                    " file holds one AOV, but the AOVs are ", names,
+                    "; give one with --aov (e.g. --aov depth), write them all to an EXR (--out "
+                    "NAME.exr), render once per AOV, or use a batch job with \"outputs\" "
+                    "(docs/batch.md)"));
+  checkDatasetOutput("--out", a.out, names);
+  return {{names, a.out}};
+}
+
+/// --out, --depth-scale, --preview and --preview-range, checked before anything is loaded or
+/// rendered.
 PreviewOptions checkRenderOutputs(const RenderArgs& a, const AovSet& aovs) {
-  checkOutputPath("--out", a.out, OutputKind::Exr);
+  checkOutputPath("--out", a.out, datasetFormatOf(a.out) ? OutputKind::Dataset : OutputKind::Exr);
+  checkDepthScale("--depth-scale", a.depthScale);
   PreviewOptions preview;
   if (!a.previewRange.empty()) {
     preview.depthRange = parsePreviewRange("--preview-range", a.previewRange);
@@ -52,6 +73,7 @@ int runRender(const RenderArgs& a) {
       resolveCommandCamera(given, a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0));
   const RenderSettings settings = a.render.settings(unframed.spp);
   checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs, a.preview.empty() ? 0 : 4);
+  const std::vector<DatasetOutput> datasets = datasetOutputsOf(a, aovs);
   const PreviewOptions preview = checkRenderOutputs(a, aovs);
   if (given.has("eye") || unframed.worldToCamera || unframed.cameraToWorld) makeCamera(unframed);
 
@@ -73,7 +95,10 @@ int runRender(const RenderArgs& a) {
   for (const Mesh& m : loaded.meshes) meshNames.push_back(m.name);
   const ExrMetadata meta =
       viewMetadata(view, meshNames, aovs, a.scene.buildOptions(), a.scene.loadOptions().placement);
-  writeViewOutputs(view, meta, exr, a.out, a.preview, preview, a.cameraSidecar);
+  DatasetWriteOptions dataset;
+  dataset.depthScale = a.depthScale;
+  writeViewOutputs(view, meta, exr, datasets.empty() ? a.out : std::string(), a.preview, preview,
+                   a.cameraSidecar, datasets, dataset);
   if (!a.quiet && !a.preview.empty())
     std::fprintf(stderr, "aperture: wrote %s\n", a.preview.c_str());
   if (!a.quiet) std::fprintf(stderr, "aperture: wrote %s\n", a.out.c_str());
@@ -84,15 +109,23 @@ int runRender(const RenderArgs& a) {
 
 Command addRenderCommand(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
-  CLI::App* sub = app.add_subcommand("render", "Render one frame to a multi-channel EXR");
+  CLI::App* sub = app.add_subcommand(
+      "render", "Render one frame to a multi-channel EXR (or one AOV to a dataset file)");
   addSceneOptions(*sub, args->scene);
   args->camera.add(*sub);
   addRenderOptions(*sub, args->render);
-  sub->add_option("--out", args->out, "Output EXR path, must end in .exr (written atomically)")
+  sub->add_option("--out", args->out,
+                  "Output path, written atomically: .exr holds every AOV; .png (16-bit depth), "
+                  ".pfm, .npy, .tif/.tiff hold the one AOV --aov names")
+      ->capture_default_str();
+  sub->add_option("--depth-scale", args->depthScale,
+                  "16-bit PNG --out: value = round(depth * S), 0 for misses and out of range (a "
+                  "warning counts them); 1000 = millimetres per metre, 5000 for TUM")
       ->capture_default_str();
   sub->add_option("--preview", args->preview,
                   "Also write an opaque 8-bit preview (.png .jpg .jpeg .tif .tiff .bmp .tga "
-                  ".ppm) of color, else depth, normal, primid or geomid; written before the EXR");
+                  ".ppm) of color, else depth, normal, primid or geomid, for looking at (--out "
+                  "x.png is the 16-bit depth data); written before the EXR");
   sub->add_option("--preview-range", args->previewRange,
                   "NEAR,FAR: a depth preview maps depth NEAR to white and FAR to black, clamped "
                   "(default: the image's own nearest and farthest depth)");

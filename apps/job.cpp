@@ -1,6 +1,7 @@
 #include "apps/job.h"
 
 #include <algorithm>
+#include <cctype>
 #include <climits>
 #include <cmath>
 #include <filesystem>
@@ -19,7 +20,9 @@
 #include "apps/presets.h"
 #include "cameras/calibrated.h"
 #include "cameras/registry.h"
+#include "core/dataset_image.h"
 #include "core/error.h"
+#include "core/mesh.h"
 #include "core/units.h"
 
 namespace aperture::app {
@@ -89,6 +92,11 @@ glm::dmat4 parseMatrix(const Object& parent, const char* key) {
   const double det = glm::determinant(glm::dmat3(m));
   if (!std::isfinite(det) || std::abs(det) < 1e-300) parent.fail(where, "matrix is singular");
   return m;
+}
+
+std::string lowerCase(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
 }
 
 bool isProcedural(const std::string& spec) { return spec.rfind("procedural:", 0) == 0; }
@@ -218,9 +226,89 @@ CameraParams readCameraDefaults(const Object& top, const Preset* preset) {
   }
 }
 
-void readOutputSettings(const Object& top, const Preset* preset, Job& job) {
-  if (!top.has("output")) top.fail("output", "required key is missing");
-  job.outputPattern = *top.string("output");
+/// The "aov" of an "outputs" entry: a string, or (for an EXR) an array of strings.
+std::string outputAovText(const Object& entry) {
+  const json* a = entry.find("aov");
+  if (!a) return "all";
+  if (a->is_string()) return a->get<std::string>();
+  if (!a->is_array()) entry.fail(entry.keyPath("aov"), "expected an AOV name or a list of them");
+  std::string list;
+  for (size_t k = 0; k < a->size(); ++k) {
+    if (!(*a)[k].is_string())
+      entry.fail(indexPath(entry.keyPath("aov"), k), "expected an AOV name (a string)");
+    list += (list.empty() ? "" : ",") + (*a)[k].get<std::string>();
+  }
+  return list;
+}
+
+/// Refuses an AOV the job does not render: outputs name AOVs of "aovs", they add none.
+void checkAmongJobAovs(const Object& entry, const AovSet& wanted, const AovSet& job) {
+  bool among = (wanted.mask & ~job.mask) == 0;
+  for (const PropertyAov& p : wanted.properties)
+    among =
+        among && std::find(job.properties.begin(), job.properties.end(), p) != job.properties.end();
+  if (!among)
+    entry.fail(entry.keyPath("aov"), cat("'", aovListString(wanted), "' is not among the job's ",
+                                         "\"aovs\" (", aovListString(job), "); add it there"));
+}
+
+/// One "outputs" entry: {"aov": NAME, "path": PATTERN}. A .exr path is the job's EXR (its
+/// "aov" is "all" or every AOV of the job: an EXR holds them all); any other path is a
+/// dataset file of one AOV.
+void readOutputEntry(const Object& entry, const std::string& baseDir, Job& job) {
+  if (!entry.has("path")) entry.fail(entry.keyPath("path"), "required key is missing");
+  const std::string pattern = *entry.string("path");
+  const std::string aovText = outputAovText(entry);
+  AovSet wanted;
+  try {
+    wanted = aovText == "all" ? job.aovs : parseAovSet(aovText);
+  } catch (const Error& e) {
+    entry.fail(entry.keyPath("aov"), e.what());
+  }
+  checkAmongJobAovs(entry, wanted, job.aovs);
+  if (!datasetFormatOf(pattern)) {
+    if (lowerExtension(pattern) != ".exr")
+      entry.fail(entry.keyPath("path"), cat("'", pattern, "': unknown extension; supported: .exr ",
+                                            join(datasetExtensions(), " ")));
+    if (!job.outputPattern.empty())
+      entry.fail(entry.keyPath("path"),
+                 "the job already writes an EXR (\"output\" or an "
+                 "earlier entry); give one");
+    if (!(wanted == job.aovs))
+      entry.fail(entry.keyPath("aov"),
+                 cat("an EXR holds every AOV of the job (", aovListString(job.aovs),
+                     "): give \"all\"; write ", "single AOVs as .npy, .tif, .pfm or .png"));
+    job.outputPattern = pattern;
+    return;
+  }
+  if (aovText == "all" || aovText.find(',') != std::string::npos)
+    entry.fail(entry.keyPath("aov"),
+               cat("'", aovText, "': a ", datasetFormatName(*datasetFormatOf(pattern)),
+                   " file holds one AOV; give one entry per AOV"));
+  job.datasets.push_back({aovText, pattern, resolve(baseDir, patternDirectory(pattern))});
+}
+
+void readOutputSettings(const Object& top, const Preset* preset, const std::string& baseDir,
+                        Job& job) {
+  if (!top.has("output") && !top.has("outputs"))
+    top.fail("output", "required key is missing (give \"output\" or \"outputs\")");
+  job.outputPattern = top.string("output").value_or("");
+  if (top.has("outputs")) {
+    const json& entries = top.array("outputs");
+    if (entries.empty()) top.fail("outputs", "needs at least one entry");
+    for (size_t k = 0; k < entries.size(); ++k)
+      readOutputEntry(Object(top.file(), indexPath("outputs", k), entries[k], {"aov", "path"}),
+                      baseDir, job);
+  }
+  job.writesExr = !job.outputPattern.empty();
+  if (top.has("depth_scale")) {
+    job.dataset.depthScale = *top.number("depth_scale");
+    try {
+      checkDepthScale("depth_scale", job.dataset.depthScale);
+    } catch (const Error& e) {
+      top.fail("depth_scale", e.what());
+    }
+  }
   job.previewPattern = top.string("preview").value_or("");
   try {
     job.exr.compression = parseExrCompression(
@@ -308,6 +396,24 @@ std::string expandFor(const Object& top, const char* key, const std::string& pat
   }
 }
 
+/// The files of one image: the EXR, dataset and preview patterns expanded, and the list of
+/// every file in writing order.
+void expandImageFiles(const Object& top, const std::string& baseDir, const Job& job,
+                      JobImage& image, const std::string& imageName = "") {
+  const std::string& camera = image.camera;
+  if (job.writesExr)
+    image.output =
+        expandFor(top, "output", job.outputPattern, baseDir, camera, image.frame, imageName);
+  for (const JobDatasetOutput& d : job.datasets)
+    image.datasets.push_back(
+        {d.aov, expandFor(top, "outputs", d.pattern, baseDir, camera, image.frame, imageName)});
+  if (!job.writesExr) image.output = image.datasets.front().path;
+  if (!job.previewPattern.empty())
+    image.preview =
+        expandFor(top, "preview", job.previewPattern, baseDir, camera, image.frame, imageName);
+  image.files = viewFilePaths(job.writesExr ? image.output : "", image.preview, image.datasets);
+}
+
 /// "cameras": {"from": PATH, "images": [NAME, ...]}: every image of a camera file (or those
 /// listed, in the order listed), each a calibrated camera named by its image name.
 void readCameraFileImages(const Object& top, const CameraParams& defaults,
@@ -336,10 +442,7 @@ void readCameraFileImages(const Object& top, const CameraParams& defaults,
       image.camera = im->name;
       image.params = resolveCameraParams(imageParamSet(file, *im), defaults);
       calibratedSensorOf(image.params);  // the lens is checked now; its table is built later
-      image.output = expandFor(top, "output", job.outputPattern, baseDir, im->name, 0, im->name);
-      if (!job.previewPattern.empty())
-        image.preview =
-            expandFor(top, "preview", job.previewPattern, baseDir, im->name, 0, im->name);
+      expandImageFiles(top, baseDir, job, image, im->name);
       job.images.push_back(std::move(image));
     }
   } catch (const Error& e) {
@@ -366,9 +469,7 @@ void readCameras(const Object& top, const CameraParams& defaults, const std::str
       image.camera = cam.name;
       image.frame = f;
       image.params = p;
-      image.output = expandFor(top, "output", job.outputPattern, baseDir, cam.name, f);
-      if (!job.previewPattern.empty())
-        image.preview = expandFor(top, "preview", job.previewPattern, baseDir, cam.name, f);
+      expandImageFiles(top, baseDir, job, image);
       job.images.push_back(std::move(image));
     }
   }
@@ -386,7 +487,8 @@ void checkOutputs(const Object& top, const std::string& baseDir, Job& job) {
     if (job.previewPattern.empty()) top.fail("preview_range", "needs a \"preview\" pattern");
     job.preview.depthRange = *range;
   }
-  job.outputDirectory = resolve(baseDir, patternDirectory(job.outputPattern));
+  job.outputDirectory = job.writesExr ? resolve(baseDir, patternDirectory(job.outputPattern))
+                                      : job.datasets.front().directory;
   try {
     checkJobOutputs(job, job.outputDirectory,
                     resolve(baseDir, patternDirectory(job.previewPattern)));
@@ -395,14 +497,15 @@ void checkOutputs(const Object& top, const std::string& baseDir, Job& job) {
   }
   std::map<std::string, const JobImage*> used;
   for (const JobImage& f : job.images) {
-    for (const std::string* out : {&f.output, &f.preview}) {
-      if (out->empty()) continue;
-      const char* key = out == &f.output ? "output" : "preview";
-      auto [it, fresh] = used.emplace(*out, &f);
+    for (const std::string& out : f.files) {
+      const char* key = out == f.preview                   ? "preview"
+                        : job.writesExr && out == f.output ? "output"
+                                                           : "outputs";
+      auto [it, fresh] = used.emplace(out, &f);
       if (!fresh)
         top.fail(key, cat("camera '", f.camera, "' frame ", f.frame, " and camera '",
-                          it->second->camera, "' frame ", it->second->frame, " both write '", *out,
-                          "' (use {camera} and {frame} in the pattern)"));
+                          it->second->camera, "' frame ", it->second->frame, " both write '", out,
+                          "' (use {camera} and {frame}, or {image}, in the patterns)"));
     }
   }
 }
@@ -411,9 +514,10 @@ void checkOutputs(const Object& top, const std::string& baseDir, Job& job) {
 
 Job parseJobText(const std::string& text, const std::string& name, const std::string& baseDir) {
   const json root = parseJsonText(text, name);
-  const Object top(name, "", root,
-                   {"scene", "cameras", "aovs", "size", "spp", "output", "preview", "preview_range",
-                    "compression", "half", "performance", "preset", "camera_files"});
+  const Object top(
+      name, "", root,
+      {"scene", "cameras", "aovs", "size", "spp", "output", "outputs", "depth_scale", "preview",
+       "preview_range", "compression", "half", "performance", "preset", "camera_files"});
   Job job;
   job.path = name;
   const Preset* preset = readPreset(top, job);
@@ -422,7 +526,7 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
   job.width = defaults.width;
   job.height = defaults.height;
   job.render.spp = defaults.spp;
-  readOutputSettings(top, preset, job);
+  readOutputSettings(top, preset, baseDir, job);
   readPerformance(top, job);
   readScene(top, baseDir, job);
   readCameras(top, defaults, baseDir, job);
@@ -436,10 +540,25 @@ Job cameraFileJob(const CameraFileBatch& b) {
   if (b.outDir.empty()) throw Error("batch --cameras: give the output folder with --out DIR");
   json meshes = json::array();
   for (const std::string& m : b.meshes) meshes.push_back({{"path", m}});
-  json job = {{"scene", {{"meshes", meshes}}},
-              {"cameras", {{"from", b.cameras}}},
-              {"aovs", b.aovs},
-              {"output", (fs::path(b.outDir) / "{image}.exr").generic_string()}};
+  json job = {
+      {"scene", {{"meshes", meshes}}}, {"cameras", {{"from", b.cameras}}}, {"aovs", b.aovs}};
+  const std::string format = lowerCase(b.format);
+  const std::string pattern = (fs::path(b.outDir) / ("{image}." + format)).generic_string();
+  if (format == "exr") {
+    job["output"] = pattern;
+  } else {
+    if (!datasetFormatOf(pattern))
+      throw Error(cat(
+          "batch --format: '", b.format, "': unknown format (known: exr ",
+          join(datasetExtensions(), " ", [](const std::string& e) { return e.substr(1); }), ")"));
+    if (b.aovs.find(',') != std::string::npos || b.aovs == "all")
+      throw Error(cat("batch --format ", format, ": writes one AOV per image, --aov names '",
+                      b.aovs,
+                      "'; give one AOV, or use --format exr, or a job file with \"outputs\" for "
+                      "several (docs/batch.md)"));
+    job["outputs"] = json::array({{{"aov", b.aovs}, {"path", pattern}}});
+  }
+  if (b.depthScale) job["depth_scale"] = *b.depthScale;
   if (!b.images.empty()) job["cameras"]["images"] = b.images;
   if (b.spp) job["spp"] = *b.spp;
   if (b.preview) job["preview"] = (fs::path(b.outDir) / "{image}.png").generic_string();

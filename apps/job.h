@@ -9,7 +9,9 @@
 #include "apps/camera_paths.h"
 #include "apps/job_camera.h"
 #include "apps/scene_setup.h"
+#include "apps/view.h"
 #include "cameras/params.h"
+#include "core/dataset_image.h"
 #include "core/exr.h"
 #include "core/framebuffer.h"
 #include "core/image.h"
@@ -24,8 +26,20 @@ struct JobImage {
   std::string camera;   ///< the camera's name
   int frame = 0;        ///< frame number within the camera (0 for a fixed camera)
   CameraParams params;  ///< complete parameters (size and spp included)
-  std::string output;   ///< EXR path, pattern expanded and resolved
-  std::string preview;  ///< preview path, or "" when the job has no preview pattern
+  /// The image's main file, pattern expanded and resolved: its EXR, or, for a job that writes
+  /// no EXR (Job::writesExr), its first "outputs" file. What logs and resume messages name.
+  std::string output;
+  std::string preview;                  ///< preview path, or "" when the job has no preview pattern
+  std::vector<DatasetOutput> datasets;  ///< the "outputs" entries that are not EXR, expanded
+  /// Every file the image writes, in the order writeViewOutputs writes them (viewFilePaths).
+  std::vector<std::string> files;
+};
+
+/// A non-EXR entry of the job's "outputs": one AOV of every image in a dataset format.
+struct JobDatasetOutput {
+  std::string aov;        ///< one AOV, among the job's "aovs"
+  std::string pattern;    ///< as written, with placeholders
+  std::string directory;  ///< the pattern's directory up to the first placeholder, resolved
 };
 
 /// A parsed and fully validated job.
@@ -47,8 +61,13 @@ struct Job {
   /// run, a COLMAP text model of every image rendered (<output directory>/sparse). Default:
   /// on for cameras from a camera file, off otherwise.
   bool cameraFiles = false;
-  std::string outputPattern;   ///< as written in the job file
-  std::string previewPattern;  ///< as written; "" for none
+  /// The job writes an EXR of every AOV per image ("output", or an "outputs" entry ending in
+  /// .exr); false when "outputs" names dataset files only.
+  bool writesExr = true;
+  std::string outputPattern;               ///< the EXR pattern as written ("" when !writesExr)
+  std::vector<JobDatasetOutput> datasets;  ///< "outputs" entries other than the EXR, in order
+  DatasetWriteOptions dataset;             ///< "depth_scale"
+  std::string previewPattern;              ///< as written; "" for none
   /// "preview_range": the depth range of every preview; without it, `aperture batch` uses
   /// batchPreviewOptions (apps/outputs.h).
   PreviewOptions preview;
@@ -77,6 +96,10 @@ struct CameraFileBatch {
   std::string aovs = "depth";
   std::optional<int> spp;
   bool preview = false;  ///< also DIR/<image name>.png
+  /// --format: exr (every AOV in DIR/<image name>.exr) or a dataset format (png pfm npy tif
+  /// tiff: the one AOV of --aov in DIR/<image name>.<format>).
+  std::string format = "exr";
+  std::optional<double> depthScale;  ///< --depth-scale
 };
 /// The job of a CameraFileBatch: written as a job file's JSON and read by parseJobText, so the
 /// one-line form and job files share every check.

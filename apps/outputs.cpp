@@ -12,6 +12,7 @@
 
 #include "apps/job.h"
 #include "cameras/registry.h"
+#include "core/dataset_image.h"
 #include "core/error.h"
 #include "core/mesh.h"
 #include "core/number_text.h"
@@ -57,7 +58,15 @@ const std::vector<std::string>& supportedExtensions(OutputKind kind) {
   static const std::vector<std::string> exr = {".exr"};
   static const std::vector<std::string> preview = {".png",  ".jpg", ".jpeg", ".tif",
                                                    ".tiff", ".bmp", ".tga",  ".ppm"};
-  return kind == OutputKind::Exr ? exr : preview;
+  switch (kind) {
+    case OutputKind::Exr:
+      return exr;
+    case OutputKind::Preview:
+      return preview;
+    case OutputKind::Dataset:
+      break;
+  }
+  return datasetExtensions();
 }
 
 void checkOutputName(const std::string& name, const std::string& path, OutputKind kind) {
@@ -70,7 +79,11 @@ void checkOutputName(const std::string& name, const std::string& path, OutputKin
   const std::vector<std::string>& known = supportedExtensions(kind);
   if (std::find(known.begin(), known.end(), ext) != known.end()) return;
   const std::string what = ext.empty() ? "has no extension" : cat("unknown extension '", ext, "'");
-  const std::string hint = kind == OutputKind::Exr ? " (8-bit images are written as previews)" : "";
+  const std::string hint =
+      kind == OutputKind::Exr
+          ? cat(" (8-bit images are written as previews; one AOV as a dataset file: ",
+                extensionList(OutputKind::Dataset), ")")
+          : "";
   throw Error(prefix(name, path) + what + "; supported: " + extensionList(kind) + hint);
 }
 
@@ -107,8 +120,15 @@ std::string patternDirectory(const std::string& pattern) {
 
 void checkJobOutputs(const Job& job, const std::string& outputDirectory,
                      const std::string& previewDirectory) {
-  checkOutputName("output", job.outputPattern, OutputKind::Exr);
-  checkOutputDirectory("output", job.outputPattern, outputDirectory);
+  if (job.writesExr) {
+    checkOutputName("output", job.outputPattern, OutputKind::Exr);
+    checkOutputDirectory("output", job.outputPattern, outputDirectory);
+  }
+  for (const JobDatasetOutput& d : job.datasets) {
+    checkOutputName("outputs", d.pattern, OutputKind::Dataset);
+    checkDatasetOutput("outputs", d.pattern, d.aov);
+    checkOutputDirectory("outputs", d.pattern, d.directory);
+  }
   const bool previews = !job.previewPattern.empty();
   if (previews) {
     checkOutputName("preview", job.previewPattern, OutputKind::Preview);
@@ -116,9 +136,28 @@ void checkJobOutputs(const Job& job, const std::string& outputDirectory,
     checkOutputDirectory("preview", job.previewPattern, previewDirectory);
   }
   for (const JobImage& image : job.images) {
-    checkOutputName("output", image.output, OutputKind::Exr);
+    if (job.writesExr) checkOutputName("output", image.output, OutputKind::Exr);
+    for (const DatasetOutput& d : image.datasets)
+      checkOutputName("outputs", d.path, OutputKind::Dataset);
     if (previews) checkOutputName("preview", image.preview, OutputKind::Preview);
   }
+}
+
+void checkDatasetOutput(const std::string& name, const std::string& path, const std::string& aov) {
+  const std::optional<DatasetFormat> format = datasetFormatOf(path);
+  if (!format) throw Error(prefix(name, path) + "is not a dataset file name");
+  try {
+    checkDatasetAov(*format, aov);
+  } catch (const Error& e) {
+    throw Error(prefix(name, path) + e.what());
+  }
+}
+
+void checkDepthScale(const std::string& name, double scale) {
+  if (!(scale > 0.0) || !std::isfinite(scale))
+    throw Error(cat(name, ": ", scale,
+                    " must be positive and finite (units per scene unit: 1000 for millimetres "
+                    "per metre)"));
 }
 
 void checkPreviewable(const std::string& name, const std::string& path, AovMask aovs) {

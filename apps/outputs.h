@@ -21,11 +21,13 @@ struct Job;
 enum class OutputKind {
   Exr,      ///< the multi-channel EXR (`--out`, the job's "output")
   Preview,  ///< the 8-bit preview (`--preview`, the job's "preview")
+  Dataset,  ///< one AOV in a dataset format (`--out x.png` with one AOV, the job's "outputs")
 };
 
 /// The extensions (lower case, with the dot) a kind of output may end in; checks ignore case.
 /// Exr: .exr. Preview: the 8-bit RGB formats OpenImageIO writes here: .png .jpg .jpeg .tif
-/// .tiff .bmp .tga .ppm.
+/// .tiff .bmp .tga .ppm. Dataset: datasetExtensions() of core/dataset_image.h (.png is a
+/// 16-bit depth file there, an 8-bit picture as a preview).
 const std::vector<std::string>& supportedExtensions(OutputKind kind);
 
 /// Checks the name of the output file `path`, given as `name` (a flag such as "--out" or a job
@@ -50,13 +52,21 @@ void checkOutputPath(const std::string& name, const std::string& path, OutputKin
 std::string patternDirectory(const std::string& pattern);
 
 /// The output checks of a parsed job, as `aperture render` checks --out and --preview: the
-/// "output" and "preview" patterns' extensions, that the job's AOVs can be previewed when it
-/// has a preview pattern, checkOutputName of every frame's paths, and checkOutputDirectory of
-/// `outputDirectory` and `previewDirectory` (each pattern's directory up to its first
-/// placeholder, resolved; directories named by placeholders are created, or fail, per frame).
-/// Throws Error("output: ..." or "preview: ...").
+/// "output", "outputs" and "preview" patterns' extensions, that the job's AOVs can be previewed
+/// when it has a preview pattern and that each "outputs" format holds its AOV,
+/// checkOutputName of every frame's paths, and checkOutputDirectory of `outputDirectory`,
+/// each "outputs" entry's directory and `previewDirectory` (each pattern's directory up to its
+/// first placeholder, resolved; directories named by placeholders are created, or fail, per
+/// frame). Throws Error("output: ...", "outputs: ..." or "preview: ...").
 void checkJobOutputs(const Job& job, const std::string& outputDirectory,
                      const std::string& previewDirectory);
+
+/// Refuses a dataset file `path` (given as `name`) that cannot hold `aov` (checkDatasetAov).
+/// Throws Error("NAME: 'PATH': AOV ... cannot be written as ...").
+void checkDatasetOutput(const std::string& name, const std::string& path, const std::string& aov);
+
+/// Checks a 16-bit PNG depth scale (`name` is the flag or key): positive and finite.
+void checkDepthScale(const std::string& name, double scale);
 
 /// Refuses a preview (`path`, given as `name`) of a framebuffer of `aovs` when none of them can
 /// be previewed (previewableAovs of core/image.h); the message lists the ones that can.

@@ -103,14 +103,28 @@ std::string previewMismatch(const JobImage& image) {
   return "";
 }
 
+/// "" when every dataset file of the image exists (they are written atomically, so one that
+/// exists is complete); else the first one missing.
+std::string datasetMismatch(const JobImage& image) {
+  std::error_code ec;
+  for (const DatasetOutput& d : image.datasets)
+    if (!fs::exists(d.path, ec)) return cat(d.aov, " file ", d.path, " is missing");
+  return "";
+}
+
 }  // namespace
 
 OutputCheck checkOutput(const Job& job, const JobImage& image) {
   std::error_code ec;
+  // Without an EXR the main file is the first dataset file; it alone decides Missing.
   if (!fs::exists(image.output, ec)) return {OutputCheck::State::Missing, ""};
-  std::string reason = headerMismatch(job, image);
-  if (reason.empty() && !isCompleteExr(image.output))
-    reason = "incomplete EXR (truncated: not every scanline decodes)";
+  std::string reason;
+  if (job.writesExr) {
+    reason = headerMismatch(job, image);
+    if (reason.empty() && !isCompleteExr(image.output))
+      reason = "incomplete EXR (truncated: not every scanline decodes)";
+  }
+  if (reason.empty()) reason = datasetMismatch(image);
   if (reason.empty() && !image.preview.empty()) reason = previewMismatch(image);
   if (reason.empty()) return {OutputCheck::State::Reusable, ""};
   return {OutputCheck::State::Stale, reason};

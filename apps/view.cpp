@@ -1,5 +1,6 @@
 #include "apps/view.h"
 
+#include <cstdio>
 #include <filesystem>
 
 #include "cameras/calibrated.h"
@@ -51,19 +52,59 @@ std::string cameraSidecarPath(const std::string& exrPath) {
   return std::filesystem::path(exrPath).replace_extension(".camera.json").string();
 }
 
+DatasetFormat DatasetOutput::format() const {
+  const std::optional<DatasetFormat> f = datasetFormatOf(path);
+  if (!f)
+    throw Error(cat("'", path, "': not a dataset file name (extensions: ",
+                    join(datasetExtensions(), " "), ")"));
+  return *f;
+}
+
+std::vector<std::string> viewFilePaths(const std::string& exrPath, const std::string& previewPath,
+                                       const std::vector<DatasetOutput>& datasets) {
+  std::vector<std::string> paths;
+  if (!previewPath.empty()) paths.push_back(previewPath);
+  for (const DatasetOutput& d : datasets) paths.push_back(d.path);
+  if (!exrPath.empty()) paths.push_back(exrPath);
+  return paths;
+}
+
+namespace {
+
+void writeDatasetOutput(const RenderedView& view, const DatasetOutput& d,
+                        const DatasetWriteOptions& options) {
+  ensureParentDirectory(d.path, "output");
+  const DatasetWriteStats stats =
+      writeDatasetImage(d.path, d.format(), aovView(view.fb, d.aov), d.aov, options);
+  if (stats.outOfRange > 0)
+    std::fprintf(stderr,
+                 "aperture: warning: %s: %zu %s values outside [1, 65535] after scaling by %g "
+                 "written as 0 (invalid)\n",
+                 d.path.c_str(), stats.outOfRange, d.aov.c_str(), options.depthScale);
+}
+
+}  // namespace
+
 void writeViewOutputs(const RenderedView& view, const ExrMetadata& meta, const ExrOptions& exr,
                       const std::string& exrPath, const std::string& previewPath,
-                      const PreviewOptions& preview, bool cameraSidecar) {
+                      const PreviewOptions& preview, bool cameraSidecar,
+                      const std::vector<DatasetOutput>& datasets,
+                      const DatasetWriteOptions& dataset) {
   if (!previewPath.empty()) {
     ensureParentDirectory(previewPath, "preview");
     writePreview(previewPath, view.fb, preview);
   }
-  if (cameraSidecar)
+  for (const DatasetOutput& d : datasets) writeDatasetOutput(view, d, dataset);
+  const std::string sidecarBeside = !exrPath.empty()   ? exrPath
+                                    : datasets.empty() ? std::string()
+                                                       : datasets.front().path;
+  if (cameraSidecar && !sidecarBeside.empty())
     if (const std::optional<CalibratedView> cal = calibratedViewOf(view.camera)) {
-      const std::string path = cameraSidecarPath(exrPath);
+      const std::string path = cameraSidecarPath(sidecarBeside);
       ensureParentDirectory(path, "camera sidecar");
       writeTextAtomically(path, cameraSidecarJson(cal->sensor, cal->worldToCamera));
     }
+  if (exrPath.empty()) return;
   ensureParentDirectory(exrPath, "output");
   writeExr(exrPath, view.fb, meta, exr);
 }

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "cameras/params.h"
+#include "core/dataset_image.h"
 #include "core/exr.h"
 #include "core/framebuffer.h"
 #include "core/image.h"
@@ -38,15 +39,35 @@ void ensureParentDirectory(const std::string& path, const std::string& what);
 /// Where the camera sidecar of an EXR goes: its path with ".camera.json" for ".exr".
 std::string cameraSidecarPath(const std::string& exrPath);
 
+/// One AOV of a view written alone in a dataset format (core/dataset_image.h): `aov` as
+/// aovView spells it, `path` ending in one of datasetExtensions().
+struct DatasetOutput {
+  std::string aov;
+  std::string path;
+  DatasetFormat format() const;  ///< by the extension of `path`
+  bool operator==(const DatasetOutput& o) const { return aov == o.aov && path == o.path; }
+};
+
+/// The files of a view in the order writeViewOutputs writes them (the camera sidecar, which
+/// only some cameras have, aside): the preview, the dataset files in order, the EXR. Empty
+/// paths are left out.
+std::vector<std::string> viewFilePaths(const std::string& exrPath, const std::string& previewPath,
+                                       const std::vector<DatasetOutput>& datasets);
+
 /// Writes the files of a rendered view in a fixed order: first the preview (when
-/// `previewPath` is not empty, with `preview`), then (with `cameraSidecar`, for a camera that
-/// has a calibrated form: calibratedViewOf) the camera sidecar JSON, then the EXR, each atomically
-/// and each after creating its directory. A preview that cannot be written throws before the EXR is
-/// started, so a complete EXR always has its preview beside it and `batch --resume`, which
-/// looks at the EXR, renders a frame whose preview failed again. (A preview may remain when
-/// the EXR then fails.) Throws Error naming the file that failed.
+/// `previewPath` is not empty, with `preview`), then the dataset files (`datasets`, with
+/// `dataset`), then (with `cameraSidecar`, for a camera that has a calibrated form:
+/// calibratedViewOf) the camera sidecar JSON beside the EXR (beside the first dataset file
+/// when there is no EXR), then the EXR (when `exrPath` is not empty), each atomically and each
+/// after creating its directory. A file that cannot be written throws before the EXR is
+/// started, so a complete EXR always has its other files beside it and `batch --resume`,
+/// which looks at the EXR first, renders a frame whose preview failed again. (Earlier files
+/// may remain when a later one fails.) A 16-bit PNG with values out of range prints a warning
+/// naming the file and the count on stderr. Throws Error naming the file that failed.
 void writeViewOutputs(const RenderedView& view, const ExrMetadata& meta, const ExrOptions& exr,
                       const std::string& exrPath, const std::string& previewPath,
-                      const PreviewOptions& preview = {}, bool cameraSidecar = false);
+                      const PreviewOptions& preview = {}, bool cameraSidecar = false,
+                      const std::vector<DatasetOutput>& datasets = {},
+                      const DatasetWriteOptions& dataset = {});
 
 }  // namespace aperture::app

@@ -362,7 +362,8 @@ TEST(Cli, RefusedOutputsNameTheFlagAndValueAndWriteNothing) {
     std::string args;
     std::vector<std::string> expect;
   } cases[] = {
-      {"--out " + dir + "/x.png", {"--out: '" + dir + "/x.png'", "supported: .exr"}},
+      {"--out " + dir + "/x.jpg", {"--out: '" + dir + "/x.jpg'", "supported: .exr"}},
+      {"--out " + dir + "/x.png", {"--out: '" + dir + "/x.png'", "holds one AOV"}},
       {"--out " + dir + "/adir", {"--out: '" + dir + "/adir': is a directory"}},
       {"--out " + dir + "/adir/", {"--out: '" + dir + "/adir/': is a directory"}},
       {"--out " + ro.path() + "/x.exr", {"--out: '" + ro.path() + "/x.exr'", "not writable"}},
