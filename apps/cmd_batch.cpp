@@ -182,6 +182,7 @@ double renderImages(BatchPlan& plan, const LoadedScene& scene, const BatchArgs& 
   double renderSeconds = 0;
   auto write = [&](ImageWriter::Task& task) {
     const auto t0 = BatchClock::now();
+    if (job.idCounts) task.result->idCounts = idCountsOf(task.view.fb);
     writeImageFiles(*task.result, task.view,
                     viewMetadata(task.view, scene.names, job.aovs, job.build, job.placement),
                     job.exr, preview, job.cameraFiles);
@@ -337,11 +338,18 @@ Command addBatchCommand(CLI::App& app) {
       ->group(group)
       ->type_name("NAME");
   sub->add_option("--aov", cf.aovs,
-                  "AOVs: color, depth, distance, normal, position, primid, geomid, all")
+                  "AOVs: color, depth, distance, normal, position, primid, geomid, all, "
+                  "shading-normal, face.NAME, vertex.NAME")
       ->group(group)
       ->capture_default_str();
   sub->add_option("--spp", cf.spp, "Samples per pixel")->group(group);
   sub->add_flag("--preview", cf.preview, "Also write DIR/<image name>.png")->group(group);
+  sub->add_option("--normal-frame", cf.normalFrame,
+                  "Frame of normal and shading-normal: world, opencv or opengl")
+      ->group(group);
+  sub->add_flag("--id-counts", cf.idCounts,
+                "summary.json: pixels per id of geomid and the face./vertex. AOVs, per image")
+      ->group(group);
   sub->add_flag("--resume", args->resume,
                 "Skip images whose EXR (and preview) is complete and matches the job; remove "
                 "temporaries of this shard's files left by processes that no longer exist");
