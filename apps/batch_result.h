@@ -2,6 +2,7 @@
 // `aperture batch`: the outcome of one job image in this run (rendered, skipped by --resume,
 // failed, interrupted), shared by the render loop, the writer, progress and the summary.
 #include <cstdint>
+#include <map>
 #include <string>
 
 #include "apps/job.h"
@@ -37,6 +38,8 @@ struct ImageResult {
   std::string staleReason;
   double renderSeconds = 0, writeSeconds = 0;
   uint64_t rays = 0;
+  /// With the job's "id_counts": per id AOV (geomid, face.*, vertex.*), pixels per id.
+  std::map<std::string, std::map<uint32_t, uint64_t>> idCounts;
   double mrays() const { return renderSeconds > 0 ? double(rays) / renderSeconds * 1e-6 : 0; }
 };
 

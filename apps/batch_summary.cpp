@@ -30,7 +30,24 @@ nlohmann::json imageEntry(const ImageResult& r) {
   e["files"] = image.files;
   if (!r.staleReason.empty()) e["stale"] = r.staleReason;
   if (!r.error.empty()) e["error"] = r.error;
+  if (!r.idCounts.empty()) {
+    nlohmann::json counts = nlohmann::json::object();
+    for (const auto& [aov, perId] : r.idCounts) {
+      nlohmann::json ids = nlohmann::json::object();
+      for (const auto& [id, pixels] : perId) ids[std::to_string(id)] = pixels;
+      counts[aov] = ids;
+    }
+    e["id_counts"] = counts;
+  }
   return e;
+}
+
+/// Pixels per id of one UINT channel, misses left out.
+std::map<uint32_t, uint64_t> countIds(const std::vector<uint32_t>& values) {
+  std::map<uint32_t, uint64_t> counts;
+  for (uint32_t id : values)
+    if (id != kInvalidId) ++counts[id];
+  return counts;
 }
 
 /// Labels ("camera frame N") of the images with `status`; outputs for skipped ones.
@@ -119,6 +136,13 @@ bool writeSummary(const nlohmann::json& summary, const std::string& path, bool q
 }
 
 }  // namespace
+
+std::map<std::string, std::map<uint32_t, uint64_t>> idCountsOf(const Framebuffer& fb) {
+  std::map<std::string, std::map<uint32_t, uint64_t>> counts;
+  if (fb.has(kAovGeomId)) counts["geomid"] = countIds(fb.geomId);
+  for (const PropertyChannel& p : fb.properties) counts[p.property.aovName()] = countIds(p.values);
+  return counts;
+}
 
 std::string defaultSummaryPath(const Job& job, const Shard& shard) {
   const std::string name =

@@ -1,6 +1,7 @@
 #pragma once
 // `aperture batch`: what a run reports when it ends: summary.json (written atomically), the
 // table on stdout, the closing lines on stderr and the exit code.
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -23,6 +24,12 @@ struct BatchRun {
   double elapsedSeconds = 0, renderSeconds = 0;
   std::vector<std::string> removedTemporaries;  ///< by --resume
 };
+
+/// Per id AOV of `fb` (geomid, then the property AOVs), the number of pixels showing each id.
+/// Misses (kInvalidId) are not counted, so each AOV's counts sum to the hit pixels. (A
+/// property value of 0xFFFFFFFF, e.g. a label of -1, is indistinguishable from a miss and is
+/// not counted either.)
+std::map<std::string, std::map<uint32_t, uint64_t>> idCountsOf(const Framebuffer& fb);
 
 /// Where summary.json goes without --summary: the job's output directory, named
 /// summary.json, or summary.shard-K-of-N.json for a shard.

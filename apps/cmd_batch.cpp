@@ -181,6 +181,7 @@ double renderImages(BatchPlan& plan, const LoadedScene& scene, const BatchArgs& 
   double renderSeconds = 0;
   auto write = [&](ImageWriter::Task& task) {
     const auto t0 = BatchClock::now();
+    if (job.idCounts) task.result->idCounts = idCountsOf(task.view.fb);
     writeImageFiles(*task.result, task.view,
                     viewMetadata(task.view, scene.names, job.aovs, job.build, job.placement),
                     job.exr, preview, job.cameraFiles, job.writesExr, job.dataset);
@@ -336,7 +337,8 @@ Command addBatchCommand(CLI::App& app) {
       ->group(group)
       ->type_name("NAME");
   sub->add_option("--aov", cf.aovs,
-                  "AOVs: color, depth, distance, normal, position, primid, geomid, all")
+                  "AOVs: color, depth, distance, normal, position, primid, geomid, all, "
+                  "shading-normal, face.NAME, vertex.NAME")
       ->group(group)
       ->capture_default_str();
   sub->add_option("--spp", cf.spp, "Samples per pixel")->group(group);
@@ -351,6 +353,12 @@ Command addBatchCommand(CLI::App& app) {
       ->group(group)
       ->type_name("S");
   sub->add_flag("--preview", cf.preview, "Also write DIR/<image name>.png")->group(group);
+  sub->add_option("--normal-frame", cf.normalFrame,
+                  "Frame of normal and shading-normal: world, opencv or opengl")
+      ->group(group);
+  sub->add_flag("--id-counts", cf.idCounts,
+                "summary.json: pixels per id of geomid and the face./vertex. AOVs, per image")
+      ->group(group);
   sub->add_flag("--resume", args->resume,
                 "Skip images whose EXR is complete and matches the job and whose other files "
                 "(preview, dataset files) exist; remove "

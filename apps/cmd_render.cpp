@@ -80,8 +80,10 @@ int runRender(const RenderArgs& a) {
   ThreadLimit threads(a.render.threads);
   Device device;
   CameraParams params;
+  SceneOptions scene = a.scene;
+  scene.aovs = aovs;  // the mesh data the AOVs read (withMeshDataFor)
   LoadedScene loaded =
-      loadSceneForCamera(device, a.scene, given, a.camera.defaults(), a.quiet, params);
+      loadSceneForCamera(device, scene, given, a.camera.defaults(), a.quiet, params);
 
   const RenderedView view = renderView(*loaded.scene, params, settings, aovs);
   const Framebuffer& fb = view.fb;

@@ -319,6 +319,16 @@ void readOutputSettings(const Object& top, const Preset* preset, const std::stri
   job.exr.halfColor = top.boolean("half", preset ? preset->halfColor : false);
 }
 
+/// "normal_frame" (world|opencv|opengl, default world) and "id_counts" (default false).
+void readMeshDataKeys(const Object& top, Job& job) {
+  try {
+    job.render.normalFrame = parseNormalFrame(top.string("normal_frame").value_or("world"));
+  } catch (const Error& e) {
+    top.fail("normal_frame", e.what());
+  }
+  job.idCounts = top.boolean("id_counts", false);
+}
+
 void readPerformance(const Object& top, Job& job) {
   if (top.has("performance")) {
     const Object p(top.file(), "performance", top.required("performance"),
@@ -514,10 +524,10 @@ void checkOutputs(const Object& top, const std::string& baseDir, Job& job) {
 
 Job parseJobText(const std::string& text, const std::string& name, const std::string& baseDir) {
   const json root = parseJsonText(text, name);
-  const Object top(
-      name, "", root,
-      {"scene", "cameras", "aovs", "size", "spp", "output", "outputs", "depth_scale", "preview",
-       "preview_range", "compression", "half", "performance", "preset", "camera_files"});
+  const Object top(name, "", root,
+                   {"scene", "cameras", "aovs", "size", "spp", "output", "outputs", "depth_scale",
+                    "preview", "preview_range", "compression", "half", "performance", "preset",
+                    "camera_files", "normal_frame", "id_counts"});
   Job job;
   job.path = name;
   const Preset* preset = readPreset(top, job);
@@ -531,6 +541,7 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
   readScene(top, baseDir, job);
   readCameras(top, defaults, baseDir, job);
   job.cameraFiles = top.boolean("camera_files", top.required("cameras").is_object());
+  readMeshDataKeys(top, job);
   checkOutputs(top, baseDir, job);
   return job;
 }
@@ -562,6 +573,8 @@ Job cameraFileJob(const CameraFileBatch& b) {
   if (!b.images.empty()) job["cameras"]["images"] = b.images;
   if (b.spp) job["spp"] = *b.spp;
   if (b.preview) job["preview"] = (fs::path(b.outDir) / "{image}.png").generic_string();
+  if (b.normalFrame != "world") job["normal_frame"] = b.normalFrame;
+  if (b.idCounts) job["id_counts"] = true;
   return parseJobText(job.dump(), "batch --cameras " + b.cameras, "");
 }
 

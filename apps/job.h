@@ -54,8 +54,14 @@ struct Job {
   BuildOptions build;
   bool cull = false;  ///< performance.cull: BVH over the triangles the frames may see
   Placement placement = Placement::CameraRelative;  ///< scene.placement
-  /// The scene to load and build: meshes, placement, BVH options and culling.
-  SceneSpec sceneSpec() const { return {meshes, placement, build, cull}; }
+  /// The scene to load and build: meshes, placement, BVH options, culling and the mesh data
+  /// the AOVs read.
+  SceneSpec sceneSpec() const {
+    return withMeshDataFor({meshes, placement, build, cull, {}, false}, aovs);
+  }
+  /// "id_counts": summary.json reports per image the pixel count of each id of the property
+  /// AOVs and geomid (batchIdCounts).
+  bool idCounts = false;
   ExrOptions exr;
   /// "camera_files": beside each EXR a camera sidecar (<name>.camera.json) and, after the
   /// run, a COLMAP text model of every image rendered (<output directory>/sparse). Default:
@@ -99,7 +105,9 @@ struct CameraFileBatch {
   /// --format: exr (every AOV in DIR/<image name>.exr) or a dataset format (png pfm npy tif
   /// tiff: the one AOV of --aov in DIR/<image name>.<format>).
   std::string format = "exr";
-  std::optional<double> depthScale;  ///< --depth-scale
+  std::optional<double> depthScale;   ///< --depth-scale
+  std::string normalFrame = "world";  ///< --normal-frame: the job's "normal_frame"
+  bool idCounts = false;              ///< --id-counts: the job's "id_counts"
 };
 /// The job of a CameraFileBatch: written as a job file's JSON and read by parseJobText, so the
 /// one-line form and job files share every check.

@@ -8,7 +8,12 @@ namespace aperture::app {
 
 void addRenderOptions(CLI::App& app, RenderOptions& o) {
   app.add_option("--aov", o.aovs,
-                 "AOVs to compute: color, depth, distance, normal, position, primid, geomid, all")
+                 "AOVs to compute: color, depth, distance, normal, position, primid, geomid, all, "
+                 "shading-normal, face.NAME, vertex.NAME (integer PLY properties)")
+      ->capture_default_str();
+  app.add_option("--normal-frame", o.normalFrame,
+                 "Frame of normal and shading-normal: world, opencv (x right, y down, z "
+                 "forward) or opengl (x right, y up, z backwards), the camera's axes")
       ->capture_default_str();
   app.add_option("--packet", o.packet, "Rays per Embree call: 1, 4, 8 or 16")
       ->capture_default_str();
@@ -23,6 +28,7 @@ RenderSettings RenderOptions::settings(int spp) const {
   s.packetWidth = packet;
   s.tileSize = tile;
   s.spp = spp;
+  s.normalFrame = parseNormalFrame(normalFrame);
   validateRenderSettings(s);
   if (threads < 0 || threads > 4096)
     throw Error(cat("--threads ", threads, " must be in [0, 4096]"));

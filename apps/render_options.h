@@ -11,6 +11,7 @@ namespace aperture::app {
 struct RenderOptions {
   std::string aovs = "color,depth";
   int packet = 16, tile = 32, threads = 0;
+  std::string normalFrame = "world";  ///< --normal-frame
   RenderSettings settings(int spp) const;
 };
 

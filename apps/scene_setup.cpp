@@ -80,7 +80,13 @@ SceneSpec SceneOptions::spec() const {
   s.placement = loadOptions().placement;
   s.build = buildOptions();
   s.cull = cull;
-  return s;
+  return withMeshDataFor(s, aovs);
+}
+
+SceneSpec withMeshDataFor(SceneSpec spec, const AovSet& aovs) {
+  spec.properties = aovs.properties;
+  spec.vertexNormals = aovs.has(kAovShadingNormal);
+  return spec;
 }
 
 void logCullStats(const CullStats& c, size_t cameras) {
@@ -119,6 +125,8 @@ std::map<std::string, Mesh*> loadDistinctMeshes(LoadedScene& s, const SceneSpec&
     if (bySpec.count(m.spec)) continue;
     LoadOptions lo;
     lo.placement = spec.placement;
+    lo.properties = spec.properties;
+    lo.vertexNormals = spec.vertexNormals;
     if (uses.at(m.spec) == 1) lo.transform = m.worldFromMesh;
     s.meshes.push_back(loadMesh(m.spec, lo));
     if (!quiet) logLoadedMesh(s.meshes.back());

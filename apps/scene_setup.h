@@ -29,7 +29,15 @@ struct SceneSpec {
   Placement placement = Placement::CameraRelative;
   BuildOptions build;
   bool cull = false;  ///< BVH over only the triangles the cameras may see
+  /// Mesh data beyond positions that the frames read (set by withMeshDataFor): the integer
+  /// properties of the face./vertex. AOVs and vertex normals for shading-normal.
+  std::vector<PropertyAov> properties;
+  bool vertexNormals = false;
 };
+
+/// `spec` with the mesh data the AOVs of `aovs` need: the one place that derives what is
+/// loaded from what is rendered (render, batch, jobs and Python call it).
+SceneSpec withMeshDataFor(SceneSpec spec, const AovSet& aovs);
 
 struct SceneOptions {
   std::vector<std::string> meshes;  ///< empty: the default procedural scene
@@ -39,6 +47,9 @@ struct SceneOptions {
   /// Leave triangles outside the cameras' view volumes out of the BVH (off by default).
   bool cull = false;
   std::string maxMemory;  ///< --max-memory: BYTES[K|M|G|T], auto, or "" for no limit
+  /// What the frames compute (set by the command after parsing --aov): decides the mesh data
+  /// spec() asks the loaders for.
+  AovSet aovs;
   LoadOptions loadOptions() const;
   BuildOptions buildOptions() const;
   /// The scene these flags describe (the procedural default scene without --mesh).

@@ -20,6 +20,7 @@ RenderedView renderView(const Scene& scene, const CameraParams& params,
   forCamera.spp = params.spp;  // a job camera may set its own spp
   view.stats = renderImage(scene, *camera, forCamera, view.fb);
   view.camera = camera->describe();
+  view.normalFrame = settings.normalFrame;
   return view;
 }
 
@@ -35,6 +36,8 @@ ExrMetadata viewMetadata(const RenderedView& view, const std::vector<std::string
                   {"aperture.robust", build.robust ? "true" : "false"},
                   {"aperture.placement",
                    placement == Placement::WorldSpace ? "world-space" : "camera-relative"}};
+  if (view.fb.has(kAovNormal) || view.fb.has(kAovShadingNormal))
+    meta.strings.emplace_back("aperture.normalFrame", normalFrameName(view.normalFrame));
   return meta;
 }
 

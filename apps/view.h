@@ -20,6 +20,7 @@ struct RenderedView {
   Framebuffer fb;
   RenderStats stats;
   CameraDescription camera;
+  NormalFrame normalFrame = NormalFrame::World;  ///< of normal and shading-normal
 };
 
 /// Builds the camera of `params` in the scene's render space and renders it into a fresh
@@ -28,7 +29,7 @@ RenderedView renderView(const Scene& scene, const CameraParams& params,
                         const RenderSettings& settings, const AovSet& aovs);
 
 /// The header of a rendered view: camera, render time, meshes, AOVs, BVH quality and
-/// traversal mode (robust or not), placement.
+/// traversal mode (robust or not), placement, and the normal frame when it holds normals.
 ExrMetadata viewMetadata(const RenderedView& view, const std::vector<std::string>& meshNames,
                          const AovSet& aovs, const BuildOptions& build, Placement placement);
 

@@ -78,6 +78,21 @@ const char* const kFisheyeMapping = "equidistant";
 const char* const kColorNames[4] = {"R", "G", "B", "A"};
 const char* const kNormalNames[3] = {"N.X", "N.Y", "N.Z"};
 const char* const kPositionNames[3] = {"P.X", "P.Y", "P.Z"};
+const char* const kShadingNormalNames[3] = {"Ns.X", "Ns.Y", "Ns.Z"};
+
+/// The property AOVs among an EXR's channels: UINT channels named "face.NAME" / "vertex.NAME",
+/// in the file's (name-sorted) channel order.
+std::vector<PropertyAov> propertyChannelsOf(const Imf::ChannelList& channels) {
+  std::vector<PropertyAov> found;
+  for (auto it = channels.begin(); it != channels.end(); ++it) {
+    const std::string name = it.name();
+    if (it.channel().type != Imf::UINT) continue;
+    if (name.rfind("face.", 0) != 0 && name.rfind("vertex.", 0) != 0) continue;
+    const AovSet set = parseAovSet(name);
+    if (set.properties.size() == 1) found.push_back(set.properties.front());
+  }
+  return found;
+}
 
 /// Adds a channel and a slice over interleaved data (`components` values a pixel).
 void addChannel(Imf::Header& header, Imf::FrameBuffer& frame, const char* name, Imf::PixelType type,
@@ -326,6 +341,19 @@ void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata&
     checkSize("geomid", fb.geomId.size(), 1);
     addChannel(header, frame, "geomID", Imf::UINT, fb.geomId.data(), sizeof(uint32_t), 1, w);
   }
+  if (fb.has(kAovShadingNormal)) {
+    checkSize("shading-normal", fb.shadingNormal.size(), 3);
+    for (int c = 0; c < 3; ++c)
+      addChannel(header, frame, kShadingNormalNames[c], Imf::FLOAT, fb.shadingNormal.data() + c,
+                 sizeof(float), 3, w);
+  }
+  std::vector<std::string> propertyNames;  // the properties' channel names
+  for (const PropertyChannel& p : fb.properties) propertyNames.push_back(p.property.aovName());
+  for (size_t j = 0; j < fb.properties.size(); ++j) {
+    checkSize(propertyNames[j].c_str(), fb.properties[j].values.size(), 1);
+    addChannel(header, frame, propertyNames[j].c_str(), Imf::UINT, fb.properties[j].values.data(),
+               sizeof(uint32_t), 1, w);
+  }
   if (header.channels().begin() == header.channels().end())
     throw Error(cat("cannot write '", path, "': the framebuffer holds no AOV"));
 
@@ -360,9 +388,15 @@ Framebuffer readExr(const std::string& path, ExrMetadata* meta) {
     if (anyPresent(kPositionNames, 3)) mask |= kAovPosition;
     if (present("primID")) mask |= kAovPrimId;
     if (present("geomID")) mask |= kAovGeomId;
-    if (mask == 0) throw Error("no aperture channels (R G B A, Z, T, N.*, P.*, primID, geomID)");
+    if (anyPresent(kShadingNormalNames, 3)) mask |= kAovShadingNormal;
+    AovSet set(mask);
+    set.properties = propertyChannelsOf(channels);
+    if (set.empty())
+      throw Error(
+          "no aperture channels (R G B A, Z, T, N.*, P.*, primID, geomID, Ns.*, face.*, "
+          "vertex.*)");
 
-    Framebuffer fb(width, height, mask);
+    Framebuffer fb(width, height, set);
     Imf::FrameBuffer frame;
     auto insert = [&](const char* name, Imf::PixelType type, void* data, size_t valueSize,
                       int components, double fill) {
@@ -386,6 +420,15 @@ Framebuffer readExr(const std::string& path, ExrMetadata* meta) {
       insert("primID", Imf::UINT, fb.primId.data(), sizeof(uint32_t), 1, double(kInvalidId));
     if (mask & kAovGeomId)
       insert("geomID", Imf::UINT, fb.geomId.data(), sizeof(uint32_t), 1, double(kInvalidId));
+    if (mask & kAovShadingNormal)
+      for (int c = 0; c < 3; ++c)
+        insert(kShadingNormalNames[c], Imf::FLOAT, fb.shadingNormal.data() + c, sizeof(float), 3,
+               0.0);
+    std::vector<std::string> propertyNames;  // the properties' channel names
+    for (const PropertyChannel& p : fb.properties) propertyNames.push_back(p.property.aovName());
+    for (size_t j = 0; j < fb.properties.size(); ++j)
+      insert(propertyNames[j].c_str(), Imf::UINT, fb.properties[j].values.data(), sizeof(uint32_t),
+             1, double(kInvalidId));
     file.setFrameBuffer(frame);
     file.readPixels(window.min.y, window.max.y);
     if (meta) readHeaderAttributes(header, width, height, meta);
@@ -434,6 +477,9 @@ std::vector<std::string> exrChannelNames(const AovSet& set) {
   if (aovs & kAovPosition) names.insert(names.end(), kPositionNames, kPositionNames + 3);
   if (aovs & kAovPrimId) names.push_back("primID");
   if (aovs & kAovGeomId) names.push_back("geomID");
+  if (aovs & kAovShadingNormal)
+    names.insert(names.end(), kShadingNormalNames, kShadingNormalNames + 3);
+  for (const PropertyAov& p : set.properties) names.push_back(p.aovName());
   return names;
 }
 

@@ -28,7 +28,8 @@ struct ExrMetadata {
 };
 
 /// Writes every allocated AOV of `fb` to `path` with the channel names of the README
-/// (R G B A, Z, T, N.X.., P.X.., primID, geomID). The header carries OpenEXR's standard
+/// (R G B A, Z, T, N.X.., P.X.., primID, geomID, Ns.X.. float32, and a UINT channel per mesh
+/// property named like its AOV, "face.object_id"). The header carries OpenEXR's standard
 /// attributes as CameraDescription defines them (pixelAspectRatio, screenWindowCenter/Width,
 /// worldToCamera, and worldToNDC unless the camera is a panorama; float, Imath row vectors),
 /// double copies "aperture.worldToCamera"/"aperture.worldToNDC", a panorama's projection
@@ -40,16 +41,17 @@ void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata&
               const ExrOptions& options = {});
 
 /// Reads an EXR written by writeExr back into a Framebuffer (AOVs from the channel names;
-/// half channels widened to float). With `meta`, the header comes back as written, except
-/// that string attributes (camera extras, `strings`) come back sorted by name. Throws Error
-/// for unreadable or incomplete files.
+/// half channels widened to float; property channels, UINT "face.*" / "vertex.*", in the
+/// file's channel order, which OpenEXR sorts by name). With `meta`, the header comes back as
+/// written, except that string attributes (camera extras, `strings`) come back sorted by name.
+/// Throws Error for unreadable or incomplete files.
 Framebuffer readExr(const std::string& path, ExrMetadata* meta = nullptr);
 
 /// True if `path` is a complete, readable EXR (every scanline present); used by --resume.
 bool isCompleteExr(const std::string& path);
 
 /// The channel names writeExr gives the AOVs of `aovs` (R G B A, Z, T, N.X.., P.X.., primID,
-/// geomID), in the order of the AovMask bits.
+/// geomID, Ns.X.., then the property channels), in the order of the AovMask bits.
 std::vector<std::string> exrChannelNames(const AovSet& aovs);
 
 /// An EXR's header, read without decoding any pixel.

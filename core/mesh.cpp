@@ -39,13 +39,17 @@ Mesh loadMesh(const std::string& spec, const LoadOptions& options) {
   auto start = std::chrono::steady_clock::now();
   Mesh mesh;
   if (spec.rfind("procedural:", 0) == 0) {
-    mesh = makeProcedural(spec);
+    if (!options.properties.empty())
+      throw Error(cat(spec, ": AOV '", options.properties.front().aovName(),
+                      "': a procedural mesh has no integer face or vertex properties (PLY "
+                      "files do)"));
+    mesh = makeProcedural(spec);  // no vertex normals: shading normals fall back to Ng
   } else {
     std::string ext = lowerExtension(spec);
     if (ext == ".ply") {
-      mesh = loadPly(spec);
+      mesh = loadPly(spec, options);
     } else if (ext == ".obj") {
-      mesh = loadObj(spec);
+      mesh = loadObj(spec, options);
     } else {
       throw Error(cat(spec, ": unknown mesh file extension '", ext,
                       "' (expected .ply, .obj or procedural:NAME)"));
@@ -121,8 +125,9 @@ size_t markNonFiniteVertices(const WorldVertices& world, size_t n, std::vector<u
   return nonFinite;
 }
 
-/// Drops the triangles using a bad vertex (when `anyBad`) and counts, but keeps, degenerate
-/// ones (a repeated index); both counts go to the mesh's stats.
+/// Drops the triangles using a bad vertex (when `anyBad`), with their face property values,
+/// and counts, but keeps, degenerate ones (a repeated index); both counts go to the mesh's
+/// stats.
 void dropTrianglesOfBadVertices(Mesh& mesh, const std::vector<uint8_t>& bad, bool anyBad) {
   size_t out = 0, dropped = 0, degenerate = 0;
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
@@ -132,11 +137,15 @@ void dropTrianglesOfBadVertices(Mesh& mesh, const std::vector<uint8_t>& bad, boo
       continue;
     }
     if (a == b || b == c || a == c) ++degenerate;
+    for (MeshProperty& p : mesh.properties)
+      if (p.domain == PropertyDomain::Face) p.values[out / 3] = p.values[t / 3];
     mesh.indices[out++] = a;
     mesh.indices[out++] = b;
     mesh.indices[out++] = c;
   }
   mesh.indices.resize(out);
+  for (MeshProperty& p : mesh.properties)
+    if (p.domain == PropertyDomain::Face) p.values.resize(out / 3);
   mesh.stats.droppedTriangles = dropped;
   mesh.stats.degenerateTriangles = degenerate;
 }
@@ -156,6 +165,37 @@ void writeAnchoredPositions(Mesh& mesh, const WorldVertices& world, const std::v
   }
 }
 
+/// Moves the vertex normals into the placed mesh's space: n' = M^-T n with M the linear part
+/// of the options' placement (scale, then the transform's 3x3). The true inverse transpose,
+/// not the cofactor matrix: the cofactor (det M · M^-T) would turn normals inside out under a
+/// mirroring placement. Not normalised (the frame loop normalises after interpolating).
+void transformVertexNormals(Mesh& mesh, const LoadOptions& options) {
+  if (mesh.vertexNormals.empty()) return;
+  glm::dmat3 linear = glm::dmat3(options.scale);
+  if (options.transform) linear = glm::dmat3(*options.transform) * linear;
+  if (linear == glm::dmat3(1.0)) return;
+  const glm::dmat3 normalFrom = glm::transpose(glm::inverse(linear));
+  for (size_t k = 0; 3 * k + 2 < mesh.vertexNormals.size(); ++k) {
+    float* n = &mesh.vertexNormals[3 * k];
+    const glm::dvec3 m = normalFrom * glm::dvec3(n[0], n[1], n[2]);
+    for (int a = 0; a < 3; ++a) n[a] = float(m[a]);
+  }
+}
+
+/// Throws Error naming the mesh when a property has the wrong number of values.
+void checkPropertySizes(const Mesh& mesh) {
+  for (const MeshProperty& p : mesh.properties) {
+    const bool face = p.domain == PropertyDomain::Face;
+    const size_t want = face ? mesh.triangleCount() : mesh.vertexCount;
+    if (p.values.size() != want)
+      throw Error(cat(mesh.name, ": property '", PropertyAov{p.domain, p.name}.aovName(), "' has ",
+                      p.values.size(), " values for ", want, face ? " triangles" : " vertices"));
+  }
+  if (!mesh.vertexNormals.empty() && mesh.vertexNormals.size() != 3 * mesh.vertexCount)
+    throw Error(cat(mesh.name, ": ", mesh.vertexNormals.size() / 3, " vertex normals for ",
+                    mesh.vertexCount, " vertices"));
+}
+
 }  // namespace
 
 void finishMesh(Mesh& mesh, const LoadOptions& options) {
@@ -169,6 +209,7 @@ void finishMesh(Mesh& mesh, const LoadOptions& options) {
   APERTURE_CHECK_OP(mesh.indices.size() % 3, ==, 0u);
   // Index range check before anything else touches the vertices.
   checkIndicesInRange(mesh);
+  checkPropertySizes(mesh);
 
   const WorldVertices world(mesh, options, fromDouble);
   std::vector<uint8_t> bad(n, 0);
@@ -182,6 +223,7 @@ void finishMesh(Mesh& mesh, const LoadOptions& options) {
   else
     mesh.anchor = 0.5 * (lo + hi);
   writeAnchoredPositions(mesh, world, bad, fromDouble);
+  transformVertexNormals(mesh, options);
   mesh.positionsDouble.clear();
   mesh.positionsDouble.shrink_to_fit();
 }

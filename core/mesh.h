@@ -94,13 +94,20 @@ struct LoadOptions {
 Mesh loadMesh(const std::string& spec, const LoadOptions& options = {});
 
 /// Loaders for one format each (loadMesh dispatches). They fill positions in world space
-/// (anchor 0, no padding); finishMesh() then validates, anchors and pads.
-Mesh loadPly(const std::string& path);
-Mesh loadObj(const std::string& path);
+/// (anchor 0, no padding); finishMesh() then validates, anchors and pads. Of `options` they
+/// read only `properties` and `vertexNormals` (what to keep beyond positions and indices).
+/// OBJ: no integer properties (a request is an Error); normals from `vn` through the corners'
+/// normal indices, a vertex used with several normals split into one vertex per normal (so
+/// vertexCount may grow; triangles keep their order and so their primIDs); a face corner
+/// without a normal index in a file whose other corners have one is an Error.
+Mesh loadPly(const std::string& path, const LoadOptions& options = {});
+Mesh loadObj(const std::string& path, const LoadOptions& options = {});
 /// The same on a file already in memory (`size` bytes at `data`, which need not be aligned or
 /// terminated); `name` stands for the file in messages. Used by the fuzz targets.
-Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& name);
-Mesh loadObjFromMemory(const char* data, size_t size, const std::string& name);
+Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& name,
+                       const LoadOptions& options = {});
+Mesh loadObjFromMemory(const char* data, size_t size, const std::string& name,
+                       const LoadOptions& options = {});
 Mesh makeProcedural(const std::string& spec);
 
 /// How many vertices and triangles a mesh has.
@@ -116,9 +123,12 @@ MeshCounts proceduralMeshCounts(const std::string& spec);
 /// The extension of the last path component, lower-cased with its dot (".ply"), or "".
 std::string lowerExtension(const std::string& path);
 
-/// Counts and zeroes non-finite vertices, drops the triangles using them, counts degenerate
-/// triangles, checks every index (< vertexCount, else Error naming `name`), applies the
-/// options' transform and anchor, and pads positions for Embree.
+/// Counts and zeroes non-finite vertices, drops the triangles using them (and their face
+/// property values), counts degenerate triangles, checks every index (< vertexCount, else
+/// Error naming `name`), applies the options' transform and anchor, and pads positions for
+/// Embree. Vertex normals go through the inverse transpose of the linear part of
+/// x -> transform · (scale * x + translate): a mirroring placement (negative scale or
+/// determinant) keeps them pointing out of the same side of the surface.
 void finishMesh(Mesh& mesh, const LoadOptions& options);
 
 }  // namespace aperture

@@ -62,6 +62,20 @@ HitLanes hitLanes(const typename PacketOf<N>::type& p) {
             p.hit.geomID, p.hit.primID, p.hit.instID[0]};
 }
 
+/// Embree's barycentric hit coordinates per lane: the hit point is (1 − u − v)·v0 + u·v1 +
+/// v·v2 for the triangle's vertices in index-buffer order.
+struct BarycentricLanes {
+  const float *u, *v;
+};
+
+template <int N>
+BarycentricLanes barycentricLanes(const typename PacketOf<N>::type& p) {
+  if constexpr (N == 1)
+    return {&p.hit.u, &p.hit.v};
+  else
+    return {p.hit.u, p.hit.v};
+}
+
 /// Sets hit.geomID of every lane to RTC_INVALID_GEOMETRY_ID (required before rtcIntersect).
 template <int N>
 void clearHits(typename PacketOf<N>::type& p) {

@@ -1,5 +1,8 @@
 // PLY loader: ASCII, binary little- and big-endian. Reads vertex x/y/z, `face` polygons
-// (triangulated as fans) and `tristrips` (-1 restarts a strip); skips everything else.
+// (triangulated as fans) and `tristrips` (-1 restarts a strip); skips everything else unless
+// LoadOptions asks for it: integer face/vertex properties (MeshProperty) and vertex normals
+// (nx ny nz). Requests turn off the binary fast paths only for the elements that carry them
+// (those elements have more than the fast paths' properties anyway).
 // The header's counts are checked against the file size before anything is allocated.
 #include "core/ply.h"
 
@@ -12,6 +15,7 @@
 #include "core/error.h"
 #include "core/mapped_file.h"
 #include "core/mesh.h"
+#include "core/spelling.h"
 
 namespace aperture {
 
@@ -480,8 +484,64 @@ void emitFan(std::vector<uint32_t>& out, const uint32_t* poly, size_t n) {
   }
 }
 
+/// What the loader keeps of one element beyond positions and indices: for each of the
+/// element's properties, the index in Mesh::properties its values go to (-1: not kept), and
+/// for the vertex element the properties holding nx ny nz (-1 when not kept).
+struct ElementRequest {
+  std::vector<int> slotOf;
+  int normal[3] = {-1, -1, -1};
+  bool keepsNormals() const { return normal[0] >= 0; }
+};
+
+/// The names of e's scalar integer properties (those a MeshProperty can come from).
+std::vector<std::string> integerPropertyNames(const PlyElement& e) {
+  std::vector<std::string> names;
+  for (const PlyProperty& p : e.props)
+    if (!p.list && isInteger(p.type)) names.push_back(p.name);
+  return names;
+}
+
+/// Maps the requested properties of `domain` to e's properties; throws Error naming the file,
+/// the element and the property when e lacks it, or has it as a float or a list.
+ElementRequest requestOf(const std::string& path, const PlyElement& e, PropertyDomain domain,
+                         const LoadOptions& options) {
+  ElementRequest req;
+  req.slotOf.assign(e.props.size(), -1);
+  for (size_t slot = 0; slot < options.properties.size(); ++slot) {
+    const PropertyAov& want = options.properties[slot];
+    if (want.domain != domain) continue;
+    const int k = findProp(e, want.name.c_str());
+    const std::vector<std::string> have = integerPropertyNames(e);
+    const std::string listing = have.empty() ? "it has no integer properties"
+                                             : cat("its integer properties: ", join(have, ", "));
+    if (k < 0)
+      throw Error(cat(path, ":", e.line, ": AOV '", want.aovName(), "': element '", e.name,
+                      "' has no property '", want.name, "'", didYouMean(want.name, have), "; ",
+                      listing));
+    const PlyProperty& p = e.props[size_t(k)];
+    if (p.list || !isInteger(p.type))
+      throw Error(cat(path, ":", e.line, ": AOV '", want.aovName(), "': property '", want.name,
+                      "' of '", e.name, "' is ", p.list ? "a list" : typeName(p.type),
+                      ", not an integer (ids must be integers); ", listing));
+    req.slotOf[size_t(k)] = int(slot);
+  }
+  if (domain == PropertyDomain::Vertex && options.vertexNormals) {
+    const int n[3] = {findProp(e, "nx"), findProp(e, "ny"), findProp(e, "nz")};
+    bool all = true;
+    for (int a = 0; a < 3; ++a) all = all && n[a] >= 0 && !e.props[size_t(n[a])].list;
+    if (all)
+      for (int a = 0; a < 3; ++a) req.normal[a] = n[a];
+  }
+  return req;
+}
+
+/// Stores a property value as the Mesh contract says: signed values as their 32-bit two's
+/// complement (the cast of int64 to uint32 is modulo 2^32), unsigned ones as they are.
+inline uint32_t propertyValue(int64_t v) { return uint32_t(v); }
+
 template <typename Reader>
-void readVertices(const std::string& path, const PlyElement& e, Reader& r, Mesh& mesh) {
+void readVertices(const std::string& path, const PlyElement& e, Reader& r, Mesh& mesh,
+                  const ElementRequest& req) {
   int ix = findProp(e, "x"), iy = findProp(e, "y"), iz = findProp(e, "z");
   const char* axes = "xyz";
   int idx[3] = {ix, iy, iz};
@@ -500,6 +560,9 @@ void readVertices(const std::string& path, const PlyElement& e, Reader& r, Mesh&
     mesh.positionsDouble.resize(3 * mesh.vertexCount);
   else
     mesh.positions.resize(3 * mesh.vertexCount);
+  if (req.keepsNormals()) mesh.vertexNormals.resize(3 * mesh.vertexCount);
+  for (size_t k = 0; k < e.props.size(); ++k)
+    if (req.slotOf[k] >= 0) mesh.properties[size_t(req.slotOf[k])].values.resize(mesh.vertexCount);
   double xyz[3] = {0, 0, 0};
   for (uint64_t i = 0; i < e.count; ++i) {
     for (size_t k = 0; k < e.props.size(); ++k) {
@@ -509,6 +572,13 @@ void readVertices(const std::string& path, const PlyElement& e, Reader& r, Mesh&
         r.skipValues(n, p.type, "a vertex list value");
       } else if (int(k) == ix || int(k) == iy || int(k) == iz) {
         xyz[int(k) == ix ? 0 : int(k) == iy ? 1 : 2] = r.readReal(p.type, "a vertex coordinate");
+      } else if (req.slotOf[k] >= 0) {
+        mesh.properties[size_t(req.slotOf[k])].values[i] =
+            propertyValue(r.readInteger(p.type, "a vertex property"));
+      } else if (req.keepsNormals() &&
+                 (int(k) == req.normal[0] || int(k) == req.normal[1] || int(k) == req.normal[2])) {
+        const int a = int(k) == req.normal[0] ? 0 : int(k) == req.normal[1] ? 1 : 2;
+        mesh.vertexNormals[3 * i + size_t(a)] = float(r.readReal(p.type, "a vertex normal"));
       } else {
         r.skipScalar(p.type, "a vertex property");
       }
@@ -536,15 +606,25 @@ int findIndexList(const std::string& path, const PlyElement& e, bool allowVertex
 }
 
 /// Faces (polygons, triangulated as fans) or strips; `strips` selects the -1 restart rule.
+/// A requested face property's value goes on every triangle its face or strip yields.
 template <typename Reader>
-void readFaces(const std::string& path, const PlyElement& e, Reader& r, Mesh& mesh, bool strips) {
+void readFaces(const std::string& path, const PlyElement& e, Reader& r, Mesh& mesh, bool strips,
+               const ElementRequest& req) {
   int li = findIndexList(path, e, !strips);
   std::vector<uint32_t> poly;
+  std::vector<uint32_t> itemValues(mesh.properties.size(), 0);
+  bool anyKept = false;
+  for (int slot : req.slotOf) anyKept = anyKept || slot >= 0;
   for (uint64_t i = 0; i < e.count; ++i) {
+    const size_t trianglesBefore = mesh.indices.size() / 3;
     for (size_t k = 0; k < e.props.size(); ++k) {
       const PlyProperty& p = e.props[k];
       if (!p.list) {
-        r.skipScalar(p.type, "a face property");
+        if (req.slotOf[k] >= 0)
+          itemValues[size_t(req.slotOf[k])] =
+              propertyValue(r.readInteger(p.type, "a face property"));
+        else
+          r.skipScalar(p.type, "a face property");
         continue;
       }
       uint64_t n = r.readListCount(p, "a list count");
@@ -578,6 +658,14 @@ void readFaces(const std::string& path, const PlyElement& e, Reader& r, Mesh& me
         ++mesh.stats.sourceFaces;
         emitFan(mesh.indices, poly.data(), poly.size());
       }
+    }
+    if (anyKept) {
+      const size_t made = mesh.indices.size() / 3 - trianglesBefore;
+      for (size_t k = 0; k < e.props.size(); ++k)
+        if (req.slotOf[k] >= 0) {
+          std::vector<uint32_t>& values = mesh.properties[size_t(req.slotOf[k])].values;
+          values.insert(values.end(), made, itemValues[size_t(req.slotOf[k])]);
+        }
     }
   }
 }
@@ -661,12 +749,13 @@ bool fixedSize(const PlyElement& e, size_t& bytes) {
 
 }  // namespace
 
-Mesh loadPly(const std::string& path) {
+Mesh loadPly(const std::string& path, const LoadOptions& options) {
   MappedFile file(path);
-  return loadPlyFromMemory(file.data(), file.size(), path);
+  return loadPlyFromMemory(file.data(), file.size(), path, options);
 }
 
-Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& path) {
+Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& path,
+                       const LoadOptions& options) {
   if (size == 0) throw Error(cat(path, ": file is empty"));
   const PlyHeader h = readPlyHeader(path, data, size);
   checkPlyCountsFitData(path, h, size - h.dataOffset);
@@ -682,6 +771,11 @@ Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& path) {
   }
   if (!vertexElem) throw Error(cat(path, ": no 'vertex' element in the header"));
   if (!haveFaces) throw Error(cat(path, ": no face or tristrips element in the header"));
+  for (const PropertyAov& p : options.properties) mesh.properties.push_back({p.domain, p.name, {}});
+  auto requestFor = [&](const PlyElement& e) {
+    return requestOf(path, e, e.name == "vertex" ? PropertyDomain::Vertex : PropertyDomain::Face,
+                     options);
+  };
 
   const char* begin = data + h.dataOffset;
   const char* end = data + size;
@@ -689,9 +783,9 @@ Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& path) {
     TextReader r(path, begin, end, h.dataLine);
     for (const PlyElement& e : h.elements) {
       if (e.name == "vertex")
-        readVertices(path, e, r, mesh);
+        readVertices(path, e, r, mesh, requestFor(e));
       else if (e.name == "face" || e.name == "tristrips")
-        readFaces(path, e, r, mesh, e.name == "tristrips");
+        readFaces(path, e, r, mesh, e.name == "tristrips", requestFor(e));
       else
         skipElement(e, r);
     }
@@ -700,12 +794,16 @@ Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& path) {
     BinaryReader r(path, data, begin, end, swap);
     for (const PlyElement& e : h.elements) {
       size_t itemBytes;
+      // The fast paths read elements with exactly the positions or the index list, so they
+      // never see a requested property or normal (requestFor has checked it exists).
       if (e.name == "vertex") {
-        if (!readVerticesFast(e, r, mesh)) readVertices(path, e, r, mesh);
+        const ElementRequest req = requestFor(e);
+        if (!readVerticesFast(e, r, mesh)) readVertices(path, e, r, mesh, req);
       } else if (e.name == "face") {
-        if (!readFacesFast(path, e, r, mesh)) readFaces(path, e, r, mesh, false);
+        const ElementRequest req = requestFor(e);
+        if (!readFacesFast(path, e, r, mesh)) readFaces(path, e, r, mesh, false, req);
       } else if (e.name == "tristrips") {
-        readFaces(path, e, r, mesh, true);
+        readFaces(path, e, r, mesh, true, requestFor(e));
       } else if (fixedSize(e, itemBytes)) {
         r.skipValues(e.count * itemBytes, PlyType::UInt8, "skipped element data");
       } else {

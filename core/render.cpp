@@ -33,6 +33,19 @@ const char* normalFrameName(NormalFrame frame) {
   }
 }
 
+glm::dmat3 normalFrameFromWorld(NormalFrame frame, const CameraDescription& camera) {
+  // glm matrices are built from columns; the rows of the rotation are the frame's axes in
+  // world space, so the matrix is the transpose of the one with those columns.
+  switch (frame) {
+    case NormalFrame::OpenCV:
+      return glm::transpose(glm::dmat3(camera.u, -camera.v, -camera.w));
+    case NormalFrame::OpenGL:
+      return glm::transpose(glm::dmat3(camera.u, camera.v, camera.w));
+    default:
+      return glm::dmat3(1.0);
+  }
+}
+
 void validateRenderSettings(const RenderSettings& s) {
   if (s.packetWidth != 1 && s.packetWidth != 4 && s.packetWidth != 8 && s.packetWidth != 16)
     throw Error(cat("packet width ", s.packetWidth, " is not one of 1, 4, 8, 16"));
@@ -41,6 +54,27 @@ void validateRenderSettings(const RenderSettings& s) {
 }
 
 namespace {
+
+/// For each property channel of `fb`, each object's values of that property. Throws Error,
+/// before anything is rendered, naming the first object mesh that lacks one.
+std::vector<std::vector<const uint32_t*>> propertyTables(const Scene& scene,
+                                                         const Framebuffer& fb) {
+  std::vector<std::vector<const uint32_t*>> tables;
+  for (const PropertyChannel& channel : fb.properties) {
+    std::vector<const uint32_t*> perObject;
+    for (size_t object = 0; object < scene.objectCount(); ++object) {
+      const Mesh& mesh = scene.objectMesh(unsigned(object));
+      const MeshProperty* p = mesh.property(channel.property.domain, channel.property.name);
+      if (!p)
+        throw Error(cat("AOV '", channel.property.aovName(), "': mesh '", mesh.name, "' (object ",
+                        object, ") has no such property; was it loaded with it ",
+                        "(LoadOptions::properties)?"));
+      perObject.push_back(p->values.data());
+    }
+    tables.push_back(std::move(perObject));
+  }
+  return tables;
+}
 
 /// What one frame computes, decided once from the framebuffer's AOVs.
 struct ImagePlan {
@@ -54,6 +88,14 @@ struct ImagePlan {
   glm::vec3 eye, axis;  // render space
   glm::dvec3 origin;    // world position of the render-space origin
   bool color, depth, distance, normal, position, primId, geomId;
+  bool shadingNormal;
+  bool rotateNormals;        // normalFrame is not World: normals go through frameFromWorld
+  glm::mat3 frameFromWorld;  // normalFrameFromWorld(settings.normalFrame, camera)
+  /// Per requested property (fb.properties order), per object: the mesh's values.
+  std::vector<std::vector<const uint32_t*>> propertyValues;
+  /// Anything of the mesh data pass (storeMeshDataLane): decided once, so a frame without
+  /// it runs the geometry store unchanged.
+  bool meshData;
   bool anyGeometry;   // any AOV filled from the centre ray
   bool instanced;     // normals of instanced hits need the instance's normal matrix
   bool remapPrimIds;  // the scene was culled: primID goes through Scene::originalPrimId
@@ -81,7 +123,13 @@ ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSet
       position(fb_.has(kAovPosition)),
       primId(fb_.has(kAovPrimId)),
       geomId(fb_.has(kAovGeomId)),
-      anyGeometry(depth || distance || normal || position || primId || geomId),
+      shadingNormal(fb_.has(kAovShadingNormal)),
+      rotateNormals(settings_.normalFrame != NormalFrame::World),
+      frameFromWorld(normalFrameFromWorld(settings_.normalFrame, camera_.describe())),
+      propertyValues(propertyTables(scene_, fb_)),
+      meshData(shadingNormal || !fb_.properties.empty() || (normal && rotateNormals)),
+      anyGeometry(depth || distance || normal || position || primId || geomId || shadingNormal ||
+                  !fb_.properties.empty()),
       instanced(scene_.instanceCount() > 0),
       remapPrimIds(scene_.remapsPrimIds()),
       colorSamples(color ? settings_.spp : 0),
@@ -251,11 +299,72 @@ void storeGeometryLane(const ImagePlan& plan, const PacketState<N>& st, const Pa
   if (plan.geomId) fb.geomId[px] = objectId(st.hits, k);
 }
 
-/// Stores the geometry AOVs of every hit lane of the packet of `req` (misses keep the
-/// framebuffer's miss values).
+/// The corner (0, 1, 2 in index-buffer order) with the largest barycentric weight
+/// (1 − u − v, u, v); ties go to the lowest corner.
+inline int nearestCorner(float u, float v) {
+  const float w[3] = {1.0f - u - v, u, v};
+  int c = 0;
+  if (w[1] > w[c]) c = 1;
+  if (w[2] > w[c]) c = 2;
+  return c;
+}
+
+/// `n` normalised, or `fallback` when it has zero length.
+inline glm::vec3 unitOr(const glm::vec3& n, const glm::vec3& fallback) {
+  const float len2 = glm::dot(n, n);
+  return len2 > 0.0f ? n / std::sqrt(len2) : fallback;
+}
+
+/// Stores the AOVs read from the hit mesh's data for hit lane k at pixel px: the shading
+/// normal, the property channels, and the normal (and shading normal) in the plan's frame.
+/// Shading normal: the triangle's vertex normals interpolated with Embree's u, v, through the
+/// instance's normal matrix, normalised; the geometric normal for a mesh without vertex
+/// normals (or where the interpolated normal vanishes).
 template <int N>
-void storeGeometry(const ImagePlan& plan, const PacketRequest& req, const PacketState<N>& st,
-                   const PacketHits<N>& h) {
+void storeMeshDataLane(const ImagePlan& plan, const PacketState<N>& st, const PacketHits<N>& h,
+                       int k, size_t px) {
+  Framebuffer& fb = plan.fb;
+  const unsigned object = objectId(st.hits, k);
+  const uint32_t prim =
+      plan.remapPrimIds ? plan.scene.originalPrimId(object, st.hits.primID[k]) : st.hits.primID[k];
+  const Mesh& mesh = plan.scene.objectMesh(object);
+  const uint32_t* corner = &mesh.indices[3 * size_t(prim)];
+  const BarycentricLanes bary = barycentricLanes<N>(st.packet);
+  const float u = bary.u[k], v = bary.v[k];
+  const glm::vec3 ng(h.nx[k], h.ny[k], h.nz[k]);  // unit, world space
+  if (plan.shadingNormal) {
+    glm::vec3 ns = ng;
+    if (!mesh.vertexNormals.empty()) {
+      const float* vn = mesh.vertexNormals.data();
+      const float w[3] = {1.0f - u - v, u, v};
+      glm::vec3 sum(0.0f);
+      for (int c = 0; c < 3; ++c)
+        sum += w[c] * glm::vec3(vn[3 * size_t(corner[c])], vn[3 * size_t(corner[c]) + 1],
+                                vn[3 * size_t(corner[c]) + 2]);
+      if (st.hits.instID[k] != RTC_INVALID_GEOMETRY_ID)
+        sum = plan.scene.normalFromMesh(st.hits.instID[k]) * sum;
+      ns = unitOr(sum, ng);
+    }
+    if (plan.rotateNormals) ns = plan.frameFromWorld * ns;
+    for (int a = 0; a < 3; ++a) fb.shadingNormal[3 * px + size_t(a)] = ns[a];
+  }
+  if (plan.normal && plan.rotateNormals) {
+    const glm::vec3 n = plan.frameFromWorld * ng;
+    for (int a = 0; a < 3; ++a) fb.normal[3 * px + size_t(a)] = n[a];
+  }
+  for (size_t j = 0; j < fb.properties.size(); ++j) {
+    const uint32_t* values = plan.propertyValues[j][object];
+    fb.properties[j].values[px] = fb.properties[j].property.domain == PropertyDomain::Face
+                                      ? values[prim]
+                                      : values[corner[nearestCorner(u, v)]];
+  }
+}
+
+/// Stores the geometry AOVs of every hit lane of the packet of `req` (misses keep the
+/// framebuffer's miss values); with kMeshData also the mesh data AOVs (storeMeshDataLane).
+template <int N, bool kMeshData>
+void storeGeometryLanes(const ImagePlan& plan, const PacketRequest& req, const PacketState<N>& st,
+                        const PacketHits<N>& h) {
   constexpr int kBW = blockWidthFor(N);
   alignas(64) float z[N];
   if (plan.depth) planarDepths<N>(plan, st, z);
@@ -265,7 +374,17 @@ void storeGeometry(const ImagePlan& plan, const PacketRequest& req, const Packet
     const LanePixel p = lanePixel(x0, y0, kBW, k);
     const size_t px = size_t(p.row) * size_t(width) + size_t(p.column);
     storeGeometryLane<N>(plan, st, h, k, z, px);
+    if constexpr (kMeshData) storeMeshDataLane<N>(plan, st, h, k, px);
   }
+}
+
+template <int N>
+void storeGeometry(const ImagePlan& plan, const PacketRequest& req, const PacketState<N>& st,
+                   const PacketHits<N>& h) {
+  if (plan.meshData)
+    storeGeometryLanes<N, true>(plan, req, st, h);
+  else
+    storeGeometryLanes<N, false>(plan, req, st, h);
 }
 
 /// Traces the packet of `req`; adds its shading to `color` when given, and stores the
@@ -277,7 +396,7 @@ void renderPass(const ImagePlan& plan, const PacketRequest& req, PacketState<N>&
   PacketHits<N> hits;
   if (findHits<N>(st, hits) == 0) return;
   count.hits += uint64_t(hits.count);
-  if (color || (geometry && plan.normal)) unitNormals<N>(plan, st, hits);
+  if (color || (geometry && (plan.normal || plan.shadingNormal))) unitNormals<N>(plan, st, hits);
   if (color) accumulateColor<N>(st, hits, *color);
   if (geometry) storeGeometry<N>(plan, req, st, hits);
 }
@@ -343,7 +462,7 @@ void renderTileOfWidth(const ImagePlan& plan, int x0, int y0, int x1, int y1, Ti
 /// Throws Error when the framebuffer is empty or does not match the camera's image size
 /// and spp.
 void checkFramebuffer(const Camera& camera, const RenderSettings& settings, const Framebuffer& fb) {
-  if (fb.width <= 0 || fb.height <= 0 || fb.aovs == 0)
+  if (fb.width <= 0 || fb.height <= 0 || (fb.aovs == 0 && fb.properties.empty()))
     throw Error(cat("framebuffer ", fb.width, "x", fb.height, " with AOVs '",
                     aovListString(fb.aovs), "' is empty"));
   const CameraDescription desc = camera.describe();

@@ -17,6 +17,10 @@ namespace aperture {
 enum class NormalFrame { World, OpenCV, OpenGL };
 NormalFrame parseNormalFrame(const std::string& name);  ///< world|opencv|opengl, else Error
 const char* normalFrameName(NormalFrame frame);
+/// The rotation taking world-space directions into `frame` of the camera described by
+/// `camera` (rows: OpenCV U, −V, −W; OpenGL U, V, W; World the identity). The one owner of
+/// the normal frames: the frame loop applies it to normal and shading-normal.
+glm::dmat3 normalFrameFromWorld(NormalFrame frame, const CameraDescription& camera);
 
 struct RenderSettings {
   int packetWidth = 16;  ///< 1, 4, 8 or 16 rays per rtcIntersectN call (blocks 1x1, 2x2, 4x2, 4x4)

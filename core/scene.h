@@ -105,6 +105,8 @@ class Scene {
   /// The mesh of object `object` (the top-level geomID, or the instance's): its properties
   /// and vertex normals, indexed by originalPrimId().
   const Mesh& objectMesh(unsigned object) const { return *objectMeshes_[object]; }
+  /// Number of objects (top-level geomIDs 0 .. objectCount() - 1).
+  size_t objectCount() const { return objectMeshes_.size(); }
   /// True when some object was built from a TriangleSubset, so Embree's primID is an index
   /// into the subset and must go through originalPrimId().
   bool remapsPrimIds() const { return !primIdMaps_.empty(); }
