@@ -18,9 +18,11 @@
 
 #include <cstddef>
 #include <exception>
+#include <limits>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/layers.h"
 
 namespace aperture {
 
@@ -78,6 +80,15 @@ const char* const kFisheyeMapping = "equidistant";
 const char* const kColorNames[4] = {"R", "G", "B", "A"};
 const char* const kNormalNames[3] = {"N.X", "N.Y", "N.Z"};
 const char* const kPositionNames[3] = {"P.X", "P.Y", "P.Z"};
+
+/// Layered hits (core/layers.h): layer k (0-based, nearest first) is the OpenEXR layer
+/// "hit<k>" holding the channels below, e.g. hit0.Z hit0.T hit0.primID hit0.geomID hit1.Z ...
+/// Z and T float (+inf past the last surface), primID and geomID UINT (0xFFFFFFFF there).
+enum LayerChannel { kLayerZ, kLayerT, kLayerPrimId, kLayerGeomId };
+const char* const kLayerChannelNames[4] = {"Z", "T", "primID", "geomID"};
+std::string layerChannelName(int layer, LayerChannel channel) {
+  return cat("hit", layer, ".", kLayerChannelNames[channel]);
+}
 
 /// Adds a channel and a slice over interleaved data (`components` values a pixel).
 void addChannel(Imf::Header& header, Imf::FrameBuffer& frame, const char* name, Imf::PixelType type,
@@ -326,6 +337,18 @@ void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata&
     checkSize("geomid", fb.geomId.size(), 1);
     addChannel(header, frame, "geomID", Imf::UINT, fb.geomId.data(), sizeof(uint32_t), 1, w);
   }
+  checkSize("layers", fb.layerDepth.size(), size_t(fb.layers));
+  for (int k = 0; k < fb.layers; ++k) {
+    const size_t at = size_t(k) * n;
+    addChannel(header, frame, layerChannelName(k, kLayerZ).c_str(), Imf::FLOAT,
+               fb.layerDepth.data() + at, sizeof(float), 1, w);
+    addChannel(header, frame, layerChannelName(k, kLayerT).c_str(), Imf::FLOAT,
+               fb.layerDistance.data() + at, sizeof(float), 1, w);
+    addChannel(header, frame, layerChannelName(k, kLayerPrimId).c_str(), Imf::UINT,
+               fb.layerPrimId.data() + at, sizeof(uint32_t), 1, w);
+    addChannel(header, frame, layerChannelName(k, kLayerGeomId).c_str(), Imf::UINT,
+               fb.layerGeomId.data() + at, sizeof(uint32_t), 1, w);
+  }
   if (header.channels().begin() == header.channels().end())
     throw Error(cat("cannot write '", path, "': the framebuffer holds no AOV"));
 
@@ -360,9 +383,13 @@ Framebuffer readExr(const std::string& path, ExrMetadata* meta) {
     if (anyPresent(kPositionNames, 3)) mask |= kAovPosition;
     if (present("primID")) mask |= kAovPrimId;
     if (present("geomID")) mask |= kAovGeomId;
-    if (mask == 0) throw Error("no aperture channels (R G B A, Z, T, N.*, P.*, primID, geomID)");
+    AovSet set(mask);
+    while (set.layers < kMaxLayers && present(layerChannelName(set.layers, kLayerZ).c_str()))
+      ++set.layers;
+    if (set.empty())
+      throw Error("no aperture channels (R G B A, Z, T, N.*, P.*, primID, geomID, hit0.Z ...)");
 
-    Framebuffer fb(width, height, mask);
+    Framebuffer fb(width, height, set);
     Imf::FrameBuffer frame;
     auto insert = [&](const char* name, Imf::PixelType type, void* data, size_t valueSize,
                       int components, double fill) {
@@ -386,6 +413,18 @@ Framebuffer readExr(const std::string& path, ExrMetadata* meta) {
       insert("primID", Imf::UINT, fb.primId.data(), sizeof(uint32_t), 1, double(kInvalidId));
     if (mask & kAovGeomId)
       insert("geomID", Imf::UINT, fb.geomId.data(), sizeof(uint32_t), 1, double(kInvalidId));
+    const double inf = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < set.layers; ++k) {
+      const size_t at = size_t(k) * fb.pixelCount();
+      insert(layerChannelName(k, kLayerZ).c_str(), Imf::FLOAT, fb.layerDepth.data() + at,
+             sizeof(float), 1, inf);
+      insert(layerChannelName(k, kLayerT).c_str(), Imf::FLOAT, fb.layerDistance.data() + at,
+             sizeof(float), 1, inf);
+      insert(layerChannelName(k, kLayerPrimId).c_str(), Imf::UINT, fb.layerPrimId.data() + at,
+             sizeof(uint32_t), 1, double(kInvalidId));
+      insert(layerChannelName(k, kLayerGeomId).c_str(), Imf::UINT, fb.layerGeomId.data() + at,
+             sizeof(uint32_t), 1, double(kInvalidId));
+    }
     file.setFrameBuffer(frame);
     file.readPixels(window.min.y, window.max.y);
     if (meta) readHeaderAttributes(header, width, height, meta);
@@ -434,6 +473,9 @@ std::vector<std::string> exrChannelNames(const AovSet& set) {
   if (aovs & kAovPosition) names.insert(names.end(), kPositionNames, kPositionNames + 3);
   if (aovs & kAovPrimId) names.push_back("primID");
   if (aovs & kAovGeomId) names.push_back("geomID");
+  for (int k = 0; k < set.layers; ++k)
+    for (LayerChannel c : {kLayerZ, kLayerT, kLayerPrimId, kLayerGeomId})
+      names.push_back(layerChannelName(k, c));
   return names;
 }
 
