@@ -341,6 +341,7 @@ Command addBatchCommand(CLI::App& app) {
       ->group(group)
       ->capture_default_str();
   sub->add_option("--spp", cf.spp, "Samples per pixel")->group(group);
+  addLayersOption(*sub, cf.layers, group);
   sub->add_flag("--preview", cf.preview, "Also write DIR/<image name>.png")->group(group);
   sub->add_flag("--resume", args->resume,
                 "Skip images whose EXR (and preview) is complete and matches the job; remove "

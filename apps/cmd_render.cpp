@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "core/exr.h"
 #include "core/image.h"
+#include "core/layers.h"
 
 namespace aperture::app {
 
@@ -43,7 +44,9 @@ PreviewOptions checkRenderOutputs(const RenderArgs& a, const AovSet& aovs) {
 
 int runRender(const RenderArgs& a) {
   // Everything that can be checked is checked before loading the mesh.
-  const AovSet aovs = parseAovSet(a.render.aovs);
+  const AovSet aovs = a.render.aovSet();
+  SceneOptions sceneOptions = a.scene;
+  sceneOptions.contextFilter = layersNeedContextFilter(aovs);
   ExrOptions exr;
   exr.compression = parseExrCompression(a.compression);
   exr.halfColor = a.half;
@@ -59,7 +62,7 @@ int runRender(const RenderArgs& a) {
   Device device;
   CameraParams params;
   LoadedScene loaded =
-      loadSceneForCamera(device, a.scene, given, a.camera.defaults(), a.quiet, params);
+      loadSceneForCamera(device, sceneOptions, given, a.camera.defaults(), a.quiet, params);
 
   const RenderedView view = renderView(*loaded.scene, params, settings, aovs);
   const Framebuffer& fb = view.fb;

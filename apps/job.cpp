@@ -20,6 +20,7 @@
 #include "cameras/calibrated.h"
 #include "cameras/registry.h"
 #include "core/error.h"
+#include "core/layers.h"
 #include "core/units.h"
 
 namespace aperture::app {
@@ -413,17 +414,26 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
   const json root = parseJsonText(text, name);
   const Object top(name, "", root,
                    {"scene", "cameras", "aovs", "size", "spp", "output", "preview", "preview_range",
-                    "compression", "half", "performance", "preset", "camera_files"});
+                    "compression", "half", "performance", "preset", "camera_files", "layers"});
   Job job;
   job.path = name;
   const Preset* preset = readPreset(top, job);
   job.aovs = readAovs(top);
+  if (const std::optional<int> layers = top.integer("layers")) {
+    try {
+      checkLayerCount(*layers, "layers");
+    } catch (const Error& e) {
+      top.fail(top.keyPath("layers"), e.what());
+    }
+    job.aovs.layers = *layers;
+  }
   const CameraParams defaults = readCameraDefaults(top, preset);
   job.width = defaults.width;
   job.height = defaults.height;
   job.render.spp = defaults.spp;
   readOutputSettings(top, preset, job);
   readPerformance(top, job);
+  job.build.contextFilter = layersNeedContextFilter(job.aovs);
   readScene(top, baseDir, job);
   readCameras(top, defaults, baseDir, job);
   job.cameraFiles = top.boolean("camera_files", top.required("cameras").is_object());
@@ -442,6 +452,7 @@ Job cameraFileJob(const CameraFileBatch& b) {
               {"output", (fs::path(b.outDir) / "{image}.exr").generic_string()}};
   if (!b.images.empty()) job["cameras"]["images"] = b.images;
   if (b.spp) job["spp"] = *b.spp;
+  if (b.layers) job["layers"] = *b.layers;
   if (b.preview) job["preview"] = (fs::path(b.outDir) / "{image}.png").generic_string();
   return parseJobText(job.dump(), "batch --cameras " + b.cameras, "");
 }

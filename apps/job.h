@@ -76,7 +76,8 @@ struct CameraFileBatch {
   std::string outDir;
   std::string aovs = "depth";
   std::optional<int> spp;
-  bool preview = false;  ///< also DIR/<image name>.png
+  std::optional<int> layers;  ///< --layers K
+  bool preview = false;       ///< also DIR/<image name>.png
 };
 /// The job of a CameraFileBatch: written as a job file's JSON and read by parseJobText, so the
 /// one-line form and job files share every check.

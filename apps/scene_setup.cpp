@@ -33,6 +33,7 @@ BuildOptions SceneOptions::buildOptions() const {
   b.quality = parseBvhQuality(quality);
   b.robust = robust;
   b.compact = compact;
+  b.contextFilter = contextFilter;
   return b;
 }
 

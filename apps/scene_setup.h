@@ -39,6 +39,8 @@ struct SceneOptions {
   /// Leave triangles outside the cameras' view volumes out of the BVH (off by default).
   bool cull = false;
   std::string maxMemory;  ///< --max-memory: BYTES[K|M|G|T], auto, or "" for no limit
+  /// Not a flag: set by commands rendering layered hits (layersNeedContextFilter).
+  bool contextFilter = false;
   LoadOptions loadOptions() const;
   BuildOptions buildOptions() const;
   /// The scene these flags describe (the procedural default scene without --mesh).
