@@ -352,6 +352,7 @@ Command addBatchCommand(CLI::App& app) {
                   "(default 1000: millimetres per metre)")
       ->group(group)
       ->type_name("S");
+  addLayersOption(*sub, cf.layers, group);
   sub->add_flag("--preview", cf.preview, "Also write DIR/<image name>.png")->group(group);
   sub->add_option("--normal-frame", cf.normalFrame,
                   "Frame of normal and shading-normal: world, opencv or opengl")

@@ -19,6 +19,7 @@
 #include "core/atomic_file.h"
 #include "core/baseline.h"
 #include "core/error.h"
+#include "core/layers.h"
 #include "core/stats.h"
 
 namespace aperture::app {
@@ -32,6 +33,7 @@ struct BenchArgs {
   int frames = 10, warmup = 3, builds = 3;
   bool baseline = false, quiet = false;
   std::string sweep, json, preset;
+  std::string layersMethod;  ///< hidden --layers-method filter|retrace (bench/layers_methods.sh)
 };
 
 nlohmann::json toJson(const SampleSummary& s) {
@@ -40,7 +42,7 @@ nlohmann::json toJson(const SampleSummary& s) {
 
 /// Mrays/s of `frames` timed frames after `warmup` untimed ones.
 std::vector<double> timeFrames(const Scene& scene, const Camera& camera, const RenderSettings& rs,
-                               AovMask aovs, int width, int height, int warmup, int frames) {
+                               const AovSet& aovs, int width, int height, int warmup, int frames) {
   Framebuffer fb(width, height, aovs);
   std::vector<double> mrays;
   for (int f = 0; f < warmup + frames; ++f) {
@@ -82,14 +84,15 @@ struct Bench {
   const ThreadLimit& threads;
   const Device& device;
   LoadedScene& loaded;
-  AovMask aovs;
+  AovSet aovs;
   RenderSettings settings;
   BuildOptions build;
   CameraParams params;
   std::unique_ptr<Camera> camera;
 
   /// Mrays/s of the run's timed frames of `scene` with `rs` and `frameAovs`.
-  SampleSummary timeScene(const Scene& scene, const RenderSettings& rs, AovMask frameAovs) const {
+  SampleSummary timeScene(const Scene& scene, const RenderSettings& rs,
+                          const AovSet& frameAovs) const {
     return summarize(timeFrames(scene, *camera, rs, frameAovs, params.width, params.height,
                                 args.warmup, args.frames));
   }
@@ -117,6 +120,8 @@ void reportConfig(const Bench& b, nlohmann::json& j) {
                  {"compact", a.scene.compact},
                  {"placement", a.scene.worldSpace ? "world-space" : "camera-relative"},
                  {"aovs", aovListString(b.aovs)},
+                 {"layers", b.aovs.layers},
+                 {"layers_method", layerMethodName(defaultLayerMethod())},
                  {"camera", b.params.type},
                  {"width", b.params.width},
                  {"height", b.params.height},
@@ -125,12 +130,12 @@ void reportConfig(const Bench& b, nlohmann::json& j) {
                  {"warmup", a.warmup}};
   std::printf(
       "config: %s, %zu triangles; %d threads, Embree ISA %s; packet %d, tile %d; BVH %s%s%s; "
-      "AOVs %s; %s %dx%d, %d spp\n",
+      "AOVs %s; layers %d (%s); %s %dx%d, %d spp\n",
       meshNames.c_str(), st.triangles, b.threads.threads(), b.device.isaName().c_str(),
       b.settings.packetWidth, b.settings.tileSize, a.scene.quality.c_str(),
       robust ? " robust" : " not robust", a.scene.compact ? " compact" : "",
-      aovListString(b.aovs).c_str(), b.params.type.c_str(), b.params.width, b.params.height,
-      b.params.spp);
+      aovListString(b.aovs).c_str(), b.aovs.layers, layerMethodName(defaultLayerMethod()),
+      b.params.type.c_str(), b.params.width, b.params.height, b.params.spp);
 }
 
 /// Load speed, and the BVH build time over --builds builds (the first is the run's own).
@@ -291,7 +296,12 @@ void runSweep(const Bench& b, nlohmann::json& j) {
 }
 
 int runBench(const BenchArgs& a) {
-  const AovMask aovs = parseAovList(a.render.aovs);
+  if (!a.layersMethod.empty()) setLayerMethod(parseLayerMethod(a.layersMethod));
+  const AovSet aovs = a.render.aovSet();
+  if (!aovs.properties.empty())
+    throw Error(cat("AOV '", aovs.properties.front().aovName(), "' is not available in bench"));
+  SceneOptions sceneOptions = a.scene;
+  sceneOptions.aovs = aovs;
   const ParamSet given = a.camera.given();
   const CameraParams unframed =
       resolveCommandCamera(given, a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0));
@@ -303,10 +313,10 @@ int runBench(const BenchArgs& a) {
   Device device;
   CameraParams params;
   LoadedScene loaded =
-      loadSceneForCamera(device, a.scene, given, a.camera.defaults(), a.quiet, params);
+      loadSceneForCamera(device, sceneOptions, given, a.camera.defaults(), a.quiet, params);
   auto camera = makeCamera(params, loaded.scene->renderOrigin());
   const Bench bench{
-      a,      threads,          device, loaded, aovs, settings, a.scene.buildOptions(),
+      a,      threads,          device, loaded, aovs, settings, sceneOptions.buildOptions(),
       params, std::move(camera)};
 
   nlohmann::json j;
@@ -339,6 +349,8 @@ Command addBenchCommand(CLI::App& app) {
                   "Also sweep: packet, threads, quality or aovs (depth alone .. all AOVs, "
                   "interleaved frames)");
   sub->add_option("--json", args->json, "Write every figure to this JSON file");
+  // Hidden (no group): picks the layered-hit method to measure, as APERTURE_LAYERS_METHOD.
+  sub->add_option("--layers-method", args->layersMethod)->group("");
   sub->add_flag("--quiet", args->quiet, "No log lines on stderr");
   addPresetOption(*sub, args->preset);
   return [args, sub] {

@@ -15,6 +15,7 @@
 #include "core/error.h"
 #include "core/exr.h"
 #include "core/image.h"
+#include "core/layers.h"
 
 namespace aperture::app {
 
@@ -64,7 +65,9 @@ PreviewOptions checkRenderOutputs(const RenderArgs& a, const AovSet& aovs) {
 
 int runRender(const RenderArgs& a) {
   // Everything that can be checked is checked before loading the mesh.
-  const AovSet aovs = parseAovSet(a.render.aovs);
+  const AovSet aovs = a.render.aovSet();
+  SceneOptions sceneOptions = a.scene;
+  sceneOptions.aovs = aovs;  // the mesh data and BVH flags the AOVs need (withAovNeeds)
   ExrOptions exr;
   exr.compression = parseExrCompression(a.compression);
   exr.halfColor = a.half;
@@ -80,10 +83,8 @@ int runRender(const RenderArgs& a) {
   ThreadLimit threads(a.render.threads);
   Device device;
   CameraParams params;
-  SceneOptions scene = a.scene;
-  scene.aovs = aovs;  // the mesh data the AOVs read (withMeshDataFor)
   LoadedScene loaded =
-      loadSceneForCamera(device, scene, given, a.camera.defaults(), a.quiet, params);
+      loadSceneForCamera(device, sceneOptions, given, a.camera.defaults(), a.quiet, params);
 
   const RenderedView view = renderView(*loaded.scene, params, settings, aovs);
   const Framebuffer& fb = view.fb;

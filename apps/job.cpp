@@ -22,6 +22,7 @@
 #include "cameras/registry.h"
 #include "core/dataset_image.h"
 #include "core/error.h"
+#include "core/layers.h"
 #include "core/mesh.h"
 #include "core/units.h"
 
@@ -527,11 +528,19 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
   const Object top(name, "", root,
                    {"scene", "cameras", "aovs", "size", "spp", "output", "outputs", "depth_scale",
                     "preview", "preview_range", "compression", "half", "performance", "preset",
-                    "camera_files", "normal_frame", "id_counts"});
+                    "camera_files", "normal_frame", "id_counts", "layers"});
   Job job;
   job.path = name;
   const Preset* preset = readPreset(top, job);
   job.aovs = readAovs(top);
+  if (const std::optional<int> layers = top.integer("layers")) {
+    try {
+      checkLayerCount(*layers, "layers");
+    } catch (const Error& e) {
+      top.fail(top.keyPath("layers"), e.what());
+    }
+    job.aovs.layers = *layers;
+  }
   const CameraParams defaults = readCameraDefaults(top, preset);
   job.width = defaults.width;
   job.height = defaults.height;
@@ -572,6 +581,7 @@ Job cameraFileJob(const CameraFileBatch& b) {
   if (b.depthScale) job["depth_scale"] = *b.depthScale;
   if (!b.images.empty()) job["cameras"]["images"] = b.images;
   if (b.spp) job["spp"] = *b.spp;
+  if (b.layers) job["layers"] = *b.layers;
   if (b.preview) job["preview"] = (fs::path(b.outDir) / "{image}.png").generic_string();
   if (b.normalFrame != "world") job["normal_frame"] = b.normalFrame;
   if (b.idCounts) job["id_counts"] = true;

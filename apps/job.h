@@ -57,7 +57,7 @@ struct Job {
   /// The scene to load and build: meshes, placement, BVH options, culling and the mesh data
   /// the AOVs read.
   SceneSpec sceneSpec() const {
-    return withMeshDataFor({meshes, placement, build, cull, {}, false}, aovs);
+    return withAovNeeds({meshes, placement, build, cull, {}, false}, aovs);
   }
   /// "id_counts": summary.json reports per image the pixel count of each id of the property
   /// AOVs and geomid (batchIdCounts).
@@ -108,6 +108,7 @@ struct CameraFileBatch {
   std::optional<double> depthScale;   ///< --depth-scale
   std::string normalFrame = "world";  ///< --normal-frame: the job's "normal_frame"
   bool idCounts = false;              ///< --id-counts: the job's "id_counts"
+  std::optional<int> layers;          ///< --layers K
 };
 /// The job of a CameraFileBatch: written as a job file's JSON and read by parseJobText, so the
 /// one-line form and job files share every check.

@@ -3,8 +3,19 @@
 #include <tbb/global_control.h>
 
 #include "core/error.h"
+#include "core/layers.h"
 
 namespace aperture::app {
+
+const char* const kLayersHelp =
+    "Also record the first K surfaces along each pixel-centre ray, K in [1, 64]: EXR channels "
+    "hit<k>.Z hit<k>.T hit<k>.primID hit<k>.geomID for k = 0..K-1, nearest first "
+    "(docs/layers.md)";
+
+void addLayersOption(CLI::App& app, std::optional<int>& layers, const std::string& group) {
+  CLI::Option* o = app.add_option("--layers", layers, kLayersHelp)->type_name("K");
+  if (!group.empty()) o->group(group);
+}
 
 void addRenderOptions(CLI::App& app, RenderOptions& o) {
   app.add_option("--aov", o.aovs,
@@ -15,6 +26,7 @@ void addRenderOptions(CLI::App& app, RenderOptions& o) {
                  "Frame of normal and shading-normal: world, opencv (x right, y down, z "
                  "forward) or opengl (x right, y up, z backwards), the camera's axes")
       ->capture_default_str();
+  addLayersOption(app, o.layers);
   app.add_option("--packet", o.packet, "Rays per Embree call: 1, 4, 8 or 16")
       ->capture_default_str();
   app.add_option("--tile", o.tile, "Tile size in pixels: a multiple of 4 in [4, 4096]")
@@ -33,6 +45,15 @@ RenderSettings RenderOptions::settings(int spp) const {
   if (threads < 0 || threads > 4096)
     throw Error(cat("--threads ", threads, " must be in [0, 4096]"));
   return s;
+}
+
+AovSet RenderOptions::aovSet() const {
+  AovSet set = parseAovSet(aovs);
+  if (layers) {
+    checkLayerCount(*layers, "--layers");
+    set.layers = *layers;
+  }
+  return set;
 }
 
 struct ThreadLimitImpl {

@@ -2,6 +2,7 @@
 // The frame-loop flags (AOVs, packet width, tile size, threads) and the thread limit.
 #include <CLI/CLI.hpp>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "core/render.h"
@@ -10,12 +11,19 @@ namespace aperture::app {
 
 struct RenderOptions {
   std::string aovs = "color,depth";
+  std::optional<int> layers;  ///< --layers K: the first K surfaces per pixel
   int packet = 16, tile = 32, threads = 0;
   std::string normalFrame = "world";  ///< --normal-frame
   RenderSettings settings(int spp) const;
+  /// The AOVs of --aov and --layers; throws Error for a bad name or K.
+  AovSet aovSet() const;
 };
 
 void addRenderOptions(CLI::App& app, RenderOptions& o);
+/// The --layers flag alone (render and bench add it through addRenderOptions).
+void addLayersOption(CLI::App& app, std::optional<int>& layers, const std::string& group = "");
+/// --layers help: what it records and where (docs/layers.md).
+extern const char* const kLayersHelp;
 
 /// Limits TBB (and so Embree's builder) to n threads while alive; n = 0 keeps all cores.
 class ThreadLimit {

@@ -7,6 +7,7 @@
 
 #include "cameras/culling.h"
 #include "core/error.h"
+#include "core/layers.h"
 #include "core/limits.h"
 
 namespace aperture::app {
@@ -80,12 +81,13 @@ SceneSpec SceneOptions::spec() const {
   s.placement = loadOptions().placement;
   s.build = buildOptions();
   s.cull = cull;
-  return withMeshDataFor(s, aovs);
+  return withAovNeeds(s, aovs);
 }
 
-SceneSpec withMeshDataFor(SceneSpec spec, const AovSet& aovs) {
+SceneSpec withAovNeeds(SceneSpec spec, const AovSet& aovs) {
   spec.properties = aovs.properties;
   spec.vertexNormals = aovs.has(kAovShadingNormal);
+  spec.build.contextFilter = layersNeedContextFilter(aovs);
   return spec;
 }
 

@@ -29,15 +29,16 @@ struct SceneSpec {
   Placement placement = Placement::CameraRelative;
   BuildOptions build;
   bool cull = false;  ///< BVH over only the triangles the cameras may see
-  /// Mesh data beyond positions that the frames read (set by withMeshDataFor): the integer
+  /// Mesh data beyond positions that the frames read (set by withAovNeeds): the integer
   /// properties of the face./vertex. AOVs and vertex normals for shading-normal.
   std::vector<PropertyAov> properties;
   bool vertexNormals = false;
 };
 
-/// `spec` with the mesh data the AOVs of `aovs` need: the one place that derives what is
+/// `spec` with what the AOVs of `aovs` need of the scene (vertex normals, integer properties,
+/// the BVH's context filter for layered hits): the one place that derives what is
 /// loaded from what is rendered (render, batch, jobs and Python call it).
-SceneSpec withMeshDataFor(SceneSpec spec, const AovSet& aovs);
+SceneSpec withAovNeeds(SceneSpec spec, const AovSet& aovs);
 
 struct SceneOptions {
   std::vector<std::string> meshes;  ///< empty: the default procedural scene
@@ -48,7 +49,7 @@ struct SceneOptions {
   bool cull = false;
   std::string maxMemory;  ///< --max-memory: BYTES[K|M|G|T], auto, or "" for no limit
   /// What the frames compute (set by the command after parsing --aov): decides the mesh data
-  /// spec() asks the loaders for.
+  /// and the BVH flags spec() asks for (withAovNeeds).
   AovSet aovs;
   LoadOptions loadOptions() const;
   BuildOptions buildOptions() const;

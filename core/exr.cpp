@@ -18,9 +18,11 @@
 
 #include <cstddef>
 #include <exception>
+#include <limits>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/layers.h"
 
 namespace aperture {
 
@@ -92,6 +94,15 @@ std::vector<PropertyAov> propertyChannelsOf(const Imf::ChannelList& channels) {
     if (set.properties.size() == 1) found.push_back(set.properties.front());
   }
   return found;
+}
+
+/// Layered hits (core/layers.h): layer k (0-based, nearest first) is the OpenEXR layer
+/// "hit<k>" holding the channels below, e.g. hit0.Z hit0.T hit0.primID hit0.geomID hit1.Z ...
+/// Z and T float (+inf past the last surface), primID and geomID UINT (0xFFFFFFFF there).
+enum LayerChannel { kLayerZ, kLayerT, kLayerPrimId, kLayerGeomId };
+const char* const kLayerChannelNames[4] = {"Z", "T", "primID", "geomID"};
+std::string layerChannelName(int layer, LayerChannel channel) {
+  return cat("hit", layer, ".", kLayerChannelNames[channel]);
 }
 
 /// Adds a channel and a slice over interleaved data (`components` values a pixel).
@@ -354,6 +365,18 @@ void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata&
     addChannel(header, frame, propertyNames[j].c_str(), Imf::UINT, fb.properties[j].values.data(),
                sizeof(uint32_t), 1, w);
   }
+  checkSize("layers", fb.layerDepth.size(), size_t(fb.layers));
+  for (int k = 0; k < fb.layers; ++k) {
+    const size_t at = size_t(k) * n;
+    addChannel(header, frame, layerChannelName(k, kLayerZ).c_str(), Imf::FLOAT,
+               fb.layerDepth.data() + at, sizeof(float), 1, w);
+    addChannel(header, frame, layerChannelName(k, kLayerT).c_str(), Imf::FLOAT,
+               fb.layerDistance.data() + at, sizeof(float), 1, w);
+    addChannel(header, frame, layerChannelName(k, kLayerPrimId).c_str(), Imf::UINT,
+               fb.layerPrimId.data() + at, sizeof(uint32_t), 1, w);
+    addChannel(header, frame, layerChannelName(k, kLayerGeomId).c_str(), Imf::UINT,
+               fb.layerGeomId.data() + at, sizeof(uint32_t), 1, w);
+  }
   if (header.channels().begin() == header.channels().end())
     throw Error(cat("cannot write '", path, "': the framebuffer holds no AOV"));
 
@@ -391,10 +414,12 @@ Framebuffer readExr(const std::string& path, ExrMetadata* meta) {
     if (anyPresent(kShadingNormalNames, 3)) mask |= kAovShadingNormal;
     AovSet set(mask);
     set.properties = propertyChannelsOf(channels);
+    while (set.layers < kMaxLayers && present(layerChannelName(set.layers, kLayerZ).c_str()))
+      ++set.layers;
     if (set.empty())
       throw Error(
           "no aperture channels (R G B A, Z, T, N.*, P.*, primID, geomID, Ns.*, face.*, "
-          "vertex.*)");
+          "vertex.*, hit0.Z ...)");
 
     Framebuffer fb(width, height, set);
     Imf::FrameBuffer frame;
@@ -429,6 +454,18 @@ Framebuffer readExr(const std::string& path, ExrMetadata* meta) {
     for (size_t j = 0; j < fb.properties.size(); ++j)
       insert(propertyNames[j].c_str(), Imf::UINT, fb.properties[j].values.data(), sizeof(uint32_t),
              1, double(kInvalidId));
+    const double inf = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < set.layers; ++k) {
+      const size_t at = size_t(k) * fb.pixelCount();
+      insert(layerChannelName(k, kLayerZ).c_str(), Imf::FLOAT, fb.layerDepth.data() + at,
+             sizeof(float), 1, inf);
+      insert(layerChannelName(k, kLayerT).c_str(), Imf::FLOAT, fb.layerDistance.data() + at,
+             sizeof(float), 1, inf);
+      insert(layerChannelName(k, kLayerPrimId).c_str(), Imf::UINT, fb.layerPrimId.data() + at,
+             sizeof(uint32_t), 1, double(kInvalidId));
+      insert(layerChannelName(k, kLayerGeomId).c_str(), Imf::UINT, fb.layerGeomId.data() + at,
+             sizeof(uint32_t), 1, double(kInvalidId));
+    }
     file.setFrameBuffer(frame);
     file.readPixels(window.min.y, window.max.y);
     if (meta) readHeaderAttributes(header, width, height, meta);
@@ -480,6 +517,9 @@ std::vector<std::string> exrChannelNames(const AovSet& set) {
   if (aovs & kAovShadingNormal)
     names.insert(names.end(), kShadingNormalNames, kShadingNormalNames + 3);
   for (const PropertyAov& p : set.properties) names.push_back(p.aovName());
+  for (int k = 0; k < set.layers; ++k)
+    for (LayerChannel c : {kLayerZ, kLayerT, kLayerPrimId, kLayerGeomId})
+      names.push_back(layerChannelName(k, c));
   return names;
 }
 

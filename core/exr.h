@@ -51,7 +51,10 @@ Framebuffer readExr(const std::string& path, ExrMetadata* meta = nullptr);
 bool isCompleteExr(const std::string& path);
 
 /// The channel names writeExr gives the AOVs of `aovs` (R G B A, Z, T, N.X.., P.X.., primID,
-/// geomID, Ns.X.., then the property channels), in the order of the AovMask bits.
+/// geomID, Ns.X.., then the property channels), in the order of the AovMask bits, then the
+/// layered hits: layer k (0-based, nearest first) as the OpenEXR layer "hit<k>": hit<k>.Z,
+/// hit<k>.T (float, +inf past the last surface), hit<k>.primID, hit<k>.geomID (UINT,
+/// 0xFFFFFFFF there); docs/layers.md.
 std::vector<std::string> exrChannelNames(const AovSet& aovs);
 
 /// An EXR's header, read without decoding any pixel.

@@ -1,5 +1,6 @@
 #include "core/framebuffer.h"
 
+#include <iterator>
 #include <limits>
 #include <sstream>
 
@@ -138,9 +139,34 @@ ImageView floatView(const Framebuffer& fb, const std::vector<float>& v, int chan
 ImageView uintView(const Framebuffer& fb, const std::vector<uint32_t>& v) {
   return {fb.width, fb.height, 1, nullptr, v.data()};
 }
+
+/// The layered-hit views by name ("layers.depth", ...), in the order aovNames lists them.
+constexpr const char* kLayerViewNames[] = {"layers.depth", "layers.distance", "layers.primid",
+                                           "layers.geomid"};
+
+ImageView layerView(const Framebuffer& fb, int which) {
+  ImageView v{fb.width, fb.height, 1, nullptr, nullptr, fb.layers};
+  switch (which) {
+    case 0:
+      v.f32 = fb.layerDepth.data();
+      break;
+    case 1:
+      v.f32 = fb.layerDistance.data();
+      break;
+    case 2:
+      v.u32 = fb.layerPrimId.data();
+      break;
+    default:
+      v.u32 = fb.layerGeomId.data();
+  }
+  return v;
+}
 }  // namespace
 
 ImageView aovView(const Framebuffer& fb, const std::string& aovName) {
+  if (fb.layers > 0)
+    for (int k = 0; k < 4; ++k)
+      if (aovName == kLayerViewNames[k]) return layerView(fb, k);
   PropertyAov property;
   if (parsePropertyAov(aovName, property)) {
     for (const PropertyChannel& c : fb.properties)
@@ -177,6 +203,8 @@ std::vector<std::string> aovNames(const Framebuffer& fb) {
   for (const auto& a : kAovNames)
     if (fb.has(a.bit)) names.emplace_back(a.name);
   for (const PropertyChannel& c : fb.properties) names.push_back(c.property.aovName());
+  if (fb.layers > 0)
+    names.insert(names.end(), std::begin(kLayerViewNames), std::end(kLayerViewNames));
   return names;
 }
 

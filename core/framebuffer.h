@@ -96,15 +96,19 @@ struct Framebuffer {
 };
 
 /// One AOV's pixels: H rows of W pixels of C channels, row 0 at the top, interleaved; exactly
-/// one of f32 / u32 is set. Does not own the data.
+/// one of f32 / u32 is set. Layered hits are `layers` such images one after the other
+/// (layer-major: [k][row][column][channel]). Does not own the data.
 struct ImageView {
   int width = 0, height = 0, channels = 1;
   const float* f32 = nullptr;
   const uint32_t* u32 = nullptr;
+  int layers = 1;
 };
 
 /// The view of one AOV of `fb` by its name as parseAovSet spells it ("color" gives the 4
-/// RGBA channels, "depth", "normal", "primid", "shading-normal", "face.object_id", ...).
+/// RGBA channels, "depth", "normal", "primid", "shading-normal", "face.object_id", ...), or
+/// of the layered hits: "layers.depth", "layers.distance" (float), "layers.primid",
+/// "layers.geomid" (UINT), each with ImageView::layers = fb.layers.
 /// Throws Error when the framebuffer does not hold it.
 ImageView aovView(const Framebuffer& fb, const std::string& aovName);
 /// The names aovView knows for the AOVs `fb` holds, in aovListString order.

@@ -6,8 +6,10 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "core/error.h"
+#include "core/layers.h"
 #include "core/packet.h"
 #include "core/parallel.h"
 #include "core/spelling.h"
@@ -96,8 +98,9 @@ struct ImagePlan {
   /// Anything of the mesh data pass (storeMeshDataLane): decided once, so a frame without
   /// it runs the geometry store unchanged.
   bool meshData;
-  bool anyGeometry;   // any AOV filled from the centre ray
-  bool instanced;     // normals of instanced hits need the instance's normal matrix
+  std::optional<LayerPlan> layers;  // --layers K: the first K surfaces of the centre ray
+  bool anyGeometry;                 // any AOV filled from the centre ray
+  bool instanced;                   // normals of instanced hits need the instance's normal matrix
   bool remapPrimIds;  // the scene was culled: primID goes through Scene::originalPrimId
   // The passes over each block: colour averages samples [0, colorSamples); the geometry AOVs
   // come from the centre ray, which at spp 1 is sample 0 itself (geometryFromSample) and
@@ -128,8 +131,11 @@ ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSet
       frameFromWorld(normalFrameFromWorld(settings_.normalFrame, camera_.describe())),
       propertyValues(propertyTables(scene_, fb_)),
       meshData(shadingNormal || !fb_.properties.empty() || (normal && rotateNormals)),
+      layers(fb_.layers > 0
+                 ? std::optional<LayerPlan>(std::in_place, scene_, camera_, fb_, eye, axis)
+                 : std::nullopt),
       anyGeometry(depth || distance || normal || position || primId || geomId || shadingNormal ||
-                  !fb_.properties.empty()),
+                  !fb_.properties.empty() || layers),
       instanced(scene_.instanceCount() > 0),
       remapPrimIds(scene_.remapsPrimIds()),
       colorSamples(color ? settings_.spp : 0),
@@ -399,6 +405,7 @@ void renderPass(const ImagePlan& plan, const PacketRequest& req, PacketState<N>&
   if (color || (geometry && (plan.normal || plan.shadingNormal))) unitNormals<N>(plan, st, hits);
   if (color) accumulateColor<N>(st, hits, *color);
   if (geometry) storeGeometry<N>(plan, req, st, hits);
+  if (geometry && plan.layers) traceLayers<N>(*plan.layers, req, st.hits, hits.hit);
 }
 
 /// Writes the block's colour: the mean of its samples (R = G = B = shade, A = coverage).
@@ -462,9 +469,9 @@ void renderTileOfWidth(const ImagePlan& plan, int x0, int y0, int x1, int y1, Ti
 /// Throws Error when the framebuffer is empty or does not match the camera's image size
 /// and spp.
 void checkFramebuffer(const Camera& camera, const RenderSettings& settings, const Framebuffer& fb) {
-  if (fb.width <= 0 || fb.height <= 0 || (fb.aovs == 0 && fb.properties.empty()))
+  if (fb.width <= 0 || fb.height <= 0 || fb.aovSet().empty())
     throw Error(cat("framebuffer ", fb.width, "x", fb.height, " with AOVs '",
-                    aovListString(fb.aovs), "' is empty"));
+                    aovListString(fb.aovSet()), "' is empty"));
   const CameraDescription desc = camera.describe();
   if (desc.width != fb.width || desc.height != fb.height || desc.spp != settings.spp)
     throw Error(cat("camera image ", desc.width, "x", desc.height, " spp ", desc.spp,

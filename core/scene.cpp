@@ -172,6 +172,7 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
   int flags = RTC_SCENE_FLAG_NONE;
   if (options.robust) flags |= RTC_SCENE_FLAG_ROBUST;
   if (options.compact) flags |= RTC_SCENE_FLAG_COMPACT;
+  if (options.contextFilter) flags |= RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION;
   auto newScene = [&] {
     RTCScene s = rtcNewScene(device.handle());
     device.check("rtcNewScene");

@@ -49,6 +49,11 @@ struct BuildOptions {
   /// trace time (bench/TRADEOFF.md). Off only when asked for (--no-robust, preset fast).
   bool robust = true;
   bool compact = false;  ///< RTC_SCENE_FLAG_COMPACT: less memory, slower traversal
+  /// RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION on the scene and every instanced sub-scene: lets
+  /// layered hits (core/layers.h) collect every hit along a ray through a filter function in
+  /// the intersection context. Off unless layers are asked for: Embree then selects its
+  /// filter-capable traversal kernels for every ray of the scene.
+  bool contextFilter = false;
 };
 
 struct BuildStats {
