@@ -3,9 +3,13 @@
 #include <pmmintrin.h>
 #include <xmmintrin.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <deque>
+#include <memory>
+#include <mutex>
 
 #include "core/error.h"
 #include "core/packet.h"
@@ -380,6 +384,77 @@ RenderStats renderImage(const Scene& scene, const Camera& camera, const RenderSe
   stats.raysTraced = traced;
   stats.raysSkipped = skipped;
   stats.hits = hits;
+  return stats;
+}
+
+namespace {
+
+/// Work counters of one frame of renderImages, summed over its tiles.
+struct FrameProgress {
+  std::atomic<uint64_t> traced{0}, skipped{0}, hits{0};
+  std::atomic<size_t> tilesLeft{0};
+};
+
+}  // namespace
+
+std::vector<RenderStats> renderImages(const Scene& scene, const std::vector<const Camera*>& cameras,
+                                      const RenderSettings& settings,
+                                      std::vector<Framebuffer>& framebuffers,
+                                      const std::function<void(size_t)>& progress) {
+  validateRenderSettings(settings);
+  if (cameras.size() != framebuffers.size())
+    throw Error(cat("renderImages: ", cameras.size(), " cameras but ", framebuffers.size(),
+                    " framebuffers"));
+  const size_t n = cameras.size();
+  const int ts = settings.tileSize;
+  // One plan per frame, as renderImage makes it (with the camera's own spp), and the frames'
+  // tiles numbered one after another: frame k owns tiles [firstTile[k], firstTile[k + 1]).
+  std::deque<ImagePlan> plans;
+  std::vector<size_t> firstTile(n + 1, 0);
+  std::unique_ptr<FrameProgress[]> frames(new FrameProgress[n]);
+  for (size_t k = 0; k < n; ++k) {
+    APERTURE_CHECK_OP(cameras[k], !=, nullptr);
+    RenderSettings forCamera = settings;
+    forCamera.spp = cameras[k]->describe().spp;
+    checkFramebuffer(*cameras[k], forCamera, framebuffers[k]);
+    plans.emplace_back(scene, *cameras[k], forCamera, framebuffers[k]);
+    const size_t tiles = size_t((framebuffers[k].width + ts - 1) / ts) *
+                         size_t((framebuffers[k].height + ts - 1) / ts);
+    frames[k].tilesLeft = tiles;
+    firstTile[k + 1] = firstTile[k] + tiles;
+  }
+  std::vector<RenderStats> stats(n);
+  std::mutex progressMutex;
+  size_t framesDone = 0;
+  const auto start = std::chrono::steady_clock::now();
+  parallelFor(firstTile[n], 1, [&](size_t first, size_t last) {
+    for (size_t tile = first; tile != last; ++tile) {
+      const size_t k =
+          size_t(std::upper_bound(firstTile.begin(), firstTile.end(), tile) - firstTile.begin()) -
+          1;
+      const ImagePlan& plan = plans[k];
+      const int tilesX = (plan.fb.width + ts - 1) / ts, local = int(tile - firstTile[k]);
+      const int x0 = (local % tilesX) * ts, y0 = (local / tilesX) * ts;
+      const int x1 = std::min(x0 + ts, plan.fb.width), y1 = std::min(y0 + ts, plan.fb.height);
+      TileCounters c;
+      renderTileOfWidth(plan, x0, y0, x1, y1, c);
+      FrameProgress& f = frames[k];
+      f.traced += c.traced;
+      f.skipped += c.skipped;
+      f.hits += c.hits;
+      if (--f.tilesLeft != 0) continue;
+      // The frame's last tile: its counters are complete (every other tile decremented
+      // tilesLeft after adding its counts).
+      stats[k].seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      stats[k].raysTraced = f.traced;
+      stats[k].raysSkipped = f.skipped;
+      stats[k].hits = f.hits;
+      const std::lock_guard<std::mutex> lock(progressMutex);
+      ++framesDone;
+      if (progress) progress(framesDone);
+    }
+  });
   return stats;
 }
 
