@@ -39,7 +39,9 @@ struct DatasetWriteOptions {
 };
 
 struct DatasetWriteStats {
-  size_t outOfRange = 0;  ///< PNG16: finite values that did not fit in [1, 65535], written as 0
+  /// PNG16: values other than +inf (a miss) whose round(value · depthScale) is not in
+  /// [1, 65535] (negative, zero, too far, NaN, −inf); written as 0 like the misses.
+  size_t outOfRange = 0;
 };
 
 /// Writes `image` to `path` in `format`, atomically (core/atomic_file.h: a failure leaves no

@@ -1,0 +1,415 @@
+#include "core/dataset_image.h"
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <bitset>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <sstream>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace aperture {
+
+namespace {
+
+struct FormatEntry {
+  DatasetFormat format;
+  const char* name;
+  const char* takes;  ///< what the format holds, for refusals
+  std::vector<std::string> extensions;
+};
+
+const std::vector<FormatEntry>& formatTable() {
+  static const std::vector<FormatEntry> table = {
+      {DatasetFormat::Png16, "16-bit PNG", "one float channel: depth, distance", {".png"}},
+      {DatasetFormat::Pfm,
+       "PFM",
+       "float AOVs of 1 or 3 channels: depth, distance, normal, "
+       "position, shading-normal",
+       {".pfm"}},
+      {DatasetFormat::Npy, "NumPy .npy", "every AOV (float32 or uint32)", {".npy"}},
+      {DatasetFormat::Tiff, "float TIFF", "every AOV (float32 or uint32)", {".tif", ".tiff"}},
+  };
+  return table;
+}
+
+const FormatEntry& entryOf(DatasetFormat format) {
+  for (const FormatEntry& e : formatTable())
+    if (e.format == format) return e;
+  throw Error(cat("invalid dataset format value ", int(format)));
+}
+
+std::string lowerCase(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::string layoutText(int channels, bool isFloat) {
+  return cat(channels, " ", isFloat ? "float" : "uint32", " channel", channels == 1 ? "" : "s");
+}
+
+bool formatHolds(DatasetFormat format, int channels, bool isFloat) {
+  switch (format) {
+    case DatasetFormat::Png16:
+      return isFloat && channels == 1;
+    case DatasetFormat::Pfm:
+      return isFloat && (channels == 1 || channels == 3);
+    case DatasetFormat::Npy:
+    case DatasetFormat::Tiff:
+      return channels >= 1;
+  }
+  return false;
+}
+
+// --- Little-endian byte output (PFM with scale −1, NPY '<f4' / '<u4') -------------------------
+
+void appendLittleEndian(std::string& out, uint32_t bits) {
+  for (int k = 0; k < 4; ++k) out.push_back(char((bits >> (8 * k)) & 0xffu));
+}
+
+uint32_t valueBits(const ImageView& image, size_t index) {
+  if (image.u32) return image.u32[index];
+  uint32_t bits;
+  std::memcpy(&bits, &image.f32[index], sizeof bits);
+  return bits;
+}
+
+/// Appends pixel rows [row, row + 1) of `image` in their interleaved order.
+void appendRow(std::string& out, const ImageView& image, int row) {
+  const size_t perRow = size_t(image.width) * size_t(image.channels);
+  const size_t first = size_t(row) * perRow;
+  for (size_t k = 0; k < perRow; ++k) appendLittleEndian(out, valueBits(image, first + k));
+}
+
+/// PFM (Netpbm's description): "PF" (3 channels) or "Pf" (1), "W H", the scale whose negative
+/// sign means little-endian, each followed by one newline; then the raster, rows from the
+/// bottom of the image to the top.
+std::string encodePfm(const ImageView& image) {
+  std::string out =
+      cat(image.channels == 3 ? "PF" : "Pf", "\n", image.width, " ", image.height, "\n-1.0\n");
+  for (int row = image.height - 1; row >= 0; --row) appendRow(out, image, row);
+  return out;
+}
+
+/// NPY format 1.0: magic "\x93NUMPY", version 1 0, a little-endian uint16 header length, and
+/// a Python dict literal padded with spaces and ended by '\n' so that the data starts at a
+/// multiple of 64 bytes; then the array in C order.
+std::string encodeNpy(const ImageView& image) {
+  const std::string shape =
+      image.channels == 1 ? cat("(", image.height, ", ", image.width, ")")
+                          : cat("(", image.height, ", ", image.width, ", ", image.channels, ")");
+  std::string dict = cat("{'descr': '", image.u32 ? "<u4" : "<f4",
+                         "', 'fortran_order': False, 'shape': ", shape, ", }");
+  const size_t preamble = 6 + 2 + 2;  // magic, version, header length
+  const size_t unpadded = preamble + dict.size() + 1;
+  dict.append((64 - unpadded % 64) % 64, ' ');
+  dict.push_back('\n');
+  std::string out("\x93NUMPY\x01\x00", 8);
+  out.push_back(char(dict.size() & 0xffu));
+  out.push_back(char((dict.size() >> 8) & 0xffu));
+  out += dict;
+  for (int row = 0; row < image.height; ++row) appendRow(out, image, row);
+  return out;
+}
+
+// --- Through OpenImageIO (PNG16, TIFF), encoded in memory -------------------------------------
+
+/// The bytes of the file `path` would hold, encoded by OpenImageIO's writer for its extension
+/// (then written by writeBytesAtomically, which checks every write: OpenImageIO's PNG writer
+/// does not report a full disk).
+std::vector<unsigned char> encodeWithOiio(const std::string& path, OIIO::ImageSpec spec,
+                                          const void* pixels) {
+  auto out = OIIO::ImageOutput::create(path);
+  if (!out) throw Error(cat("no image writer for this extension: ", OIIO::geterror()));
+  std::vector<unsigned char> bytes;
+  OIIO::Filesystem::IOVecOutput memory(bytes);
+  OIIO::Filesystem::IOProxy* proxy = &memory;
+  spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+  // libtiff cannot write the Exif directory into memory (core/image.cpp); none is needed.
+  spec.attribute("tiff:write_exif", 0);
+  if (!out->open(path, spec)) throw Error(out->geterror());
+  if (!out->write_image(spec.format, pixels)) {
+    const std::string message = out->geterror();
+    out->close();
+    throw Error(message);
+  }
+  if (!out->close()) throw Error(out->geterror());
+  return bytes;
+}
+
+/// round(value · scale) when it lies in [1, 65535]; 0 otherwise (+inf misses, and the
+/// out-of-range values, NaN included, which are also counted).
+std::vector<uint16_t> depthToUint16(const ImageView& image, double scale, size_t* outOfRange) {
+  const size_t n = size_t(image.width) * size_t(image.height);
+  std::vector<uint16_t> values(n, 0);
+  for (size_t i = 0; i < n; ++i) {
+    const float v = image.f32[i];
+    if (v == std::numeric_limits<float>::infinity()) continue;
+    const double r = std::round(double(v) * scale);
+    if (r >= 1.0 && r <= 65535.0)
+      values[i] = uint16_t(r);
+    else
+      ++*outOfRange;
+  }
+  return values;
+}
+
+std::vector<unsigned char> encodePng16(const std::string& path, const ImageView& image,
+                                       double scale, size_t* outOfRange) {
+  const std::vector<uint16_t> values = depthToUint16(image, scale, outOfRange);
+  OIIO::ImageSpec spec(image.width, image.height, 1, OIIO::TypeDesc::UINT16);
+  spec.attribute("ImageDescription",
+                 cat("aperture depth: round(value * ", scale, "), 0 = no valid value"));
+  return encodeWithOiio(path, spec, values.data());
+}
+
+std::vector<unsigned char> encodeTiff(const std::string& path, const ImageView& image) {
+  OIIO::ImageSpec spec(image.width, image.height, image.channels,
+                       image.u32 ? OIIO::TypeDesc::UINT32 : OIIO::TypeDesc::FLOAT);
+  spec.attribute("compression", "zip");
+  return encodeWithOiio(
+      path, spec,
+      image.u32 ? static_cast<const void*>(image.u32) : static_cast<const void*>(image.f32));
+}
+
+// --- Reading back PFM and NPY ---------------------------------------------------------------
+
+std::string readWholeFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(cat("cannot open '", path, "' for reading"));
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+/// Reads the next whitespace-separated header token at `pos` and the one whitespace byte
+/// after it.
+std::string headerToken(const std::string& bytes, size_t& pos, const std::string& path) {
+  const size_t start = pos;
+  while (pos < bytes.size() && !std::isspace(static_cast<unsigned char>(bytes[pos]))) ++pos;
+  if (pos == start || pos >= bytes.size()) throw Error(cat("'", path, "': truncated PFM header"));
+  std::string token = bytes.substr(start, pos - start);
+  ++pos;
+  return token;
+}
+
+int positiveInt(const std::string& text, const std::string& what, const std::string& path) {
+  char* end = nullptr;
+  const long v = std::strtol(text.c_str(), &end, 10);
+  if (text.empty() || *end != '\0' || v <= 0 || v > (1L << 24))
+    throw Error(cat("'", path, "': bad ", what, " '", text, "'"));
+  return int(v);
+}
+
+/// Fills `count` values from `bytes` at `pos` in the given byte order.
+void readValues(const std::string& bytes, size_t pos, size_t count, bool littleEndian,
+                uint32_t* out) {
+  for (size_t i = 0; i < count; ++i) {
+    uint32_t v = 0;
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t b = static_cast<unsigned char>(bytes[pos + 4 * i + size_t(k)]);
+      v |= b << (littleEndian ? 8 * k : 8 * (3 - k));
+    }
+    out[i] = v;
+  }
+}
+
+void checkDataSize(const std::string& bytes, size_t pos, size_t count, const std::string& path) {
+  if (bytes.size() - pos != 4 * count)
+    throw Error(
+        cat("'", path, "': ", bytes.size() - pos, " bytes of pixel data, expected ", 4 * count));
+}
+
+DatasetImage readPfm(const std::string& path, const std::string& bytes) {
+  size_t pos = 0;
+  const std::string id = headerToken(bytes, pos, path);
+  if (id != "Pf" && id != "PF")
+    throw Error(cat("'", path, "': not a PFM file (starts '", id, "')"));
+  DatasetImage image;
+  image.channels = id == "PF" ? 3 : 1;
+  image.width = positiveInt(headerToken(bytes, pos, path), "PFM width", path);
+  image.height = positiveInt(headerToken(bytes, pos, path), "PFM height", path);
+  const std::string scaleText = headerToken(bytes, pos, path);
+  const double scale = std::strtod(scaleText.c_str(), nullptr);
+  if (!(scale != 0.0) || !std::isfinite(scale))
+    throw Error(cat("'", path, "': bad PFM scale '", scaleText, "'"));
+  const size_t rowValues = size_t(image.width) * size_t(image.channels);
+  const size_t count = rowValues * size_t(image.height);
+  checkDataSize(bytes, pos, count, path);
+  image.f32.resize(count);
+  std::vector<uint32_t> row(rowValues);
+  // The file's first row is the bottom of the image.
+  for (int fileRow = 0; fileRow < image.height; ++fileRow) {
+    readValues(bytes, pos + 4 * rowValues * size_t(fileRow), rowValues, scale < 0, row.data());
+    const size_t imageRow = size_t(image.height - 1 - fileRow);
+    std::memcpy(&image.f32[imageRow * rowValues], row.data(), 4 * rowValues);
+  }
+  return image;
+}
+
+/// The text after `'key': ` in a NPY header dict, up to (not including) `stop`.
+std::string dictValue(const std::string& dict, const std::string& key, char stop,
+                      const std::string& path) {
+  const std::string needle = "'" + key + "':";
+  const size_t at = dict.find(needle);
+  if (at == std::string::npos) throw Error(cat("'", path, "': NPY header lacks '", key, "'"));
+  size_t start = at + needle.size();
+  while (start < dict.size() && dict[start] == ' ') ++start;
+  const size_t end = dict.find(stop, start);
+  if (end == std::string::npos) throw Error(cat("'", path, "': bad NPY header '", dict, "'"));
+  return dict.substr(start, end - start);
+}
+
+DatasetImage readNpy(const std::string& path, const std::string& bytes) {
+  if (bytes.size() < 10 || bytes.compare(0, 6, "\x93NUMPY") != 0)
+    throw Error(cat("'", path, "': not a NumPy .npy file"));
+  if (bytes[6] != 1 || bytes[7] != 0)
+    throw Error(cat("'", path, "': NPY version ", int(bytes[6]), ".", int(bytes[7]),
+                    " (only 1.0 is read)"));
+  const size_t headerSize = size_t(static_cast<unsigned char>(bytes[8])) |
+                            size_t(static_cast<unsigned char>(bytes[9])) << 8;
+  if (bytes.size() < 10 + headerSize) throw Error(cat("'", path, "': truncated NPY header"));
+  const std::string dict = bytes.substr(10, headerSize);
+  const std::string descr = dictValue(dict, "descr", ',', path);
+  if (descr != "'<f4'" && descr != "'<u4'")
+    throw Error(cat("'", path, "': NPY dtype ", descr, " (only '<f4' and '<u4' are read)"));
+  if (dictValue(dict, "fortran_order", ',', path) != "False")
+    throw Error(cat("'", path, "': NPY array in Fortran order (only C order is read)"));
+  std::string shape = dictValue(dict, "shape", ')', path);
+  if (shape.empty() || shape[0] != '(') throw Error(cat("'", path, "': bad NPY shape"));
+  std::vector<int> dims;
+  std::stringstream parts(shape.substr(1));
+  for (std::string part; std::getline(parts, part, ',');) {
+    part.erase(std::remove(part.begin(), part.end(), ' '), part.end());
+    if (!part.empty()) dims.push_back(positiveInt(part, "NPY dimension", path));
+  }
+  if (dims.size() != 2 && dims.size() != 3)
+    throw Error(cat("'", path, "': NPY shape (", shape.substr(1), ") is not (H, W) or (H, W, C)"));
+  DatasetImage image;
+  image.height = dims[0];
+  image.width = dims[1];
+  image.channels = dims.size() == 3 ? dims[2] : 1;
+  const size_t count = size_t(image.width) * size_t(image.height) * size_t(image.channels);
+  checkDataSize(bytes, 10 + headerSize, count, path);
+  std::vector<uint32_t> values(count);
+  readValues(bytes, 10 + headerSize, count, true, values.data());
+  if (descr == "'<u4'") {
+    image.u32 = std::move(values);
+  } else {
+    image.f32.resize(count);
+    std::memcpy(image.f32.data(), values.data(), 4 * count);
+  }
+  return image;
+}
+
+}  // namespace
+
+std::optional<DatasetFormat> datasetFormatOf(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  const size_t dot = path.find_last_of('.');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return std::nullopt;
+  const std::string extension = lowerCase(path.substr(dot));
+  for (const FormatEntry& e : formatTable())
+    for (const std::string& known : e.extensions)
+      if (extension == known) return e.format;
+  return std::nullopt;
+}
+
+const char* datasetFormatName(DatasetFormat format) { return entryOf(format).name; }
+
+const std::vector<std::string>& datasetExtensions() {
+  static const std::vector<std::string> extensions = [] {
+    std::vector<std::string> all;
+    for (const FormatEntry& e : formatTable())
+      all.insert(all.end(), e.extensions.begin(), e.extensions.end());
+    return all;
+  }();
+  return extensions;
+}
+
+void checkDatasetAov(DatasetFormat format, const std::string& aovName, int channels, bool isFloat) {
+  if (formatHolds(format, channels, isFloat)) return;
+  const FormatEntry& e = entryOf(format);
+  throw Error(cat("AOV '", aovName, "' (", layoutText(channels, isFloat), ") cannot be written as ",
+                  e.name, ", which takes ", e.takes, "; write it as .npy, .tif or .exr"));
+}
+
+void checkDatasetAov(DatasetFormat format, const std::string& aovName) {
+  // The layout comes from aovView on a 1×1 framebuffer, so the AOV's channel count and type
+  // have one definition (core/framebuffer.cpp). parseAovSet rejects unknown names.
+  const AovSet set = parseAovSet(aovName);
+  const size_t count = std::bitset<32>(set.mask).count() + set.properties.size();
+  if (count != 1 || aovListString(set) != aovName)
+    throw Error(cat("'", aovName, "' is not one AOV: a dataset file holds exactly one (",
+                    aovListString(set), " were named)"));
+  const ImageView layout = aovView(Framebuffer(1, 1, set), aovName);
+  checkDatasetAov(format, aovName, layout.channels, layout.f32 != nullptr);
+}
+
+DatasetWriteStats writeDatasetImage(const std::string& path, DatasetFormat format,
+                                    const ImageView& image, const std::string& aovName,
+                                    const DatasetWriteOptions& options) {
+  if (image.width <= 0 || image.height <= 0 || image.channels <= 0)
+    throw Error(cat("cannot write '", path, "': empty image (", image.width, "x", image.height, "x",
+                    image.channels, ")"));
+  if ((image.f32 == nullptr) == (image.u32 == nullptr))
+    throw Error(cat("cannot write '", path, "': the image view of AOV '", aovName,
+                    "' must hold exactly one of float or uint32 data"));
+  try {
+    checkDatasetAov(format, aovName, image.channels, image.f32 != nullptr);
+  } catch (const Error& e) {
+    throw Error(cat("cannot write '", path, "': ", e.what()));
+  }
+  const double scale = options.depthScale;
+  if (format == DatasetFormat::Png16 && !(scale > 0.0 && std::isfinite(scale)))
+    throw Error(
+        cat("cannot write '", path, "': depth scale ", scale, " (must be positive and finite)"));
+
+  DatasetWriteStats stats;
+  try {
+    switch (format) {
+      case DatasetFormat::Png16: {
+        const auto bytes = encodePng16(path, image, scale, &stats.outOfRange);
+        writeBytesAtomically(path, bytes.data(), bytes.size());
+        break;
+      }
+      case DatasetFormat::Tiff: {
+        const auto bytes = encodeTiff(path, image);
+        writeBytesAtomically(path, bytes.data(), bytes.size());
+        break;
+      }
+      case DatasetFormat::Pfm: {
+        const std::string bytes = encodePfm(image);
+        writeBytesAtomically(path, bytes.data(), bytes.size());
+        break;
+      }
+      case DatasetFormat::Npy: {
+        const std::string bytes = encodeNpy(image);
+        writeBytesAtomically(path, bytes.data(), bytes.size());
+        break;
+      }
+    }
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    // writeBytesAtomically's errors already name the path.
+    if (message.find(path) != std::string::npos) throw;
+    throw Error(cat("cannot write '", path, "': ", message));
+  }
+  return stats;
+}
+
+DatasetImage readDatasetImage(const std::string& path) {
+  const std::optional<DatasetFormat> format = datasetFormatOf(path);
+  if (format != DatasetFormat::Pfm && format != DatasetFormat::Npy)
+    throw Error(cat("cannot read '", path, "': readDatasetImage reads .pfm and .npy files"));
+  const std::string bytes = readWholeFile(path);
+  return *format == DatasetFormat::Pfm ? readPfm(path, bytes) : readNpy(path, bytes);
+}
+
+}  // namespace aperture
