@@ -30,8 +30,8 @@ from ._aperture import (
     camera_parameters,
     camera_types,
     load_cameras as _load_cameras,
-    read,
-    read_exr,
+    read as _read,
+    read_exr as _read_exr,
 )
 
 __all__ = [
@@ -76,6 +76,19 @@ def load_cameras(path: str | os.PathLike[str], images: Iterable[str] | None = No
     Raises FileNotFoundError for a missing path, ValueError for bad contents or an unknown
     image name."""
     return _load_cameras(os.fspath(path), None if images is None else [str(i) for i in images])
+
+
+def read_exr(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
+    """Every AOV of an EXR written by aperture (render, batch), by AOV name as render returns
+    them: float32 or uint32 arrays (H, W) or (H, W, C), row 0 at the top. OSError for a
+    missing or unreadable file, ValueError for a bad one."""
+    return _read_exr(os.fspath(path))
+
+
+def read(path: str | os.PathLike[str]) -> np.ndarray:
+    """A .pfm or .npy written by aperture.write (or the command line) as an array (H, W) or
+    (H, W, C), row 0 at the top (a PFM's bottom-to-top rows are turned over)."""
+    return _read(os.fspath(path))
 
 
 def _aov_list(aovs: str | Iterable[str]) -> str:

@@ -2,6 +2,7 @@
 // camera entry: each becomes a JSON value read by paramFromJson (apps/job_camera.cpp) against
 // the camera parameter schema, then resolveCameraParams checks the set (types, ranges,
 // conflicts, companions) with messages naming "Camera(fov=...)".
+#include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
@@ -54,8 +55,10 @@ std::vector<std::string> keywordNames() {
 /// the source "Camera(NAME=...)"; an unknown keyword is an Error with "did you mean".
 ParamSet paramsOfKeywords(const nb::kwargs& kwargs) {
   json entry = json::object();
+  std::vector<std::string> order;  // the keywords as given (JSON objects sort their keys)
   for (auto [key, value] : kwargs) {
     const std::string name = nb::cast<std::string>(key);
+    order.push_back(name);
     if (!findCameraParamSpec(name))
       throw Error(cat("Camera(): unknown parameter '", name, "'", didYouMean(name, keywordNames()),
                       " (see aperture.camera_parameters())"));
@@ -65,10 +68,9 @@ ParamSet paramsOfKeywords(const nb::kwargs& kwargs) {
   const std::string file = "Camera()";  // Object keeps a reference to its file's name
   const app::Object object(file, "", entry, keywordNames());
   ParamSet given;
-  for (const auto& item : entry.items()) {
-    const ParamSpec& spec = *findCameraParamSpec(item.key());
-    given.set(spec, app::paramFromJson(object, spec, item.value()),
-              cat("Camera(", item.key(), "=...)"));
+  for (const std::string& name : order) {
+    const ParamSpec& spec = *findCameraParamSpec(name);
+    given.set(spec, app::paramFromJson(object, spec, entry[name]), cat("Camera(", name, "=...)"));
   }
   return given;
 }
