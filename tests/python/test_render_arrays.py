@@ -130,3 +130,18 @@ def test_write_and_read_round_trip(tmp_path) -> None:
     assert aperture.write(tmp_path / "d.png", out["depth"]) == 0
     with pytest.warns(UserWarning, match="did not fit"):
         assert aperture.write(tmp_path / "far.png", out["depth"] * 100.0) > 0
+
+
+def test_params_give_the_same_camera_back() -> None:
+    """Camera(**cam.params) is the same camera: the same pixels, for a few models."""
+    for camera in [
+        aperture.Camera.look_at(eye=(0.5, 1, 4), at=(0, 0, 0), fov=33, size=(20, 14)),
+        aperture.Camera(type="fisheye", eye=(0, 0, 3), dir=(0, 0, -1), fisheye_fov=190, size=(16, 16)),
+        aperture.Camera(type="calibrated", intrinsics=(30, 31, 10, 7), lens_model="OPENCV",
+                        distortion=(0.1, 0.01, 0, 0), eye=(0, 0.2, 4), at=(0, 0, 0), size=(20, 14)),
+    ]:
+        again = aperture.Camera(**camera.params)
+        assert again.params == camera.params
+        a, b = SCENE.render(camera, aovs="depth"), SCENE.render(again, aovs="depth")
+        assert np.array_equal(a["depth"], b["depth"]) and np.isfinite(a["depth"]).any()
+        assert camera.describe() == again.describe() and camera.describe().startswith("camera ")
