@@ -11,8 +11,22 @@ namespace nb = nanobind;
 
 namespace {
 
-/// The shape of an AOV: leading dimensions, then H, W, and C when C > 1.
+/// How many layers a view holds, layer-major (layered hits, ImageView::layers, which comes
+/// with the layered-hits change; 1 for views without the field). Read through overloads so
+/// this file needs no change when the field arrives.
+template <class View>
+auto layersOf(const View& v, int) -> decltype(int(v.layers)) {
+  return v.layers;
+}
+template <class View>
+int layersOf(const View&, long) {
+  return 1;
+}
+
+/// The shape of an AOV: leading dimensions, then K when the view holds K > 1 layers, then
+/// H, W, and C when C > 1.
 std::vector<size_t> shapeOf(std::vector<size_t> lead, const ImageView& v) {
+  if (layersOf(v, 0) > 1) lead.push_back(size_t(layersOf(v, 0)));
   lead.push_back(size_t(v.height));
   lead.push_back(size_t(v.width));
   if (v.channels > 1) lead.push_back(size_t(v.channels));
@@ -54,7 +68,8 @@ nb::dict stackedArrays(std::vector<Framebuffer>& frames) {
   std::vector<size_t> frameBytes;
   for (const std::string& name : names) {
     const ImageView v = aovView(frames[0], name);
-    const size_t bytes = size_t(v.width) * size_t(v.height) * size_t(v.channels) * 4;
+    const size_t bytes =
+        size_t(layersOf(v, 0)) * size_t(v.width) * size_t(v.height) * size_t(v.channels) * 4;
     char* block = new char[bytes * frames.size()];
     nb::capsule owner(block, [](void* p) noexcept { delete[] static_cast<char*>(p); });
     out[name.c_str()] = arrayOf(block, shapeOf({frames.size()}, v), v.f32 != nullptr, owner);
