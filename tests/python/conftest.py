@@ -48,4 +48,5 @@ def shared_dir() -> Path:
 
 @pytest.fixture(scope="session")
 def bunny(shared_dir: Path) -> Path:
+    """The Stanford bunny at its coarsest resolution (948 faces)."""
     return shared_dir / "meshes" / "stanford" / "bun_zipper_res4.ply"
