@@ -24,6 +24,7 @@
 #include "core/error.h"
 #include "core/layers.h"
 #include "core/mesh.h"
+#include "core/spelling.h"
 #include "core/units.h"
 
 namespace aperture::app {
@@ -93,11 +94,6 @@ glm::dmat4 parseMatrix(const Object& parent, const char* key) {
   const double det = glm::determinant(glm::dmat3(m));
   if (!std::isfinite(det) || std::abs(det) < 1e-300) parent.fail(where, "matrix is singular");
   return m;
-}
-
-std::string lowerCase(std::string s) {
-  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return s;
 }
 
 bool isProcedural(const std::string& spec) { return spec.rfind("procedural:", 0) == 0; }
@@ -562,7 +558,7 @@ Job cameraFileJob(const CameraFileBatch& b) {
   for (const std::string& m : b.meshes) meshes.push_back({{"path", m}});
   json job = {
       {"scene", {{"meshes", meshes}}}, {"cameras", {{"from", b.cameras}}}, {"aovs", b.aovs}};
-  const std::string format = lowerCase(b.format);
+  const std::string format = toLowerAscii(b.format);
   const std::string pattern = (fs::path(b.outDir) / ("{image}." + format)).generic_string();
   if (format == "exr") {
     job["output"] = pattern;

@@ -15,6 +15,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/mesh.h"
 
 namespace aperture {
 
@@ -45,11 +46,6 @@ const FormatEntry& entryOf(DatasetFormat format) {
   for (const FormatEntry& e : formatTable())
     if (e.format == format) return e;
   throw Error(cat("invalid dataset format value ", int(format)));
-}
-
-std::string lowerCase(std::string s) {
-  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return s;
 }
 
 std::string layoutText(int channels, bool isFloat) {
@@ -311,10 +307,7 @@ DatasetImage readNpy(const std::string& path, const std::string& bytes) {
 }  // namespace
 
 std::optional<DatasetFormat> datasetFormatOf(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  const size_t dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return std::nullopt;
-  const std::string extension = lowerCase(path.substr(dot));
+  const std::string extension = lowerExtension(path);
   for (const FormatEntry& e : formatTable())
     for (const std::string& known : e.extensions)
       if (extension == known) return e.format;

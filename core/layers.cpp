@@ -65,7 +65,8 @@ LayerPlan::LayerPlan(const Scene& scene_, const Camera& camera_, Framebuffer& fb
       eye(eye_),
       axis(axis_),
       method(scene_.options().contextFilter ? method_ : LayerMethod::Retrace),
-      layers(fb_.layers) {
+      layers(fb_.layers),
+      imageWidth(fb_.width) {
   checkLayerCount(layers, "framebuffer layers");
 }
 
@@ -116,17 +117,9 @@ struct LaneLayers {
 
 /// A packet of its own for the layer passes (the caller's keeps its first hits).
 template <int N>
-struct LayerPacket {
-  alignas(64) typename PacketOf<N>::type packet;
-  alignas(64) int valid[N];
-  RayLanes lanes;
-  HitLanes hits;
+struct LayerPacket : PacketBuffers<N> {
   float tfar[N];  ///< each lane's tfar as the camera generated it (a clip's far end)
   LaneLayers found[N];
-
-  LayerPacket() : lanes(rayLanes<N>(packet)), hits(hitLanes<N>(packet)) {}
-  LayerPacket(const LayerPacket&) = delete;
-  LayerPacket& operator=(const LayerPacket&) = delete;
 };
 
 /// The intersection context of the Filter method. Embree hands the filter the context
@@ -250,7 +243,7 @@ template <int N>
 void storeLane(const LayerPlan& plan, const PacketRequest& req, const LayerPacket<N>& lp, int k,
                const LayerHit& first) {
   const LanePixel p = lanePixel(req.x0, req.y0, req.blockW, k);
-  const size_t px = size_t(p.row) * size_t(plan.fb.width) + size_t(p.column);
+  const size_t px = plan.pixelOffset + size_t(p.row) * size_t(plan.imageWidth) + size_t(p.column);
   storeLayer(plan, px, 0, first, planarDepth(plan, lp.lanes, k, first.t));
   const LaneLayers& lane = lp.found[k];
   int layer = 1;

@@ -55,8 +55,12 @@ struct LayerPlan {
   const Camera& camera;
   Framebuffer& fb;
   glm::vec3 eye, axis;
-  LayerMethod method;  ///< the method actually used
-  int layers;          ///< K = fb.layers
+  LayerMethod method;      ///< the method actually used
+  int layers;              ///< K = fb.layers
+  int imageWidth;          ///< the camera's image width (fb.width unless frames are stacked)
+  size_t pixelOffset = 0;  ///< fb index of the image's pixel (0, 0)
+  /// Places the image in a framebuffer of stacked frames (core/render.h renderImagesStacked).
+  void place(int width, size_t offset) { imageWidth = width, pixelOffset = offset; }
 };
 
 /// Fills fb's layers at the pixels of the packet of `req` (a centre-ray request) from its

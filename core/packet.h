@@ -76,6 +76,21 @@ BarycentricLanes barycentricLanes(const typename PacketOf<N>::type& p) {
     return {p.hit.u, p.hit.v};
 }
 
+/// An aligned Embree packet of N rays with its lane mask and the SoA views into it: what the
+/// frame loop's and the layer passes' per-thread packets share. Not copyable (the views point
+/// into it).
+template <int N>
+struct PacketBuffers {
+  alignas(64) typename PacketOf<N>::type packet;
+  alignas(64) int valid[N];
+  RayLanes lanes;
+  HitLanes hits;
+
+  PacketBuffers() : lanes(rayLanes<N>(packet)), hits(hitLanes<N>(packet)) {}
+  PacketBuffers(const PacketBuffers&) = delete;
+  PacketBuffers& operator=(const PacketBuffers&) = delete;
+};
+
 /// Sets hit.geomID of every lane to RTC_INVALID_GEOMETRY_ID (required before rtcIntersect).
 template <int N>
 void clearHits(typename PacketOf<N>::type& p) {

@@ -3,9 +3,13 @@
 #include <pmmintrin.h>
 #include <xmmintrin.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <deque>
+#include <memory>
+#include <mutex>
 #include <optional>
 
 #include "core/error.h"
@@ -80,13 +84,17 @@ std::vector<std::vector<const uint32_t*>> propertyTables(const Scene& scene,
 
 /// What one frame computes, decided once from the framebuffer's AOVs.
 struct ImagePlan {
+  /// `pixelOffset`: where the camera's pixel (0, 0) is in `fb` (frame k of a stacked
+  /// framebuffer starts at k·W·H; 0 otherwise).
   ImagePlan(const Scene& scene, const Camera& camera, const RenderSettings& settings,
-            Framebuffer& fb);
+            Framebuffer& fb, size_t pixelOffset = 0);
 
   const Scene& scene;
   const Camera& camera;
   Framebuffer& fb;
   RenderSettings settings;
+  int width, height;    // the camera's image
+  size_t pixelOffset;   // fb index of the image's pixel (0, 0)
   glm::vec3 eye, axis;  // render space
   glm::dvec3 origin;    // world position of the render-space origin
   bool color, depth, distance, normal, position, primId, geomId;
@@ -111,11 +119,14 @@ struct ImagePlan {
 };
 
 ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSettings& settings_,
-                     Framebuffer& fb_)
+                     Framebuffer& fb_, size_t pixelOffset_)
     : scene(scene_),
       camera(camera_),
       fb(fb_),
       settings(settings_),
+      width(camera_.describe().width),
+      height(camera_.describe().height),
+      pixelOffset(pixelOffset_),
       eye(camera_.renderEye()),
       axis(camera_.viewAxis()),
       origin(scene_.renderOrigin()),
@@ -140,27 +151,23 @@ ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSet
       remapPrimIds(scene_.remapsPrimIds()),
       colorSamples(color ? settings_.spp : 0),
       geometryFromSample(anyGeometry && color && settings_.spp == 1),
-      passes(colorSamples + (anyGeometry && !geometryFromSample ? 1 : 0)) {}
+      passes(colorSamples + (anyGeometry && !geometryFromSample ? 1 : 0)) {
+  if (layers) layers->place(width, pixelOffset);
+}
 
 struct TileCounters {
   uint64_t traced = 0, skipped = 0, hits = 0;
 };
 
-/// One thread's Embree packet, its lane mask and the SoA views into it.
+/// One thread's Embree packet and its coherent intersection context.
 template <int N>
-struct PacketState {
-  alignas(64) typename PacketOf<N>::type packet;
-  alignas(64) int valid[N];
-  RayLanes lanes;
-  HitLanes hits;
+struct PacketState : PacketBuffers<N> {
   RTCIntersectContext ctx;
 
-  PacketState() : lanes(rayLanes<N>(packet)), hits(hitLanes<N>(packet)) {
+  PacketState() {
     rtcInitIntersectContext(&ctx);
     ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   }
-  PacketState(const PacketState&) = delete;
-  PacketState& operator=(const PacketState&) = delete;
 };
 
 /// Per-lane results of one traced packet: which lanes hit, and their unit normals.
@@ -190,7 +197,7 @@ int selectLanes(const ImagePlan& plan, const PacketRequest& req, PacketState<N>&
                 TileCounters& count) {
   constexpr int kBW = blockWidthFor(N);
   // Locals: the stores to valid[] could otherwise alias them and force reloads every lane.
-  const int x0 = req.x0, y0 = req.y0, width = plan.fb.width, height = plan.fb.height;
+  const int x0 = req.x0, y0 = req.y0, width = plan.width, height = plan.height;
   int active = 0, nonFinite = 0;
   for (int k = 0; k < N; ++k) {
     const bool inside = laneInImage(x0, y0, kBW, k, width, height);
@@ -374,11 +381,12 @@ void storeGeometryLanes(const ImagePlan& plan, const PacketRequest& req, const P
   constexpr int kBW = blockWidthFor(N);
   alignas(64) float z[N];
   if (plan.depth) planarDepths<N>(plan, st, z);
-  const int x0 = req.x0, y0 = req.y0, width = plan.fb.width;  // not reloaded after stores
+  const int x0 = req.x0, y0 = req.y0, width = plan.width;  // not reloaded after stores
+  const size_t offset = plan.pixelOffset;
   for (int k = 0; k < N; ++k) {
     if (!h.hit[k]) continue;
     const LanePixel p = lanePixel(x0, y0, kBW, k);
-    const size_t px = size_t(p.row) * size_t(width) + size_t(p.column);
+    const size_t px = offset + size_t(p.row) * size_t(width) + size_t(p.column);
     storeGeometryLane<N>(plan, st, h, k, z, px);
     if constexpr (kMeshData) storeMeshDataLane<N>(plan, st, h, k, px);
   }
@@ -412,8 +420,8 @@ void renderPass(const ImagePlan& plan, const PacketRequest& req, PacketState<N>&
 template <int N>
 void storeColor(const ImagePlan& plan, int bx, int by, const BlockColor<N>& color) {
   constexpr int kBW = blockWidthFor(N);
-  const int width = plan.fb.width, height = plan.fb.height;
-  float* const out = plan.fb.rgba.data();
+  const int width = plan.width, height = plan.height;
+  float* const out = plan.fb.rgba.data() + 4 * plan.pixelOffset;
   const float inv = 1.0f / float(plan.colorSamples);
   for (int k = 0; k < N; ++k) {
     if (!laneInImage(bx, by, kBW, k, width, height)) continue;
@@ -481,32 +489,128 @@ void checkFramebuffer(const Camera& camera, const RenderSettings& settings, cons
 
 }  // namespace
 
+namespace {
+
+/// Work counters of one frame, summed over its tiles.
+struct FrameProgress {
+  std::atomic<uint64_t> traced{0}, skipped{0}, hits{0};
+  std::atomic<size_t> tilesLeft{0};
+};
+
+/// The one parallel loop over (frame, tile) behind renderImage, renderImages and
+/// renderImagesStacked: the frames' tiles are numbered one after another (frame k owns tiles
+/// [firstTile[k], firstTile[k + 1])), so small frames keep every core busy. Returns each
+/// frame's stats; `progress` as renderImages documents it.
+std::vector<RenderStats> renderPlans(const std::deque<ImagePlan>& plans,
+                                     const std::function<void(size_t)>& progress) {
+  const size_t n = plans.size();
+  std::vector<size_t> firstTile(n + 1, 0);
+  std::unique_ptr<FrameProgress[]> frames(new FrameProgress[n]);
+  for (size_t k = 0; k < n; ++k) {
+    const int ts = plans[k].settings.tileSize;
+    const size_t tiles =
+        size_t((plans[k].width + ts - 1) / ts) * size_t((plans[k].height + ts - 1) / ts);
+    frames[k].tilesLeft = tiles;
+    firstTile[k + 1] = firstTile[k] + tiles;
+  }
+  std::vector<RenderStats> stats(n);
+  std::mutex progressMutex;
+  size_t framesDone = 0;
+  const auto start = std::chrono::steady_clock::now();
+  parallelFor(firstTile[n], 1, [&](size_t first, size_t last) {
+    for (size_t tile = first; tile != last; ++tile) {
+      const size_t k =
+          size_t(std::upper_bound(firstTile.begin(), firstTile.end(), tile) - firstTile.begin()) -
+          1;
+      const ImagePlan& plan = plans[k];
+      const int ts = plan.settings.tileSize;
+      const int tilesX = (plan.width + ts - 1) / ts, local = int(tile - firstTile[k]);
+      const int x0 = (local % tilesX) * ts, y0 = (local / tilesX) * ts;
+      const int x1 = std::min(x0 + ts, plan.width), y1 = std::min(y0 + ts, plan.height);
+      TileCounters c;
+      renderTileOfWidth(plan, x0, y0, x1, y1, c);
+      FrameProgress& f = frames[k];
+      f.traced += c.traced;
+      f.skipped += c.skipped;
+      f.hits += c.hits;
+      if (--f.tilesLeft != 0) continue;
+      // The frame's last tile: its counters are complete (every other tile decremented
+      // tilesLeft after adding its counts).
+      stats[k].seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      stats[k].raysTraced = f.traced;
+      stats[k].raysSkipped = f.skipped;
+      stats[k].hits = f.hits;
+      if (!progress) continue;
+      const std::lock_guard<std::mutex> lock(progressMutex);
+      progress(++framesDone);
+    }
+  });
+  return stats;
+}
+
+/// `settings` with the camera's own spp.
+RenderSettings settingsFor(const Camera& camera, const RenderSettings& settings) {
+  RenderSettings s = settings;
+  s.spp = camera.describe().spp;
+  return s;
+}
+
+}  // namespace
+
 RenderStats renderImage(const Scene& scene, const Camera& camera, const RenderSettings& settings,
                         Framebuffer& fb) {
   validateRenderSettings(settings);
   checkFramebuffer(camera, settings, fb);
-  const ImagePlan plan(scene, camera, settings, fb);
-  const int ts = settings.tileSize;
-  const int tilesX = (fb.width + ts - 1) / ts, tilesY = (fb.height + ts - 1) / ts;
-  std::atomic<uint64_t> traced{0}, skipped{0}, hits{0};
-  const auto start = std::chrono::steady_clock::now();
-  parallelFor(size_t(tilesX) * size_t(tilesY), 1, [&](size_t first, size_t last) {
-    for (int tile = int(first); tile != int(last); ++tile) {
-      const int x0 = (tile % tilesX) * ts, y0 = (tile / tilesX) * ts;
-      const int x1 = std::min(x0 + ts, fb.width), y1 = std::min(y0 + ts, fb.height);
-      TileCounters c;
-      renderTileOfWidth(plan, x0, y0, x1, y1, c);
-      traced += c.traced;
-      skipped += c.skipped;
-      hits += c.hits;
-    }
-  });
-  RenderStats stats;
-  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  stats.raysTraced = traced;
-  stats.raysSkipped = skipped;
-  stats.hits = hits;
-  return stats;
+  std::deque<ImagePlan> plans;
+  plans.emplace_back(scene, camera, settings, fb);
+  return renderPlans(plans, {}).front();
+}
+
+std::vector<RenderStats> renderImages(const Scene& scene, const std::vector<const Camera*>& cameras,
+                                      const RenderSettings& settings,
+                                      std::vector<Framebuffer>& framebuffers,
+                                      const std::function<void(size_t)>& progress) {
+  validateRenderSettings(settings);
+  if (cameras.size() != framebuffers.size())
+    throw Error(cat("renderImages: ", cameras.size(), " cameras but ", framebuffers.size(),
+                    " framebuffers"));
+  std::deque<ImagePlan> plans;  // a deque: plans are not movable (references)
+  for (size_t k = 0; k < cameras.size(); ++k) {
+    APERTURE_CHECK_OP(cameras[k], !=, nullptr);
+    const RenderSettings forCamera = settingsFor(*cameras[k], settings);
+    checkFramebuffer(*cameras[k], forCamera, framebuffers[k]);
+    plans.emplace_back(scene, *cameras[k], forCamera, framebuffers[k]);
+  }
+  return renderPlans(plans, progress);
+}
+
+std::vector<RenderStats> renderImagesStacked(const Scene& scene,
+                                             const std::vector<const Camera*>& cameras,
+                                             const RenderSettings& settings, Framebuffer& stacked,
+                                             const std::function<void(size_t)>& progress) {
+  validateRenderSettings(settings);
+  if (cameras.empty()) throw Error("renderImagesStacked: no camera");
+  if (stacked.aovSet().empty()) throw Error("renderImagesStacked: the framebuffer holds no AOV");
+  const CameraDescription first = cameras.front()->describe();
+  if (stacked.width != first.width ||
+      size_t(stacked.height) != size_t(first.height) * cameras.size())
+    throw Error(cat("renderImagesStacked: framebuffer ", stacked.width, "x", stacked.height,
+                    " does not hold ", cameras.size(), " frames of ", first.width, "x",
+                    first.height));
+  const size_t framePixels = size_t(first.width) * size_t(first.height);
+  std::deque<ImagePlan> plans;
+  for (size_t k = 0; k < cameras.size(); ++k) {
+    APERTURE_CHECK_OP(cameras[k], !=, nullptr);
+    const CameraDescription d = cameras[k]->describe();
+    if (d.width != first.width || d.height != first.height)
+      throw Error(cat("renderImagesStacked: camera ", k, " is ", d.width, "x", d.height,
+                      ", camera 0 is ", first.width, "x", first.height,
+                      ": stacked frames share one size"));
+    plans.emplace_back(scene, *cameras[k], settingsFor(*cameras[k], settings), stacked,
+                       k * framePixels);
+  }
+  return renderPlans(plans, progress);
 }
 
 }  // namespace aperture

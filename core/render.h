@@ -56,6 +56,16 @@ std::vector<RenderStats> renderImages(const Scene& scene, const std::vector<cons
                                       std::vector<Framebuffer>& framebuffers,
                                       const std::function<void(size_t)>& progress = {});
 
+/// renderImages for cameras of one size W x H into ONE framebuffer of W x (N·H): frame k fills
+/// rows [k·H, (k+1)·H), so each AOV is a single (N, H, W[, C]) block (layered hits: (K, N, H,
+/// W), layer-major over the stacked image) that a caller can hand out without copying. Each
+/// frame's pixels are bit-identical to renderImage of it alone. Throws Error when the cameras'
+/// sizes differ or the framebuffer is not W x (N·H).
+std::vector<RenderStats> renderImagesStacked(const Scene& scene,
+                                             const std::vector<const Camera*>& cameras,
+                                             const RenderSettings& settings, Framebuffer& stacked,
+                                             const std::function<void(size_t)>& progress = {});
+
 /// Checks settings (packet width in {1,4,8,16}, tile size a positive multiple of 4 up to
 /// 4096); throws Error naming the bad value. spp is the camera's, checked by the camera
 /// schema; renderImage requires settings.spp to equal it.

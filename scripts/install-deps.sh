@@ -10,6 +10,7 @@ pkgs=(
   libyaml-cpp-dev  # OpenCV FileStorage YAML camera files
   clang-format  # the Format test enforces .clang-format
   openimageio-tools  # Debian's OpenImageIO CMake config references its binaries
+  python3-dev python3-venv  # the Python module: headers, and venv with pip for .venv
 )
 missing=()
 for p in "${pkgs[@]}"; do

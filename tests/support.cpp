@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "apps/camera_flags.h"
+#include "core/error.h"
 
 namespace fs = std::filesystem;
 
@@ -168,6 +169,15 @@ int forEachHit(const Framebuffer& fb,
       ++hits;
     }
   return hits;
+}
+
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
 }
 
 }  // namespace aperture::test

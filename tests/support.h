@@ -72,6 +72,9 @@ CameraParams cameraParamsFromFlags(const std::string& flags);
 int forEachHit(const Framebuffer& fb,
                const std::function<void(int, int, const Imath::V3d&, double, double)>& f);
 
+/// The message of the aperture::Error `f` throws ("" when it throws none).
+std::string errorOf(const std::function<void()>& f);
+
 }  // namespace aperture::test
 
 /// Skips the current test with a message when a ../shared mesh is missing.

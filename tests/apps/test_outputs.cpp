@@ -22,16 +22,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// The message of the Error `f` throws ("" when it does not throw).
-template <typename F>
-std::string errorOf(F f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using aperture::test::errorOf;
 
 /// Every file under `dir`, recursively (relative names).
 std::vector<std::string> filesUnder(const std::string& dir) {

@@ -21,6 +21,8 @@
 namespace aperture {
 namespace {
 
+using test::errorOf;
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 using test::readFile;
@@ -28,16 +30,6 @@ using test::scratchDir;
 using test::writeFile;
 
 constexpr double kPi = 3.14159265358979323846;
-
-// The message of the Error `f` throws ("" when it throws none).
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
 
 #define EXPECT_ERROR_MENTIONS(call, ...)                                  \
   do {                                                                    \

@@ -20,6 +20,8 @@
 namespace aperture {
 namespace {
 
+using test::errorOf;
+
 constexpr int kRows = 3, kCols = 4;
 
 /// The id of grid cell (row r, column c): negative for the first cells, so signed storage
@@ -124,17 +126,6 @@ std::string writeGrid(const std::string& bytes, const char* name) {
   const std::string path = test::scratchDir() + "/" + name;
   test::writeFile(path, bytes);
   return path;
-}
-
-/// The message `f` throws as Error ("" when it does not throw).
-template <typename F>
-std::string errorOf(F f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
 }
 
 class MeshPropertiesTest : public ::testing::TestWithParam<bool> {

@@ -1,0 +1,277 @@
+"""aperture: the fastest CPU route from a mesh and a set of cameras to a dataset.
+
+Embree ray casting of meshes into depth, distance, normals, positions and ids, with every
+camera model and camera file of the ``aperture`` command line. The work is done by the same
+C++ libraries (``aperture._aperture``); this package only converts arguments.
+
+    import aperture
+    scene = aperture.Scene("mesh.ply")
+    cams = aperture.load_cameras("sparse/0")
+    out = scene.render(cams, aovs=["depth", "normal", "primid"])
+    out["depth"]  # float32 (len(cams), H, W)
+
+See docs/python.md for conventions, memory ownership, the GIL and errors.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from typing import Any
+
+import numpy as np
+
+from ._aperture import (
+    Camera,
+    __version__,
+    _Scene,
+    _write,
+    camera_parameters,
+    camera_types,
+    load_cameras as _load_cameras,
+    read as _read,
+    read_exr as _read_exr,
+)
+
+__all__ = [
+    "Camera",
+    "Scene",
+    "__version__",
+    "camera_parameters",
+    "camera_types",
+    "load_cameras",
+    "read",
+    "read_exr",
+    "write",
+]
+
+
+def _look_at(
+    eye: Sequence[float],
+    at: Sequence[float],
+    up: Sequence[float] = (0.0, 1.0, 0.0),
+    fov: float | None = None,
+    size: Sequence[int] | None = None,
+    **params: Any,
+) -> Camera:
+    """A camera at ``eye`` looking at ``at``: sugar for ``Camera(eye=, at=, up=, fov=, size=,
+    **params)`` (fov in degrees along fov_axis, vertical by default; size (width, height))."""
+    keywords: dict[str, Any] = dict(eye=eye, at=at, up=up, **params)
+    if fov is not None:
+        keywords["fov"] = fov
+    if size is not None:
+        keywords["size"] = size
+    return Camera(**keywords)
+
+
+Camera.look_at = staticmethod(_look_at)  # type: ignore[attr-defined]
+
+
+def load_cameras(path: str | os.PathLike[str], images: Iterable[str] | None = None) -> list[Camera]:
+    """The cameras of a camera file the command line accepts: a COLMAP model folder (text or
+    binary), a transforms.json (nerfstudio, NeRF, instant-ngp) or an OpenCV JSON/YAML. Each
+    Camera has ``.name``, the image's name. ``images`` selects images by name, in that order
+    (default: all, in the file's order, which is the order ``aperture batch`` renders).
+    Raises FileNotFoundError for a missing path, ValueError for bad contents or an unknown
+    image name."""
+    return _load_cameras(os.fspath(path), None if images is None else [str(i) for i in images])
+
+
+def read_exr(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
+    """Every AOV of an EXR written by aperture (render, batch), by AOV name as render returns
+    them: float32 or uint32 arrays (H, W) or (H, W, C), row 0 at the top. OSError for a
+    missing or unreadable file, ValueError for a bad one."""
+    return _read_exr(os.fspath(path))
+
+
+def read(path: str | os.PathLike[str]) -> np.ndarray:
+    """A .pfm or .npy written by aperture.write (or the command line) as an array (H, W) or
+    (H, W, C), row 0 at the top (a PFM's bottom-to-top rows are turned over)."""
+    return _read(os.fspath(path))
+
+
+def _aov_list(aovs: str | Iterable[str]) -> str:
+    return aovs if isinstance(aovs, str) else ",".join(str(a) for a in aovs)
+
+
+def _camera_list(cameras: Camera | Iterable[Camera]) -> list[Camera]:
+    return [cameras] if isinstance(cameras, Camera) else list(cameras)
+
+
+class Scene:
+    """A scene to render: meshes by path (``.ply``, ``.obj``) or procedural spec
+    (``"procedural:sphere?radius=2"``), several at once as a list, or one mesh from arrays
+    (``vertices`` (n, 3) float32/float64 world positions, ``faces`` (m, 3) integer indices).
+    ``Scene()`` is the command line's default procedural scene. Options are the scene flags of
+    the command line: ``robust`` (watertight traversal, ``--no-robust`` when False),
+    ``quality`` (``--bvh-quality``: low, medium, high), ``compact`` and ``world_space``.
+    ``aovs``: the AOVs renders will ask for, so that the mesh data they read (face./vertex.
+    properties, vertex normals for shading-normal) is loaded with the meshes; without it, the
+    first render that needs more loads the files again with it (once)."""
+
+    def __init__(
+        self,
+        path: str | os.PathLike[str] | Sequence[str | os.PathLike[str]] | None = None,
+        *,
+        vertices: Any = None,
+        faces: Any = None,
+        robust: bool = True,
+        quality: str = "high",
+        compact: bool = False,
+        world_space: bool = False,
+        aovs: str | Iterable[str] = (),
+    ) -> None:
+        options = dict(robust=robust, quality=quality, compact=compact, world_space=world_space)
+        if vertices is not None or faces is not None:
+            if path is not None:
+                raise ValueError("Scene: give a path or vertices= and faces=, not both")
+            if vertices is None or faces is None:
+                raise ValueError("Scene: vertices= and faces= go together")
+            v, f = _mesh_arrays(vertices, faces)
+            self._scene = _Scene._from_arrays(v, f, name="arrays", **options)
+            self._arrays = (v, f)
+            return
+        if path is None:
+            paths: list[str] = []
+        elif isinstance(path, (str, os.PathLike)):
+            paths = [os.fspath(path)]
+        else:
+            paths = [os.fspath(p) for p in path]
+        self._scene = _Scene._from_paths(paths, aovs=_aov_list(aovs), **options)
+
+    @property
+    def bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """World bounds of the scene: ((x, y, z) low, (x, y, z) high)."""
+        return self._scene.bounds
+
+    @property
+    def triangle_count(self) -> int:
+        """Triangles in the scene."""
+        return self._scene.triangle_count
+
+    @property
+    def last_render(self) -> dict[str, float]:
+        """What the last render call measured: seconds (wall), rays, hits, frames and
+        mrays_per_second (rays traced / seconds)."""
+        return self._scene.last_render
+
+    def render(
+        self,
+        cameras: Camera | Iterable[Camera],
+        aovs: str | Iterable[str] = ("color", "depth"),
+        spp: int | None = None,
+        layers: int = 0,
+        normal_frame: str = "world",
+        threads: int = 0,
+        progress: Callable[[int, int], Any] | None = None,
+        packet: int = 16,
+        tile: int = 32,
+    ) -> dict[str, Any]:
+        """Renders every camera in one parallel loop over (camera, tile), with the GIL released.
+
+        ``aovs``: names as ``--aov`` takes them (color depth distance normal position primid
+        geomid shading-normal, ``all``, face.NAME, vertex.NAME), a list or a comma-separated
+        string. ``spp`` overrides every camera's samples per pixel; ``layers`` records the
+        first K surfaces; ``normal_frame`` is world, opencv or opengl; ``threads`` 0 uses every
+        core; ``progress(done, total)`` is called after each finished frame (an exception it
+        raises stops the render and is raised here).
+
+        Returns name -> array. One Camera: (H, W) or (H, W, C). A list of cameras of one size:
+        (N, H, W) or (N, H, W, C). A list of cameras of different sizes: name -> list of
+        (H, W[, C]) arrays. float32 (color, depth, distance, normal, position,
+        shading-normal) or uint32 (primid, geomid, face./vertex. properties; 0xFFFFFFFF for a
+        miss); depth and distance are +inf for a miss, normals 0."""
+        single = isinstance(cameras, Camera)
+        cams: Any = cameras if single else _camera_list(cameras)
+        return self._scene._render(
+            cams, _aov_list(aovs), spp, layers, normal_frame, threads, progress, packet, tile
+        )
+
+    def render_iter(
+        self,
+        cameras: Iterable[Camera],
+        aovs: str | Iterable[str] = ("color", "depth"),
+        batch: int = 8,
+        progress: Callable[[int, int], Any] | None = None,
+        **options: Any,
+    ) -> Iterator[tuple[Camera, dict[str, Any]]]:
+        """Yields (camera, name -> (H, W[, C]) array) per camera, rendering ``batch`` cameras
+        at a time (one parallel loop each), so memory stays that of one batch however many
+        cameras there are. ``cameras`` may be any iterable (a generator too); ``progress``
+        gets (done, total) with total the number known so far. Other options as render."""
+        cams = iter(cameras)
+        done = 0
+        if batch < 1:
+            raise ValueError(f"render_iter: batch {batch} must be >= 1")
+        while True:
+            chunk = [c for _, c in zip(range(batch), cams)]
+            if not chunk:
+                return
+            start = done
+
+            def chunk_progress(k: int, n: int, start: int = start) -> None:
+                if progress is not None:
+                    progress(start + k, start + n)
+
+            out = self.render(chunk, aovs, progress=chunk_progress, **options)
+            done += len(chunk)
+            for k, camera in enumerate(chunk):
+                yield camera, {name: value[k] for name, value in out.items()}
+            del out
+
+    def __repr__(self) -> str:
+        return f"Scene({self._scene.mesh_names!r}, triangles={self.triangle_count})"
+
+
+def _mesh_arrays(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices as C-contiguous float32 or float64 (n, 3) and faces as C-contiguous uint32
+    (m, 3), without a copy when they already are."""
+    v = np.asarray(vertices)
+    if v.dtype not in (np.float32, np.float64):
+        if not np.issubdtype(v.dtype, np.number):
+            raise ValueError(f"Scene: vertices must be numbers, not {v.dtype}")
+        v = v.astype(np.float64)
+    v = np.ascontiguousarray(v)
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise ValueError(f"Scene: vertices must have shape (n, 3), not {v.shape}")
+    f = np.asarray(faces)
+    if not np.issubdtype(f.dtype, np.integer):
+        raise ValueError(f"Scene: faces must be integers, not {f.dtype}")
+    if f.ndim != 2 or f.shape[1] != 3:
+        raise ValueError(f"Scene: faces must have shape (m, 3), not {f.shape}")
+    if f.size and (f.min() < 0 or f.max() >= len(v)):
+        bad = f.min() if f.min() < 0 else f.max()
+        raise ValueError(f"Scene: face index {bad} out of range [0, {len(v)})")
+    return v, np.ascontiguousarray(f, dtype=np.uint32)
+
+
+def write(
+    path: str | os.PathLike[str],
+    array: Any,
+    depth_scale: float = 1000.0,
+    aov: str | None = None,
+) -> int:
+    """Writes one AOV array (H, W) or (H, W, C) to a dataset image, by extension: ``.png``
+    16-bit depth (round(value * depth_scale), 0 for misses and values that do not fit),
+    ``.pfm`` float32, ``.npy`` float32 or uint32, ``.tif`` float32/uint32. Float arrays are
+    written as float32, integer arrays as uint32. ``aov`` names the AOV in messages and
+    format checks (default: from the layout). Returns the number of PNG values out of range
+    (also warned about). Written atomically; OSError when the directory is missing."""
+    a = np.asarray(array)
+    if np.issubdtype(a.dtype, np.floating):
+        a = a.astype(np.float32, copy=False)
+    elif np.issubdtype(a.dtype, np.integer):
+        if a.size and (a.min() < 0 or a.max() > 0xFFFFFFFF):
+            raise ValueError(f"{os.fspath(path)}: integer values must fit in uint32")
+        a = a.astype(np.uint32, copy=False)
+    else:
+        raise ValueError(f"{os.fspath(path)}: cannot write an array of {a.dtype}")
+    out_of_range = _write(os.fspath(path), np.ascontiguousarray(a), depth_scale, aov)
+    if out_of_range:
+        warnings.warn(
+            f"{os.fspath(path)}: {out_of_range} values did not fit in 16 bits at depth_scale "
+            f"{depth_scale} and were written as 0",
+            stacklevel=2,
+        )
+    return out_of_range

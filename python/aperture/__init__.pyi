@@ -1,0 +1,116 @@
+"""Type stubs of the Python module aperture (see docs/python.md)."""
+
+import os
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+_PathLike = str | os.PathLike[str]
+_Vec3 = Sequence[float]
+_Aovs = str | Iterable[str]
+# One camera: (H, W[, C]); cameras of one size: (N, H, W[, C]); of different sizes: a list.
+_Result = dict[str, Any]
+
+class Camera:
+    """A camera: any model and parameter of the command line, checked by the same schema."""
+
+    def __init__(self, **params: Any) -> None:
+        """Camera(type='perspective', **params): keywords are the job file's camera keys
+        (fov, size, eye, at, up, intrinsics, ...), checked by name and value (ValueError)."""
+
+    @staticmethod
+    def look_at(
+        eye: _Vec3,
+        at: _Vec3,
+        up: _Vec3 = (0.0, 1.0, 0.0),
+        fov: float | None = None,
+        size: Sequence[int] | None = None,
+        **params: Any,
+    ) -> Camera:
+        """Sugar for Camera(eye=, at=, up=, fov=, size=, **params)."""
+
+    @property
+    def params(self) -> dict[str, Any]:
+        """The parameters that differ from the defaults: Camera(**cam.params) is the same camera."""
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def type(self) -> str: ...
+    @property
+    def spp(self) -> int: ...
+    name: str
+    """The image name (load_cameras), else ''."""
+
+    def describe(self) -> str:
+        """The text of `aperture camera --describe` for this camera."""
+
+class Scene:
+    """Meshes by path or procedural spec (several as a list), or one mesh from arrays."""
+
+    def __init__(
+        self,
+        path: _PathLike | Sequence[_PathLike] | None = None,
+        *,
+        vertices: npt.ArrayLike | None = None,
+        faces: npt.ArrayLike | None = None,
+        robust: bool = True,
+        quality: str = "high",
+        compact: bool = False,
+        world_space: bool = False,
+        aovs: str | Iterable[str] = (),
+    ) -> None: ...
+    @property
+    def bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]: ...
+    @property
+    def triangle_count(self) -> int: ...
+    @property
+    def last_render(self) -> dict[str, float]:
+        """seconds, rays, hits, frames, mrays_per_second of the last render call."""
+
+    def render(
+        self,
+        cameras: Camera | Iterable[Camera],
+        aovs: _Aovs = ("color", "depth"),
+        spp: int | None = None,
+        layers: int = 0,
+        normal_frame: str = "world",
+        threads: int = 0,
+        progress: Callable[[int, int], Any] | None = None,
+        packet: int = 16,
+        tile: int = 32,
+    ) -> _Result:
+        """Renders every camera in one parallel loop with the GIL released; name -> array."""
+
+    def render_iter(
+        self,
+        cameras: Iterable[Camera],
+        aovs: _Aovs = ("color", "depth"),
+        batch: int = 8,
+        progress: Callable[[int, int], Any] | None = None,
+        **options: Any,
+    ) -> Iterator[tuple[Camera, dict[str, np.ndarray]]]:
+        """Yields (camera, name -> (H, W[, C]) array), batch cameras at a time."""
+
+def load_cameras(path: _PathLike, images: Iterable[str] | None = None) -> list[Camera]:
+    """The cameras of a COLMAP model, transforms.json or OpenCV JSON/YAML, each with .name."""
+
+def camera_parameters() -> list[str]:
+    """The keyword names Camera() accepts."""
+
+def camera_types() -> list[str]:
+    """The camera models Camera(type=...) accepts."""
+
+def read_exr(path: _PathLike) -> dict[str, np.ndarray]:
+    """Every AOV of an EXR written by aperture, by AOV name."""
+
+def read(path: _PathLike) -> np.ndarray:
+    """A .pfm or .npy written by aperture.write as an array (H, W[, C])."""
+
+def write(path: _PathLike, array: npt.ArrayLike, depth_scale: float = 1000.0, aov: str | None = None) -> int:
+    """Writes one AOV to .png (16-bit depth), .pfm, .npy or .tif; returns PNG values out of range."""

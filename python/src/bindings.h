@@ -1,0 +1,27 @@
+#pragma once
+// The pieces of the extension module `aperture._aperture`, one binder per concern. Bindings
+// only convert Python values and forward to the C++ libraries (the same road as the command
+// line and job files); they never re-implement a check or a render.
+#include <nanobind/nanobind.h>
+
+#include <string>
+
+#include "cameras/params.h"
+
+namespace aperture::python {
+
+namespace nb = nanobind;
+
+/// A Python `aperture.Camera`: resolved parameters (checked by the camera schema) and, for a
+/// camera read from a file, the image's name.
+struct PyCamera {
+  CameraParams params;
+  std::string name;
+};
+
+void bindErrors(nb::module_& m);   ///< aperture::Error -> ValueError, file errors -> OSError
+void bindCamera(nb::module_& m);   ///< Camera, load_cameras
+void bindScene(nb::module_& m);    ///< Scene, Scene.render
+void bindImageIo(nb::module_& m);  ///< read_exr, write, read
+
+}  // namespace aperture::python

@@ -1,0 +1,315 @@
+// aperture.Scene: meshes through the apps' one scene set-up (apps/scene_setup.h) or NumPy
+// arrays through finishMesh, and Scene.render over renderImages (core/render.h) with the GIL
+// released for the whole render.
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/function.h>
+#include <nanobind/stl/optional.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/unique_ptr.h>
+#include <nanobind/stl/vector.h>
+
+#include <algorithm>
+#include <chrono>
+#include <exception>
+#include <memory>
+#include <optional>
+
+#include "aov_arrays.h"
+#include "apps/render_options.h"
+#include "apps/scene_setup.h"
+#include "bindings.h"
+#include "cameras/registry.h"
+#include "core/error.h"
+#include "core/layers.h"
+#include "core/render.h"
+#include "file_errors.h"
+
+namespace aperture::python {
+
+namespace {
+
+/// The scene flags of the command line (--bvh-quality, --no-robust, --compact, --world-space).
+app::SceneOptions sceneOptions(bool robust, const std::string& quality, bool compact,
+                               bool worldSpace) {
+  app::SceneOptions o;
+  o.robust = robust;
+  o.quality = quality;
+  o.compact = compact;
+  o.worldSpace = worldSpace;
+  return o;
+}
+
+/// What Scene.render measured last: the call's wall time and the rays of every frame.
+struct RenderTotals {
+  double seconds = 0;
+  uint64_t rays = 0, hits = 0;
+  size_t frames = 0;
+};
+
+/// Thrown on a render thread to stop the frame loop once the progress callback raised.
+struct ProgressRaised {};
+
+/// What a scene holds beyond positions (SceneSpec's mesh data and BVH flags): a scene made
+/// for some AOVs is reloaded or rebuilt once when a render asks for more.
+bool holdsEverything(const app::SceneSpec& have, const app::SceneSpec& need) {
+  for (const PropertyAov& p : need.properties)
+    if (std::find(have.properties.begin(), have.properties.end(), p) == have.properties.end())
+      return false;
+  return (have.vertexNormals || !need.vertexNormals) &&
+         (have.build.contextFilter || !need.build.contextFilter);
+}
+
+/// `have` grown by what `need` adds (properties, vertex normals, the context filter).
+app::SceneSpec unionOf(app::SceneSpec have, const app::SceneSpec& need) {
+  for (const PropertyAov& p : need.properties)
+    if (std::find(have.properties.begin(), have.properties.end(), p) == have.properties.end())
+      have.properties.push_back(p);
+  have.vertexNormals = have.vertexNormals || need.vertexNormals;
+  have.build.contextFilter = have.build.contextFilter || need.build.contextFilter;
+  return have;
+}
+
+class PyScene {
+ public:
+  /// Meshes by path or procedural spec, as `--mesh` takes them; `aovs`: what renders will ask
+  /// for (the mesh data loaded up front; more is loaded on the first render that needs it).
+  PyScene(const std::vector<std::string>& meshes, const app::SceneOptions& o, const AovSet& aovs)
+      : device_(std::make_unique<Device>()), fromFiles_(true) {
+    app::SceneOptions options = o;
+    options.meshes = meshes;
+    options.aovs = aovs;
+    spec_ = options.spec();
+    for (const std::string& m : meshes)
+      if (m.rfind("procedural:", 0) != 0) files_.push_back(m);
+    load();
+  }
+
+  /// One mesh from positions (world space, float or double, as a PLY's float or double
+  /// properties load) and triangle indices; finished exactly as a loaded file is.
+  PyScene(Mesh mesh, const app::SceneOptions& o) : device_(std::make_unique<Device>()) {
+    spec_ = o.spec();
+    spec_.meshes = {{mesh.name, std::nullopt}};
+    finishMesh(mesh, o.loadOptions());
+    loaded_.meshes.push_back(std::move(mesh));
+    const Mesh& m = loaded_.meshes.back();
+    loaded_.objects.push_back({&m, glm::dmat4(1.0)});
+    loaded_.names.push_back(m.name);
+    loaded_.renderOrigin = m.anchor;
+    glm::vec3 lo, hi;
+    m.bounds(lo, hi);
+    loaded_.worldLo = m.anchor + glm::dvec3(lo);
+    loaded_.worldHi = m.anchor + glm::dvec3(hi);
+    app::buildLoadedScene(*device_, loaded_, spec_, true);
+  }
+
+  nb::object render(nb::handle cameras, const std::string& aovList, std::optional<int> spp,
+                    int layers, const std::string& normalFrame, int threads,
+                    const nb::object& progress, int packet, int tile) {
+    const bool single = nb::isinstance<PyCamera>(cameras);
+    std::vector<CameraParams> params;
+    if (single) {
+      params.push_back(nb::cast<const PyCamera&>(cameras).params);
+    } else {
+      for (nb::handle c : cameras) {
+        if (!nb::isinstance<PyCamera>(c))
+          throw nb::type_error("Scene.render: cameras must be a Camera or a sequence of Camera");
+        params.push_back(nb::cast<const PyCamera&>(c).params);
+      }
+    }
+    // Everything is checked before any work, as the command line does.
+    AovSet aovs = parseAovSet(aovList);
+    if (layers != 0) checkLayerCount(layers, "layers");
+    aovs.layers = layers;
+    app::RenderOptions options;
+    options.packet = packet;
+    options.tile = tile;
+    options.threads = threads;
+    RenderSettings settings = options.settings(1);
+    settings.normalFrame = parseNormalFrame(normalFrame);
+    std::vector<std::unique_ptr<Camera>> owned;
+    std::vector<const Camera*> frameCameras;
+    for (CameraParams& p : params) {
+      if (spp) p.spp = *spp;
+      owned.push_back(makeCamera(p, loaded_.scene->renderOrigin()));
+      frameCameras.push_back(owned.back().get());
+    }
+    provide(aovs);
+
+    // The progress callback runs with the GIL taken back; an exception it raises stops the
+    // frame loop and is raised again here.
+    std::exception_ptr raised;
+    const size_t total = params.size();
+    std::function<void(size_t)> onFrame;
+    if (!progress.is_none())
+      onFrame = [&](size_t done) {
+        {
+          nb::gil_scoped_acquire gil;
+          try {
+            progress(done, total);
+            return;
+          } catch (nb::python_error&) {
+            raised = std::current_exception();
+          }
+        }
+        throw ProgressRaised{};
+      };
+    // Frames of one size go into one stacked framebuffer, so each AOV is one (N, H, W[, C])
+    // block handed to NumPy as it is; frames of mixed sizes get a framebuffer each.
+    const bool stacked = !single && sameSize(params);
+    std::shared_ptr<Framebuffer> block;
+    std::vector<Framebuffer> frames;
+    if (stacked)
+      block = std::make_shared<Framebuffer>(params[0].width,
+                                            int(size_t(params[0].height) * params.size()), aovs);
+    else
+      for (const CameraParams& p : params) frames.emplace_back(p.width, p.height, aovs);
+    std::vector<RenderStats> stats;
+    const auto start = std::chrono::steady_clock::now();
+    {
+      nb::gil_scoped_release release;
+      app::ThreadLimit limit(threads);
+      try {
+        stats = stacked
+                    ? renderImagesStacked(*loaded_.scene, frameCameras, settings, *block, onFrame)
+                    : renderImages(*loaded_.scene, frameCameras, settings, frames, onFrame);
+      } catch (const ProgressRaised&) {
+      }
+    }
+    if (raised) std::rethrow_exception(raised);
+    last_ = RenderTotals{};
+    last_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    last_.frames = stats.size();
+    for (const RenderStats& st : stats) last_.rays += st.raysTraced, last_.hits += st.hits;
+    if (stacked) return frameArrays(std::move(block), params.size());
+    if (single) return frameArrays(std::make_shared<Framebuffer>(std::move(frames[0])), 0);
+    return perFrameLists(frames);
+  }
+
+  nb::dict lastRender() const {
+    nb::dict d;
+    d["seconds"] = last_.seconds;
+    d["rays"] = last_.rays;
+    d["hits"] = last_.hits;
+    d["frames"] = last_.frames;
+    d["mrays_per_second"] = last_.seconds > 0 ? double(last_.rays) / last_.seconds * 1e-6 : 0.0;
+    return d;
+  }
+
+  nb::tuple bounds() const {
+    const glm::dvec3 lo = loaded_.worldLo, hi = loaded_.worldHi;
+    return nb::make_tuple(nb::make_tuple(lo.x, lo.y, lo.z), nb::make_tuple(hi.x, hi.y, hi.z));
+  }
+  size_t triangleCount() const {
+    size_t n = 0;
+    for (const SceneObject& o : loaded_.objects) n += o.mesh->triangleCount();
+    return n;
+  }
+  const std::vector<std::string>& meshNames() const { return loaded_.names; }
+
+ private:
+  void load() {
+    readingFiles(files_, [&] { loaded_ = app::loadSceneMeshes(spec_, true); });
+    app::buildLoadedScene(*device_, loaded_, spec_, true);
+  }
+
+  /// Makes the scene hold what `aovs` read (withAovNeeds): files are loaded again with the
+  /// mesh data added, an array scene is rebuilt with the BVH flags added (its mesh has no
+  /// properties or vertex normals to load: the render then names what is missing).
+  void provide(const AovSet& aovs) {
+    const app::SceneSpec need = app::withAovNeeds(spec_, aovs);
+    if (holdsEverything(spec_, need)) return;
+    spec_ = unionOf(spec_, need);
+    nb::gil_scoped_release release;
+    if (fromFiles_) {
+      loaded_.scene.reset();
+      load();
+    } else {
+      app::buildLoadedScene(*device_, loaded_, spec_, true);
+    }
+  }
+
+  static bool sameSize(const std::vector<CameraParams>& params) {
+    for (const CameraParams& p : params)
+      if (p.width != params[0].width || p.height != params[0].height) return false;
+    return true;
+  }
+
+  /// Frames of mixed sizes: name -> list of (H, W[, C]) arrays, one per frame, no copy.
+  static nb::dict perFrameLists(std::vector<Framebuffer>& frames) {
+    nb::dict out;
+    for (const std::string& name : aovNames(frames[0])) out[name.c_str()] = nb::list();
+    for (Framebuffer& f : frames) {
+      nb::dict one = frameArrays(std::make_shared<Framebuffer>(std::move(f)), 0);
+      for (auto [name, array] : one) nb::cast<nb::list>(out[name]).append(array);
+    }
+    return out;
+  }
+
+  std::unique_ptr<Device> device_;  // declared first: destroyed after the scene
+  bool fromFiles_ = false;
+  std::vector<std::string> files_;  // the mesh files, for messages of readingFiles
+  app::SceneSpec spec_;
+  app::LoadedScene loaded_;
+  RenderTotals last_;
+};
+
+template <typename Real>
+Mesh meshOfArrays(
+    const nb::ndarray<const Real, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>& v,
+    const nb::ndarray<const uint32_t, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>& f,
+    const std::string& name) {
+  Mesh m;
+  m.name = name;
+  m.vertexCount = v.shape(0);
+  if constexpr (std::is_same_v<Real, float>)
+    m.positions.assign(v.data(), v.data() + 3 * v.shape(0));
+  else
+    m.positionsDouble.assign(v.data(), v.data() + 3 * v.shape(0));
+  m.indices.assign(f.data(), f.data() + 3 * f.shape(0));
+  m.stats.sourceFaces = f.shape(0);
+  return m;
+}
+
+template <typename Real>
+void bindArrayConstructor(nb::class_<PyScene>& c) {
+  c.def_static(
+      "_from_arrays",
+      [](const nb::ndarray<const Real, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>& vertices,
+         const nb::ndarray<const uint32_t, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>& faces,
+         const std::string& name, bool robust, const std::string& quality, bool compact,
+         bool worldSpace) {
+        Mesh mesh = meshOfArrays<Real>(vertices, faces, name);
+        return std::make_unique<PyScene>(std::move(mesh),
+                                         sceneOptions(robust, quality, compact, worldSpace));
+      },
+      nb::arg("vertices"), nb::arg("faces"), nb::arg("name"), nb::arg("robust"), nb::arg("quality"),
+      nb::arg("compact"), nb::arg("world_space"));
+}
+
+}  // namespace
+
+void bindScene(nb::module_& m) {
+  nb::class_<PyScene> scene(m, "_Scene", "The C++ scene behind aperture.Scene");
+  scene.def_static(
+      "_from_paths",
+      [](const std::vector<std::string>& meshes, bool robust, const std::string& quality,
+         bool compact, bool worldSpace, const std::string& aovs) {
+        return std::make_unique<PyScene>(meshes, sceneOptions(robust, quality, compact, worldSpace),
+                                         aovs.empty() ? AovSet() : parseAovSet(aovs));
+      },
+      nb::arg("meshes"), nb::arg("robust"), nb::arg("quality"), nb::arg("compact"),
+      nb::arg("world_space"), nb::arg("aovs"));
+  bindArrayConstructor<float>(scene);
+  bindArrayConstructor<double>(scene);
+  scene
+      .def("_render", &PyScene::render, nb::arg("cameras"), nb::arg("aovs"), nb::arg("spp"),
+           nb::arg("layers"), nb::arg("normal_frame"), nb::arg("threads"),
+           nb::arg("progress").none(), nb::arg("packet"), nb::arg("tile"))
+      .def_prop_ro("last_render", &PyScene::lastRender,
+                   "Seconds, rays, hits, frames and Mrays/s of the last render call")
+      .def_prop_ro("bounds", &PyScene::bounds, "World bounds ((x, y, z) low, (x, y, z) high)")
+      .def_prop_ro("triangle_count", &PyScene::triangleCount, "Triangles in the scene")
+      .def_prop_ro("mesh_names", &PyScene::meshNames, "The meshes, as given");
+}
+
+}  // namespace aperture::python

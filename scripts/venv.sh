@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Makes .venv, the Python environment of the Python module: nanobind and scikit-build-core to
+# build it, NumPy and pytest to test it. Quick start (a) installs the module into it; (b)
+# builds it in the CMake tree with .venv's Python and runs its pytest suite. An up-to-date
+# .venv is left as it is.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+if [[ ! -x .venv/bin/python ]]; then
+  python3 -m venv .venv
+fi
+if ! .venv/bin/python -c 'import nanobind, scikit_build_core, numpy, pytest' 2>/dev/null; then
+  .venv/bin/python -m pip install -q --disable-pip-version-check nanobind scikit-build-core numpy pytest
+fi

@@ -1,0 +1,52 @@
+"""Shared fixtures of the pytest suite. CTest runs it against the module built in the CMake
+tree (PYTHONPATH=build/python) with APERTURE_BINARY naming the command line and
+APERTURE_SHARED_DIR the ../shared folder; run by hand, an installed module is used and the
+tests that need the command line or ../shared skip with a message."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="session")
+def cli() -> Path:
+    """The `aperture` executable (APERTURE_BINARY, else build/apps/aperture)."""
+    path = Path(os.environ.get("APERTURE_BINARY", REPO / "build" / "apps" / "aperture"))
+    if not path.is_file():
+        pytest.skip(f"the aperture command line is not built ({path}); set APERTURE_BINARY")
+    return path
+
+
+def run_cli(cli: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    """Runs the command line; returns the finished process (stdout, stderr as text)."""
+    return subprocess.run([str(cli), *args], capture_output=True, text=True, timeout=300)
+
+
+def cli_error(cli: Path, *args: str) -> str:
+    """The message of a failing command line: stderr's 'aperture: error: ' line, without it."""
+    done = run_cli(cli, *args)
+    assert done.returncode != 0, f"expected the command line to fail: {args}"
+    lines = [l for l in done.stderr.splitlines() if l.startswith("aperture: error: ")]
+    assert lines, done.stderr
+    return lines[-1][len("aperture: error: ") :]
+
+
+@pytest.fixture(scope="session")
+def shared_dir() -> Path:
+    """../shared beside the project (APERTURE_SHARED_DIR, else REPO/../shared)."""
+    path = Path(os.environ.get("APERTURE_SHARED_DIR", REPO.parent / "shared"))
+    if not (path / "meshes").is_dir():
+        pytest.skip(f"{path}/meshes is absent (no ../shared beside the project); this test needs it")
+    return path
+
+
+@pytest.fixture(scope="session")
+def bunny(shared_dir: Path) -> Path:
+    """The Stanford bunny at its coarsest resolution (948 faces)."""
+    return shared_dir / "meshes" / "stanford" / "bun_zipper_res4.ply"
