@@ -257,5 +257,38 @@ TEST(NormalFrame, OpenCvAndOpenGlNormalsAreTheWorldNormalsRotatedIntoTheCamera) 
   EXPECT_THROW(parseNormalFrame("opencvv"), Error);
 }
 
+TEST(ShadingNormal, ObjVertexNormalsFollowTheirFaceCorners) {
+  // Two triangles share vertices 1 and 3 (OBJ, 1-based) but give vertex 3 different normals
+  // (vn 2 in the first face, vn 3 in the second): the loader must give each corner its own
+  // normal (splitting vertex 3), keep the triangle order and the corner positions.
+  const std::string obj =
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
+      "vn 0 0 1\nvn 0.6 0 0.8\nvn 0 0.6 0.8\n"
+      "f 1//1 2//1 3//2\nf 2//1 4//1 3//3\n";
+  LoadOptions wantNormals;
+  wantNormals.vertexNormals = true;
+  wantNormals.placement = Placement::WorldSpace;
+  Mesh m = loadObjFromMemory(obj.data(), obj.size(), "two.obj", wantNormals);
+  finishMesh(m, wantNormals);
+  ASSERT_EQ(m.triangleCount(), 2u);
+  ASSERT_EQ(m.vertexNormals.size(), 3 * m.vertexCount);
+  // Expected per corner, read off the text above: position index and normal, 0-based.
+  const int cornerPosition[6] = {0, 1, 2, 1, 3, 2};
+  const glm::vec3 normals[3] = {{0, 0, 1}, {0.6f, 0, 0.8f}, {0, 0.6f, 0.8f}};
+  const int cornerNormal[6] = {0, 0, 1, 0, 0, 2};
+  const glm::vec3 positions[4] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  for (int c = 0; c < 6; ++c) {
+    const uint32_t v = m.indices[size_t(c)];
+    EXPECT_EQ(m.vertex(v), positions[cornerPosition[c]]) << "corner " << c;
+    const glm::vec3 n(m.vertexNormals[3 * v], m.vertexNormals[3 * v + 1],
+                      m.vertexNormals[3 * v + 2]);
+    EXPECT_EQ(n, normals[cornerNormal[c]]) << "corner " << c;
+  }
+  // Without the option nothing is stored and the vertices are not split.
+  Mesh plain = loadObjFromMemory(obj.data(), obj.size(), "two.obj", {});
+  EXPECT_TRUE(plain.vertexNormals.empty());
+  EXPECT_EQ(plain.vertexCount, 4u);
+}
+
 }  // namespace
 }  // namespace aperture
