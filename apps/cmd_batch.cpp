@@ -142,6 +142,7 @@ std::string summaryPathOf(const BatchArgs& a, const BatchPlan& plan) {
 BatchPlan planBatch(const BatchArgs& a) {
   BatchPlan plan;
   plan.shard = parseShard(a.shard);
+  if (a.files.empty()) checkDeepHasLayers(a.cameraFile.deep, a.cameraFile.layers);
   plan.job = a.files.empty() ? cameraFileJob(a.cameraFile) : parseJob(a.files.front());
   checkJobMemory(plan.job, a.maxMemory);
   if (!a.quiet && !plan.shard.origin.empty())
@@ -353,6 +354,7 @@ Command addBatchCommand(CLI::App& app) {
       ->group(group)
       ->type_name("S");
   addLayersOption(*sub, cf.layers, group);
+  addDeepOption(*sub, cf.deep, group);
   sub->add_flag("--preview", cf.preview, "Also write DIR/<image name>.png")->group(group);
   sub->add_option("--normal-frame", cf.normalFrame,
                   "Frame of normal and shading-normal: world, opencv or opengl")

@@ -27,6 +27,7 @@ struct RenderArgs {
   RenderOptions render;
   std::string out = "out/render.exr", preview, previewRange, compression = "zip", preset;
   bool half = false, quiet = false, cameraSidecar = false;
+  bool deep = false;  ///< --deep: the layers to <out stem>.deep.exr
   double depthScale = 1000.0;
 };
 
@@ -71,6 +72,8 @@ int runRender(const RenderArgs& a) {
   ExrOptions exr;
   exr.compression = parseExrCompression(a.compression);
   exr.halfColor = a.half;
+  checkDeepHasLayers(a.deep, a.render.layers);
+  exr.layersInDeepFile = a.deep;
   const ParamSet given = a.camera.given();
   const CameraParams unframed =
       resolveCommandCamera(given, a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0));
@@ -117,6 +120,7 @@ Command addRenderCommand(CLI::App& app) {
   addSceneOptions(*sub, args->scene);
   args->camera.add(*sub);
   addRenderOptions(*sub, args->render);
+  addDeepOption(*sub, args->deep);
   sub->add_option("--out", args->out,
                   "Output path, written atomically: .exr holds every AOV; .png (16-bit depth), "
                   ".pfm, .npy, .tif/.tiff hold the one AOV --aov names")

@@ -316,6 +316,19 @@ void readOutputSettings(const Object& top, const Preset* preset, const std::stri
   job.exr.halfColor = top.boolean("half", preset ? preset->halfColor : false);
 }
 
+/// "deep" (default false): the layered hits go to <EXR stem>.deep.exr (core/exr_deep.h), which
+/// needs "layers" and an EXR.
+void readDeep(const Object& top, Job& job) {
+  job.exr.layersInDeepFile = top.boolean("deep", false);
+  if (!job.exr.layersInDeepFile) return;
+  if (job.aovs.layers == 0)
+    top.fail(top.keyPath("deep"),
+             "\"deep\": true needs \"layers\": K (the deep file holds the layered hits)");
+  if (!job.writesExr)
+    top.fail(top.keyPath("deep"),
+             "\"deep\": true needs an EXR output (the deep file goes beside the EXR)");
+}
+
 /// "normal_frame" (world|opencv|opengl, default world) and "id_counts" (default false).
 void readMeshDataKeys(const Object& top, Job& job) {
   try {
@@ -418,7 +431,8 @@ void expandImageFiles(const Object& top, const std::string& baseDir, const Job& 
   if (!job.previewPattern.empty())
     image.preview =
         expandFor(top, "preview", job.previewPattern, baseDir, camera, image.frame, imageName);
-  image.files = viewFilePaths(job.writesExr ? image.output : "", image.preview, image.datasets);
+  image.files = viewFilePaths(job.writesExr ? image.output : "", image.preview, image.datasets,
+                              job.exr.layersInDeepFile);
 }
 
 /// "cameras": {"from": PATH, "images": [NAME, ...]}: every image of a camera file (or those
@@ -524,7 +538,7 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
   const Object top(name, "", root,
                    {"scene", "cameras", "aovs", "size", "spp", "output", "outputs", "depth_scale",
                     "preview", "preview_range", "compression", "half", "performance", "preset",
-                    "camera_files", "normal_frame", "id_counts", "layers"});
+                    "camera_files", "normal_frame", "id_counts", "layers", "deep"});
   Job job;
   job.path = name;
   const Preset* preset = readPreset(top, job);
@@ -542,6 +556,7 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
   job.height = defaults.height;
   job.render.spp = defaults.spp;
   readOutputSettings(top, preset, baseDir, job);
+  readDeep(top, job);
   readPerformance(top, job);
   readScene(top, baseDir, job);
   readCameras(top, defaults, baseDir, job);
@@ -578,6 +593,7 @@ Job cameraFileJob(const CameraFileBatch& b) {
   if (!b.images.empty()) job["cameras"]["images"] = b.images;
   if (b.spp) job["spp"] = *b.spp;
   if (b.layers) job["layers"] = *b.layers;
+  if (b.deep) job["deep"] = true;
   if (b.preview) job["preview"] = (fs::path(b.outDir) / "{image}.png").generic_string();
   if (b.normalFrame != "world") job["normal_frame"] = b.normalFrame;
   if (b.idCounts) job["id_counts"] = true;

@@ -109,6 +109,7 @@ struct CameraFileBatch {
   std::string normalFrame = "world";  ///< --normal-frame: the job's "normal_frame"
   bool idCounts = false;              ///< --id-counts: the job's "id_counts"
   std::optional<int> layers;          ///< --layers K
+  bool deep = false;                  ///< --deep: the job's "deep"
 };
 /// The job of a CameraFileBatch: written as a job file's JSON and read by parseJobText, so the
 /// one-line form and job files share every check.

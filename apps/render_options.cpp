@@ -17,6 +17,19 @@ void addLayersOption(CLI::App& app, std::optional<int>& layers, const std::strin
   if (!group.empty()) o->group(group);
 }
 
+void addDeepOption(CLI::App& app, bool& deep, const std::string& group) {
+  CLI::Option* o = app.add_flag("--deep", deep,
+                                "With --layers K: write the layers as a deep EXR (samples Z, "
+                                "ZBack, T, primID, geomID, nearest first) to <out stem>.deep.exr "
+                                "instead of hit<k>.* channels (docs/layers.md)");
+  if (!group.empty()) o->group(group);
+}
+
+void checkDeepHasLayers(bool deep, const std::optional<int>& layers) {
+  if (deep && !layers)
+    throw Error("--deep needs --layers K: the deep file holds the layered hits (docs/layers.md)");
+}
+
 void addRenderOptions(CLI::App& app, RenderOptions& o) {
   app.add_option("--aov", o.aovs,
                  "AOVs to compute: color, depth, distance, normal, position, primid, geomid, all, "

@@ -24,6 +24,10 @@ void addRenderOptions(CLI::App& app, RenderOptions& o);
 void addLayersOption(CLI::App& app, std::optional<int>& layers, const std::string& group = "");
 /// --layers help: what it records and where (docs/layers.md).
 extern const char* const kLayersHelp;
+/// The --deep flag of render and the one-line batch: the layers to <out stem>.deep.exr.
+void addDeepOption(CLI::App& app, bool& deep, const std::string& group = "");
+/// Throws Error naming --deep and --layers when --deep is given without --layers.
+void checkDeepHasLayers(bool deep, const std::optional<int>& layers);
 
 /// Limits TBB (and so Embree's builder) to n threads while alive; n = 0 keeps all cores.
 class ThreadLimit {

@@ -14,6 +14,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/exr.h"
+#include "core/exr_deep.h"
 
 namespace aperture::app {
 
@@ -77,7 +78,7 @@ std::string headerMismatch(const Job& job, const JobImage& image) {
   const CameraParams& p = image.params;
   if (header.width != p.width || header.height != p.height)
     return cat("size ", header.width, "x", header.height, ", job wants ", p.width, "x", p.height);
-  std::vector<std::string> want = exrChannelNames(job.aovs), have = header.channels;
+  std::vector<std::string> want = exrChannelNames(job.aovs, job.exr), have = header.channels;
   std::sort(want.begin(), want.end());
   std::sort(have.begin(), have.end());
   if (have != want) return cat("channels ", joined(have), ", job wants ", joined(want));
@@ -103,6 +104,25 @@ std::string previewMismatch(const JobImage& image) {
   return "";
 }
 
+/// "" when the job keeps its layers in a deep file (--deep) and the image's deep file is
+/// complete: every sample decodes and it holds the job's number of layers; else why not.
+std::string deepMismatch(const Job& job, const JobImage& image) {
+  if (!job.exr.layersInDeepFile || job.aovs.layers == 0) return "";
+  const std::string path = deepLayersPath(image.output);
+  if (!fs::exists(path)) return cat("deep file ", path, " is missing");
+  try {
+    const Framebuffer layers = readDeepLayersExr(path);
+    if (layers.width != image.params.width || layers.height != image.params.height)
+      return cat("deep file size ", layers.width, "x", layers.height, ", job wants ",
+                 image.params.width, "x", image.params.height);
+    if (layers.layers != job.aovs.layers)
+      return cat("deep file ", layers.layers, " layers, job wants ", job.aovs.layers);
+  } catch (const Error& e) {
+    return cat("deep file unreadable (", e.what(), ")");
+  }
+  return "";
+}
+
 /// "" when every dataset file of the image exists (they are written atomically, so one that
 /// exists is complete); else the first one missing.
 std::string datasetMismatch(const JobImage& image) {
@@ -123,6 +143,7 @@ OutputCheck checkOutput(const Job& job, const JobImage& image) {
     reason = headerMismatch(job, image);
     if (reason.empty() && !isCompleteExr(image.output))
       reason = "incomplete EXR (truncated: not every scanline decodes)";
+    if (reason.empty()) reason = deepMismatch(job, image);
   }
   if (reason.empty()) reason = datasetMismatch(image);
   if (reason.empty() && !image.preview.empty()) reason = previewMismatch(image);

@@ -20,9 +20,10 @@ struct OutputCheck {
 /// Checks the output of `image`. Reusable only when the EXR is complete (every scanline
 /// decodes) and matches the job: the image's size, the channel names writeExr gives the job's
 /// AOVs, and the camera attributes (type, eye, U, V, W, d, viewport, spp, extras) that
-/// describe() gives for the image's camera; when every dataset file ("outputs") exists (they
-/// are written atomically and record no camera, so existing is all that is checked); and,
-/// when the job has a preview pattern, when the preview exists, decodes (OpenImageIO) and has
+/// describe() gives for the image's camera; with --deep, when the deep file of the layers
+/// decodes and has the image's size and the job's layer count; when every dataset file ("outputs")
+/// exists (they are written atomically and record no camera, so existing is all that is checked);
+/// and, when the job has a preview pattern, when the preview exists, decodes (OpenImageIO) and has
 /// the image's size. Missing when there is no EXR (for a job without one: no first dataset
 /// file); Stale otherwise, with the first mismatch found.
 OutputCheck checkOutput(const Job& job, const JobImage& image);

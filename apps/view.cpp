@@ -8,6 +8,7 @@
 #include "cameras/registry.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/exr_deep.h"
 
 namespace aperture::app {
 
@@ -64,11 +65,14 @@ DatasetFormat DatasetOutput::format() const {
 }
 
 std::vector<std::string> viewFilePaths(const std::string& exrPath, const std::string& previewPath,
-                                       const std::vector<DatasetOutput>& datasets) {
+                                       const std::vector<DatasetOutput>& datasets,
+                                       bool deepLayers) {
   std::vector<std::string> paths;
   if (!previewPath.empty()) paths.push_back(previewPath);
   for (const DatasetOutput& d : datasets) paths.push_back(d.path);
-  if (!exrPath.empty()) paths.push_back(exrPath);
+  if (exrPath.empty()) return paths;
+  if (deepLayers) paths.push_back(deepLayersPath(exrPath));
+  paths.push_back(exrPath);
   return paths;
 }
 
@@ -109,6 +113,8 @@ void writeViewOutputs(const RenderedView& view, const ExrMetadata& meta, const E
     }
   if (exrPath.empty()) return;
   ensureParentDirectory(exrPath, "output");
+  if (exr.layersInDeepFile && view.fb.layers > 0)
+    writeDeepLayersExr(deepLayersPath(exrPath), view.fb, meta);
   writeExr(exrPath, view.fb, meta, exr);
 }
 

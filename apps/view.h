@@ -50,16 +50,21 @@ struct DatasetOutput {
 };
 
 /// The files of a view in the order writeViewOutputs writes them (the camera sidecar, which
-/// only some cameras have, aside): the preview, the dataset files in order, the EXR. Empty
-/// paths are left out.
+/// only some cameras have, aside): the preview, the dataset files in order, with
+/// `deepLayers` (ExrOptions::layersInDeepFile) the deep file of the EXR (deepLayersPath), the
+/// EXR. Empty paths are left out.
 std::vector<std::string> viewFilePaths(const std::string& exrPath, const std::string& previewPath,
-                                       const std::vector<DatasetOutput>& datasets);
+                                       const std::vector<DatasetOutput>& datasets,
+                                       bool deepLayers = false);
 
 /// Writes the files of a rendered view in a fixed order: first the preview (when
 /// `previewPath` is not empty, with `preview`), then the dataset files (`datasets`, with
 /// `dataset`), then (with `cameraSidecar`, for a camera that has a calibrated form:
 /// calibratedViewOf) the camera sidecar JSON beside the EXR (beside the first dataset file
-/// when there is no EXR), then the EXR (when `exrPath` is not empty), each atomically and each
+/// when there is no EXR), then, with `exr.layersInDeepFile` and layers in the view, the deep
+/// file of the layers (core/exr_deep.h, deepLayersPath(exrPath)), then the EXR (when `exrPath`
+/// is not empty; without the hit<k>.* channels when they went to the deep file), each
+/// atomically and each
 /// after creating its directory. A file that cannot be written throws before the EXR is
 /// started, so a complete EXR always has its other files beside it and `batch --resume`,
 /// which looks at the EXR first, renders a frame whose preview failed again. (Earlier files

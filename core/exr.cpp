@@ -22,6 +22,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/exr_header.h"
 #include "core/layers.h"
 
 namespace aperture {
@@ -200,6 +201,16 @@ Imf::Header standardHeader(const std::string& path, int width, int height,
                      float(cam.screenWindowWidth));
 }
 
+}  // namespace
+
+Imf::Header exrHeaderFor(const std::string& path, int width, int height, const ExrMetadata& meta) {
+  Imf::Header header = standardHeader(path, width, height, meta.camera);
+  addHeaderAttributes(header, meta);
+  return header;
+}
+
+namespace {
+
 template <typename T, typename A>
 const T* findValue(const Imf::Header& header, const char* name) {
   const A* attribute = header.findTypedAttribute<A>(name);
@@ -304,9 +315,8 @@ void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata&
                       "expected ", n * perPixel));
   };
 
-  Imf::Header header = standardHeader(path, fb.width, fb.height, meta.camera);
+  Imf::Header header = exrHeaderFor(path, fb.width, fb.height, meta);
   header.compression() = toImf(options.compression);
-  addHeaderAttributes(header, meta);
 
   Imf::FrameBuffer frame;
   std::vector<half> halfColor;
@@ -366,7 +376,8 @@ void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata&
                sizeof(uint32_t), 1, w);
   }
   checkSize("layers", fb.layerDepth.size(), size_t(fb.layers));
-  for (int k = 0; k < fb.layers; ++k) {
+  const int flatLayers = options.layersInDeepFile ? 0 : fb.layers;
+  for (int k = 0; k < flatLayers; ++k) {
     const size_t at = size_t(k) * n;
     addChannel(header, frame, layerChannelName(k, kLayerZ).c_str(), Imf::FLOAT,
                fb.layerDepth.data() + at, sizeof(float), 1, w);
@@ -504,7 +515,7 @@ bool isCompleteExr(const std::string& path) {
   }
 }
 
-std::vector<std::string> exrChannelNames(const AovSet& set) {
+std::vector<std::string> exrChannelNames(const AovSet& set, const ExrOptions& options) {
   const AovMask aovs = set.mask;
   std::vector<std::string> names;
   if (aovs & kAovColor) names.insert(names.end(), kColorNames, kColorNames + 4);
@@ -517,7 +528,8 @@ std::vector<std::string> exrChannelNames(const AovSet& set) {
   if (aovs & kAovShadingNormal)
     names.insert(names.end(), kShadingNormalNames, kShadingNormalNames + 3);
   for (const PropertyAov& p : set.properties) names.push_back(p.aovName());
-  for (int k = 0; k < set.layers; ++k)
+  const int flatLayers = options.layersInDeepFile ? 0 : set.layers;
+  for (int k = 0; k < flatLayers; ++k)
     for (LayerChannel c : {kLayerZ, kLayerT, kLayerPrimId, kLayerGeomId})
       names.push_back(layerChannelName(k, c));
   return names;

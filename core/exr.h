@@ -17,6 +17,9 @@ std::string exrCompressionName(ExrCompression c);
 struct ExrOptions {
   ExrCompression compression = ExrCompression::Zip;
   bool halfColor = false;  ///< R G B A as half; geometry channels are always float32
+  /// --deep: the layered hits go to a deep EXR beside this one (core/exr_deep.h) instead of
+  /// the flat hit<k>.* channels, which writeExr and exrChannelNames then leave out.
+  bool layersInDeepFile = false;
 };
 
 /// What the header records beside the pixels.
@@ -54,8 +57,8 @@ bool isCompleteExr(const std::string& path);
 /// geomID, Ns.X.., then the property channels), in the order of the AovMask bits, then the
 /// layered hits: layer k (0-based, nearest first) as the OpenEXR layer "hit<k>": hit<k>.Z,
 /// hit<k>.T (float, +inf past the last surface), hit<k>.primID, hit<k>.geomID (UINT,
-/// 0xFFFFFFFF there); docs/layers.md.
-std::vector<std::string> exrChannelNames(const AovSet& aovs);
+/// 0xFFFFFFFF there); docs/layers.md. No hit<k>.* with `options.layersInDeepFile`.
+std::vector<std::string> exrChannelNames(const AovSet& aovs, const ExrOptions& options = {});
 
 /// An EXR's header, read without decoding any pixel.
 struct ExrHeader {

@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 
 #include "core/exr.h"
+#include "core/exr_deep.h"
 #include "tests/support.h"
 
 namespace aperture {
@@ -96,6 +98,65 @@ TEST(LayersCli, JobKeyLayers) {
   EXPECT_NE(test::runCommand(test::apertureBinary() + " batch " + dir + "/bad.json", &out), 0);
   EXPECT_NE(out.find("layers"), std::string::npos) << out;
   EXPECT_NE(out.find("99"), std::string::npos) << out;
+}
+
+bool sameBits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+TEST(LayersCli, DeepWritesTheLayersBesideTheExr) {
+  const std::string dir = test::scratchDir();
+  const std::string base = test::apertureBinary() + " render" + kScene +
+                           " --eye 0,0,8 --at 0,0,0 --fov 30 --size 40,32 --aov depth --layers 3";
+  std::string out;
+  ASSERT_EQ(test::runCommand(base + " --deep --out " + dir + "/out.exr", &out), 0) << out;
+  ASSERT_EQ(test::runCommand(base + " --out " + dir + "/flat.exr", &out), 0) << out;
+  EXPECT_EQ(readExrHeader(dir + "/out.exr").channels, std::vector<std::string>{"Z"});
+  const Framebuffer deep = readDeepLayersExr(dir + "/out.deep.exr"),
+                    flat = readExr(dir + "/flat.exr");
+  ASSERT_EQ(deep.layers, 3);
+  ASSERT_EQ(flat.layers, 3);
+  EXPECT_TRUE(sameBits(deep.layerDepth, flat.layerDepth));
+  EXPECT_TRUE(sameBits(deep.layerDistance, flat.layerDistance));
+  EXPECT_EQ(deep.layerPrimId, flat.layerPrimId);
+  EXPECT_EQ(deep.layerGeomId, flat.layerGeomId);
+  EXPECT_TRUE(std::any_of(flat.layerDepth.begin() + 2 * flat.pixelCount(), flat.layerDepth.end(),
+                          [](float z) { return std::isfinite(z); }))
+      << "no pixel with 3 surfaces: the comparison would not cover full pixels";
+
+  EXPECT_NE(test::runCommand(
+                test::apertureBinary() + " render --size 8,8 --deep --out " + dir + "/x.exr", &out),
+            0);
+  EXPECT_NE(out.find("--deep needs --layers"), std::string::npos) << out;
+}
+
+TEST(LayersCli, JobKeyDeepAndResume) {
+  const std::string dir = test::scratchDir();
+  const std::string job = R"({
+    "scene": {"meshes": [{"path": "procedural:sphere?radius=1&cz=1.5"},
+                         {"path": "procedural:sphere?radius=1&cz=-1.5"}]},
+    "cameras": [{"name": "a", "eye": [0, 0, 8], "at": [0, 0, 0], "fov": 30}],
+    "size": [40, 32], "aovs": "depth", "layers": 2, "deep": true, "output": ")" +
+                          dir + R"(/out/{camera}.exr"})";
+  test::writeFile(dir + "/job.json", job);
+  const std::string batch = test::apertureBinary() + " batch " + dir + "/job.json";
+  std::string out;
+  ASSERT_EQ(test::runCommand(batch, &out), 0) << out;
+  EXPECT_EQ(readExrHeader(dir + "/out/a.exr").channels, std::vector<std::string>{"Z"});
+  EXPECT_EQ(readDeepLayersExr(dir + "/out/a.deep.exr").layers, 2);
+  // --resume keeps a complete image and renders again one whose deep file is gone.
+  const auto written = std::filesystem::last_write_time(dir + "/out/a.exr");
+  ASSERT_EQ(test::runCommand(batch + " --resume", &out), 0) << out;
+  EXPECT_EQ(std::filesystem::last_write_time(dir + "/out/a.exr"), written);
+  std::filesystem::remove(dir + "/out/a.deep.exr");
+  ASSERT_EQ(test::runCommand(batch + " --resume", &out), 0) << out;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/out/a.deep.exr")) << out;
+
+  std::string noLayers = job;
+  noLayers.replace(noLayers.find("\"layers\": 2, "), 13, "");
+  test::writeFile(dir + "/bad.json", noLayers);
+  EXPECT_NE(test::runCommand(test::apertureBinary() + " batch " + dir + "/bad.json", &out), 0);
+  EXPECT_NE(out.find("\"deep\": true needs \"layers\""), std::string::npos) << out;
 }
 
 }  // namespace
