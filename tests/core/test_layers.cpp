@@ -94,6 +94,19 @@ BruteObject bruteObject(const Mesh& m, const glm::dmat4& worldFromMesh, const gl
   return o;
 }
 
+/// The camera's centre ray of pixel (i, j), origin and direction in double.
+struct CentreRay {
+  glm::dvec3 org, dir;
+};
+CentreRay centreRayOf(const Camera& cam, int i, int j) {
+  RTCRayHit ray;
+  RayLanes lanes = rayLanes<1>(ray);
+  int valid[1] = {-1};
+  cam.generate({j, i, 1, 1, PacketRequest::kCentreRay}, lanes, valid);
+  return {{ray.ray.org_x, ray.ray.org_y, ray.ray.org_z},
+          {ray.ray.dir_x, ray.ray.dir_y, ray.ray.dir_z}};
+}
+
 BruteRay bruteForce(const std::vector<BruteObject>& objects, const glm::dvec3& org,
                     const glm::dvec3& dir) {
   BruteRay r;
@@ -144,12 +157,7 @@ int expectLayersMatchBruteForce(const Scene& scene, const std::vector<BruteObjec
   int checked = 0, ambiguous = 0;
   for (int i = 0; i < p.height; ++i)
     for (int j = 0; j < p.width; ++j) {
-      RTCRayHit ray;
-      RayLanes lanes = rayLanes<1>(ray);
-      int valid[1] = {-1};
-      cam->generate({j, i, 1, 1, PacketRequest::kCentreRay}, lanes, valid);
-      const glm::dvec3 org(ray.ray.org_x, ray.ray.org_y, ray.ray.org_z);
-      const glm::dvec3 dir(ray.ray.dir_x, ray.ray.dir_y, ray.ray.dir_z);
+      const auto [org, dir] = centreRayOf(*cam, i, j);
       const BruteRay want = bruteForce(objects, org, dir);
       ambiguous += want.ambiguous;
       const size_t px = size_t(i) * size_t(p.width) + size_t(j);
@@ -229,14 +237,8 @@ TEST(Layers, SomeRaysCrossEightSurfaces) {
   size_t deepest = 0;
   for (int i = 0; i < p.height; ++i)
     for (int j = 0; j < p.width; ++j) {
-      RTCRayHit ray;
-      RayLanes lanes = rayLanes<1>(ray);
-      int valid[1] = {-1};
-      cam->generate({j, i, 1, 1, PacketRequest::kCentreRay}, lanes, valid);
-      deepest =
-          std::max(deepest, bruteForce(stack.brute, {ray.ray.org_x, ray.ray.org_y, ray.ray.org_z},
-                                       {ray.ray.dir_x, ray.ray.dir_y, ray.ray.dir_z})
-                                .hits.size());
+      const CentreRay r = centreRayOf(*cam, i, j);
+      deepest = std::max(deepest, bruteForce(stack.brute, r.org, r.dir).hits.size());
     }
   EXPECT_EQ(deepest, 8u);
 }
