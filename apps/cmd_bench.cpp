@@ -32,6 +32,7 @@ struct BenchArgs {
   RenderOptions render;
   int frames = 10, warmup = 3, builds = 3;
   bool baseline = false, quiet = false;
+  bool nullTrace = false;  ///< --null: the frame loop without Embree (RenderSettings::nullTrace)
   std::string sweep, json, preset;
   std::string layersMethod;  ///< hidden --layers-method filter|retrace (bench/layers_methods.sh)
 };
@@ -76,6 +77,10 @@ void validateBenchArgs(const BenchArgs& a) {
   if (!a.sweep.empty() && a.sweep != "packet" && a.sweep != "threads" && a.sweep != "quality" &&
       a.sweep != "aovs")
     throw Error(cat("--sweep: '", a.sweep, "' is not one of packet, threads, quality, aovs"));
+  if (a.nullTrace && a.baseline)
+    throw Error("--null measures the frame loop without Embree; --baseline traces with it");
+  if (a.nullTrace && a.sweep == "quality")
+    throw Error("--null traces no BVH: --sweep quality measures nothing there");
 }
 
 /// What every measurement of one bench run shares: the loaded scene, its camera and settings.
@@ -127,7 +132,8 @@ void reportConfig(const Bench& b, nlohmann::json& j) {
                  {"height", b.params.height},
                  {"spp", b.params.spp},
                  {"frames", a.frames},
-                 {"warmup", a.warmup}};
+                 {"warmup", a.warmup},
+                 {"null", a.nullTrace}};
   std::printf(
       "config: %s, %zu triangles; %d threads, Embree ISA %s; packet %d, tile %d; BVH %s%s%s; "
       "AOVs %s; layers %d (%s); %s %dx%d, %d spp\n",
@@ -136,6 +142,10 @@ void reportConfig(const Bench& b, nlohmann::json& j) {
       robust ? " robust" : " not robust", a.scene.compact ? " compact" : "",
       aovListString(b.aovs).c_str(), b.aovs.layers, layerMethodName(defaultLayerMethod()),
       b.params.type.c_str(), b.params.width, b.params.height, b.params.spp);
+  if (a.nullTrace)
+    std::printf(
+        "null trace: no Embree call; every ray is a fake hit (t 1, normal -dir, geomID 0), so "
+        "every requested AOV store runs\n");
 }
 
 /// Load speed, and the BVH build time over --builds builds (the first is the run's own).
@@ -170,9 +180,29 @@ void measureLoadAndBuild(const Bench& b, nlohmann::json& j) {
       tris > 0 ? bytes / tris : 0.0);
 }
 
+/// --null: the frame loop's own cost, wall time over rays (traced lanes) of each timed frame.
+void measureNullTrace(const Bench& b, nlohmann::json& j) {
+  Framebuffer fb(b.params.width, b.params.height, b.aovs);
+  std::vector<double> nsPerRay;
+  uint64_t rays = 0;
+  for (int f = 0; f < b.args.warmup + b.args.frames; ++f) {
+    const RenderStats st = renderImage(*b.loaded.scene, *b.camera, b.settings, fb);
+    rays = st.raysTraced;
+    if (f >= b.args.warmup) nsPerRay.push_back(rays > 0 ? st.seconds / double(rays) * 1e9 : 0.0);
+  }
+  const SampleSummary s = summarize(nsPerRay);
+  std::printf("%-28s median %8.3f ns/ray   (min %.3f, max %.3f, cv %.2f%%, %d frames, %llu rays)\n",
+              "null (overhead):", s.median, s.min, s.max, 100 * s.cv, b.args.frames,
+              static_cast<unsigned long long>(rays));
+  j["null_ns_per_ray"] = toJson(s);
+  j["null_ns_per_ray_median"] = s.median;
+  j["null_rays_per_frame"] = rays;
+}
+
 /// The frame loop, and with --baseline bare rtcIntersect16 on the same rays right after it,
 /// through the same scene, so both trace with the same BVH and the same (robust or not) mode.
 void measureRender(const Bench& b, nlohmann::json& j) {
+  if (b.args.nullTrace) return measureNullTrace(b, j);
   const SampleSummary render = b.time(b.settings);
   printSummary("render:", render, b.args.frames);
   j["mrays_per_s"] = toJson(render);
@@ -305,7 +335,8 @@ int runBench(const BenchArgs& a) {
   const ParamSet given = a.camera.given();
   const CameraParams unframed =
       resolveCommandCamera(given, a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0));
-  const RenderSettings settings = a.render.settings(unframed.spp);
+  RenderSettings settings = a.render.settings(unframed.spp);
+  settings.nullTrace = a.nullTrace;
   validateBenchArgs(a);
   checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs);
 
@@ -345,6 +376,9 @@ Command addBenchCommand(CLI::App& app) {
   sub->add_option("--builds", args->builds, "BVH builds to time (median)")->capture_default_str();
   sub->add_flag("--baseline", args->baseline,
                 "Also trace the same rays with bare rtcIntersect16 (no shading, no framebuffer)");
+  sub->add_flag("--null", args->nullTrace,
+                "Measure the frame loop's overhead in ns/ray: rays generated and AOVs written, "
+                "every ray a fake hit, no Embree call");
   sub->add_option("--sweep", args->sweep,
                   "Also sweep: packet, threads, quality or aovs (depth alone .. all AOVs, "
                   "interleaved frames)");

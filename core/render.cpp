@@ -82,6 +82,18 @@ std::vector<std::vector<const uint32_t*>> propertyTables(const Scene& scene,
   return tables;
 }
 
+struct ImagePlan;
+
+struct TileCounters {
+  uint64_t traced = 0, skipped = 0, hits = 0;
+};
+
+/// Renders the tile of columns [x0, x1) and rows [y0, y1) of a plan's frame.
+using TileRenderer = void (*)(const ImagePlan& plan, int x0, int y0, int x1, int y1,
+                              TileCounters& count);
+/// The tile renderer for the settings' packet width and trace mode (Embree or null).
+TileRenderer tileRendererFor(const RenderSettings& settings);
+
 /// What one frame computes, decided once from the framebuffer's AOVs.
 struct ImagePlan {
   /// `pixelOffset`: where the camera's pixel (0, 0) is in `fb` (frame k of a stacked
@@ -116,6 +128,10 @@ struct ImagePlan {
   int colorSamples;
   bool geometryFromSample;
   int passes;
+  /// The packet width and trace mode, chosen here once, so no packet tests them.
+  TileRenderer renderTile;
+  /// RenderSettings::nullTrace: the fake primID of lane k (k mod object 0's triangle count).
+  uint32_t nullPrimIds[16] = {};
 };
 
 ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSettings& settings_,
@@ -151,13 +167,20 @@ ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSet
       remapPrimIds(scene_.remapsPrimIds()),
       colorSamples(color ? settings_.spp : 0),
       geometryFromSample(anyGeometry && color && settings_.spp == 1),
-      passes(colorSamples + (anyGeometry && !geometryFromSample ? 1 : 0)) {
+      passes(colorSamples + (anyGeometry && !geometryFromSample ? 1 : 0)),
+      renderTile(tileRendererFor(settings_)) {
   if (layers) layers->place(width, pixelOffset);
+  if (settings.nullTrace) {
+    // The fake hits must name a real object and triangle (the mesh-data AOVs read them), and
+    // layers would call Embree again.
+    if (layers) throw Error("null trace (bench --null): layered hits (--layers) trace Embree");
+    if (remapPrimIds) throw Error("null trace (bench --null): not available on a culled scene");
+    if (scene.objectCount() == 0) throw Error("null trace (bench --null): the scene is empty");
+    const size_t triangles = scene.objectMesh(0).triangleCount();
+    if (triangles == 0) throw Error("null trace (bench --null): object 0 has no triangle");
+    for (size_t k = 0; k < 16; ++k) nullPrimIds[k] = uint32_t(k % triangles);
+  }
 }
-
-struct TileCounters {
-  uint64_t traced = 0, skipped = 0, hits = 0;
-};
 
 /// One thread's Embree packet and its coherent intersection context.
 template <int N>
@@ -211,15 +234,43 @@ int selectLanes(const ImagePlan& plan, const PacketRequest& req, PacketState<N>&
   return active;
 }
 
-/// Generates and intersects the packet of `req`; false when no lane was traced.
+/// The stand-in for intersect<N> of RenderSettings::nullTrace: every lane hits with the fake
+/// values documented there (Ng = −dir, so the eye-light shade is 1).
 template <int N>
+void fakeHits(const ImagePlan& plan, PacketState<N>& st) {
+  auto& h = st.packet.hit;
+  const RayLanes& l = st.lanes;
+  float *ngX, *ngY, *ngZ, *u, *v;
+  unsigned *geomID, *primID, *instID;
+  if constexpr (N == 1) {
+    ngX = &h.Ng_x, ngY = &h.Ng_y, ngZ = &h.Ng_z, u = &h.u, v = &h.v;
+    geomID = &h.geomID, primID = &h.primID, instID = &h.instID[0];
+  } else {
+    ngX = h.Ng_x, ngY = h.Ng_y, ngZ = h.Ng_z, u = h.u, v = h.v;
+    geomID = h.geomID, primID = h.primID, instID = h.instID[0];
+  }
+  for (int k = 0; k < N; ++k) {
+    l.tfar[k] = 1.0f;
+    ngX[k] = -l.dirX[k], ngY[k] = -l.dirY[k], ngZ[k] = -l.dirZ[k];
+    u[k] = 0.25f, v[k] = 0.25f;
+    geomID[k] = 0, primID[k] = plan.nullPrimIds[k], instID[k] = RTC_INVALID_GEOMETRY_ID;
+  }
+}
+
+/// Generates and intersects the packet of `req` (kNull: fakeHits instead of Embree); false
+/// when no lane was traced.
+template <int N, bool kNull>
 bool tracePacket(const ImagePlan& plan, const PacketRequest& req, PacketState<N>& st,
                  TileCounters& count) {
   plan.camera.generate(req, st.lanes, st.valid);
   const int active = selectLanes<N>(plan, req, st, count);
   if (active == 0) return false;
-  clearHits<N>(st.packet);
-  intersect<N>(plan.scene.handle(), &st.ctx, st.valid, st.packet);
+  if constexpr (kNull) {
+    fakeHits<N>(plan, st);
+  } else {
+    clearHits<N>(st.packet);
+    intersect<N>(plan.scene.handle(), &st.ctx, st.valid, st.packet);
+  }
   count.traced += uint64_t(active);
   return true;
 }
@@ -403,10 +454,10 @@ void storeGeometry(const ImagePlan& plan, const PacketRequest& req, const Packet
 
 /// Traces the packet of `req`; adds its shading to `color` when given, and stores the
 /// geometry AOVs when `geometry` is set.
-template <int N>
+template <int N, bool kNull>
 void renderPass(const ImagePlan& plan, const PacketRequest& req, PacketState<N>& st,
                 BlockColor<N>* color, bool geometry, TileCounters& count) {
-  if (!tracePacket<N>(plan, req, st, count)) return;
+  if (!tracePacket<N, kNull>(plan, req, st, count)) return;
   PacketHits<N> hits;
   if (findHits<N>(st, hits) == 0) return;
   count.hits += uint64_t(hits.count);
@@ -436,42 +487,48 @@ void storeColor(const ImagePlan& plan, int bx, int by, const BlockColor<N>& colo
 /// Renders the block of N pixels whose top-left pixel is (row by, column bx): the colour
 /// samples, then the centre ray when it is a pass of its own. One call site of renderPass,
 /// so the compiler inlines the whole pass into the block loop.
-template <int N>
+template <int N, bool kNull>
 void renderBlock(const ImagePlan& plan, int bx, int by, PacketState<N>& st, TileCounters& count) {
   constexpr int kBW = blockWidthFor(N), kBH = blockHeightFor(N);
   BlockColor<N> color;
   for (int pass = 0; pass < plan.passes; ++pass) {
     const bool centre = pass == plan.colorSamples;
     const PacketRequest req{bx, by, kBW, kBH, centre ? PacketRequest::kCentreRay : pass};
-    renderPass<N>(plan, req, st, centre ? nullptr : &color, centre || plan.geometryFromSample,
-                  count);
+    renderPass<N, kNull>(plan, req, st, centre ? nullptr : &color,
+                         centre || plan.geometryFromSample, count);
   }
   if (plan.color) storeColor<N>(plan, bx, by, color);
 }
 
-/// Renders the tile of columns [x0, x1) and rows [y0, y1), block by block.
-template <int N>
+/// Renders the tile of columns [x0, x1) and rows [y0, y1), block by block (a TileRenderer).
+template <int N, bool kNull>
 void renderTile(const ImagePlan& plan, int x0, int y0, int x1, int y1, TileCounters& count) {
   // Denormals flushed on every worker (Embree's recommendation); same mode on all threads.
   _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
   _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
   PacketState<N> st;
   for (int by = y0; by < y1; by += blockHeightFor(N))
-    for (int bx = x0; bx < x1; bx += blockWidthFor(N)) renderBlock<N>(plan, bx, by, st, count);
+    for (int bx = x0; bx < x1; bx += blockWidthFor(N))
+      renderBlock<N, kNull>(plan, bx, by, st, count);
 }
 
-/// renderTile for the plan's packet width.
-void renderTileOfWidth(const ImagePlan& plan, int x0, int y0, int x1, int y1, TileCounters& count) {
-  switch (plan.settings.packetWidth) {
+template <bool kNull>
+TileRenderer tileRendererOfWidth(int packetWidth) {
+  switch (packetWidth) {
     case 1:
-      return renderTile<1>(plan, x0, y0, x1, y1, count);
+      return &renderTile<1, kNull>;
     case 4:
-      return renderTile<4>(plan, x0, y0, x1, y1, count);
+      return &renderTile<4, kNull>;
     case 8:
-      return renderTile<8>(plan, x0, y0, x1, y1, count);
+      return &renderTile<8, kNull>;
     default:
-      return renderTile<16>(plan, x0, y0, x1, y1, count);
+      return &renderTile<16, kNull>;
   }
+}
+
+TileRenderer tileRendererFor(const RenderSettings& settings) {
+  return settings.nullTrace ? tileRendererOfWidth<true>(settings.packetWidth)
+                            : tileRendererOfWidth<false>(settings.packetWidth);
 }
 
 /// Throws Error when the framebuffer is empty or does not match the camera's image size
@@ -528,7 +585,7 @@ std::vector<RenderStats> renderPlans(const std::deque<ImagePlan>& plans,
       const int x0 = (local % tilesX) * ts, y0 = (local / tilesX) * ts;
       const int x1 = std::min(x0 + ts, plan.width), y1 = std::min(y0 + ts, plan.height);
       TileCounters c;
-      renderTileOfWidth(plan, x0, y0, x1, y1, c);
+      plan.renderTile(plan, x0, y0, x1, y1, c);
       FrameProgress& f = frames[k];
       f.traced += c.traced;
       f.skipped += c.skipped;

@@ -27,6 +27,12 @@ struct RenderSettings {
   int tileSize = 32;     ///< tile edge in pixels (a multiple of 4); tiles are the unit of TBB work
   int spp = 1;           ///< samples per pixel (must match the camera's)
   NormalFrame normalFrame = NormalFrame::World;
+  /// Measurement mode (`aperture bench --null`), not for images: the frame loop runs as usual
+  /// but Embree is never called. Every traced lane k "hits" with t = 1, Ng = −dir, u = v =
+  /// 0.25, geomID 0, no instance and primID = k mod (object 0's triangle count), so ray
+  /// generation and every requested AOV store run. Chosen once per frame; not available with
+  /// layered hits or a culled scene; throws Error for a scene without objects.
+  bool nullTrace = false;
 };
 
 struct RenderStats {
