@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "core/error.h"
+#include "core/parallel.h"
 #include "core/spelling.h"
 
 namespace aperture {
@@ -87,48 +88,111 @@ class WorldVertices {
   bool fromDouble_;
 };
 
+/// Items per chunk of finishMesh's parallel passes.
+constexpr size_t kItemsPerChunk = size_t(1) << 16;
+
+size_t chunkCount(size_t n) { return (n + kItemsPerChunk - 1) / kItemsPerChunk; }
+
+/// Calls body(c, begin, end) in parallel for chunk c = [c, c + 1) * kItemsPerChunk of [0, n)
+/// (the last one shorter). Chunks are numbered, so per-chunk results can be combined in
+/// order and give exactly what one serial pass gives, whatever the thread count.
+template <class Body>
+void forEachChunk(size_t n, const Body& body) {
+  parallelFor(chunkCount(n), 1, [&](size_t cb, size_t ce) {
+    for (size_t c = cb; c < ce; ++c)
+      body(c, c * kItemsPerChunk, std::min(n, (c + 1) * kItemsPerChunk));
+  });
+}
+
 /// Throws Error naming the mesh, how many indices are >= vertexCount and the first of them.
 void checkIndicesInRange(const Mesh& mesh) {
+  struct Bad {
+    size_t count = 0;
+    size_t first = 0;  ///< position in mesh.indices of the chunk's first bad index
+  };
   const size_t n = mesh.vertexCount;
+  std::vector<Bad> chunks(chunkCount(mesh.indices.size()));
+  forEachChunk(mesh.indices.size(), [&](size_t c, size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i)
+      if (mesh.indices[i] >= n && chunks[c].count++ == 0) chunks[c].first = i;
+  });
   size_t badIndices = 0;
   size_t firstBadAt = 0;
   uint32_t firstBad = 0;
-  for (size_t i = 0; i < mesh.indices.size(); ++i)
-    if (mesh.indices[i] >= n) {
-      if (badIndices++ == 0) {
-        firstBad = mesh.indices[i];
-        firstBadAt = i / 3;
-      }
+  for (const Bad& chunk : chunks) {
+    if (chunk.count && badIndices == 0) {
+      firstBad = mesh.indices[chunk.first];
+      firstBadAt = chunk.first / 3;
     }
+    badIndices += chunk.count;
+  }
   if (badIndices)
     throw Error(cat(mesh.name, ": ", badIndices, " vertex indices out of range (the mesh has ", n,
                     " vertices); the first is ", firstBad, " in triangle ", firstBadAt));
 }
 
 /// Sets bad[k] for the n vertices with a non-finite world position and returns how many there
-/// are; [lo, hi] becomes the bounding box of the others.
+/// are; [lo, hi] becomes the bounding box of the others. Chunks are combined in order with
+/// the same glm::min/max, so even the sign of a zero bound is that of one serial pass.
 size_t markNonFiniteVertices(const WorldVertices& world, size_t n, std::vector<uint8_t>& bad,
                              glm::dvec3& lo, glm::dvec3& hi) {
-  lo = glm::dvec3(std::numeric_limits<double>::max());
-  hi = glm::dvec3(-std::numeric_limits<double>::max());
-  size_t nonFinite = 0;
-  for (size_t k = 0; k < n; ++k) {
-    glm::dvec3 v = world(k);
-    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
-      bad[k] = 1;
-      ++nonFinite;
-    } else {
-      lo = glm::min(lo, v);
-      hi = glm::max(hi, v);
+  struct Box {
+    glm::dvec3 lo{std::numeric_limits<double>::max()};
+    glm::dvec3 hi{-std::numeric_limits<double>::max()};
+    size_t nonFinite = 0;
+  };
+  std::vector<Box> chunks(chunkCount(n));
+  forEachChunk(n, [&](size_t c, size_t b, size_t e) {
+    Box box;
+    for (size_t k = b; k < e; ++k) {
+      glm::dvec3 v = world(k);
+      if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
+        bad[k] = 1;
+        ++box.nonFinite;
+      } else {
+        box.lo = glm::min(box.lo, v);
+        box.hi = glm::max(box.hi, v);
+      }
     }
+    chunks[c] = box;
+  });
+  Box all;
+  for (const Box& box : chunks) {
+    all.lo = glm::min(all.lo, box.lo);
+    all.hi = glm::max(all.hi, box.hi);
+    all.nonFinite += box.nonFinite;
   }
-  return nonFinite;
+  lo = all.lo;
+  hi = all.hi;
+  return all.nonFinite;
+}
+
+/// How many triangles repeat an index (counted in parallel; nothing is dropped).
+size_t countDegenerateTriangles(const std::vector<uint32_t>& indices) {
+  const size_t triangles = indices.size() / 3;
+  std::vector<size_t> chunks(chunkCount(triangles), 0);
+  forEachChunk(triangles, [&](size_t c, size_t b, size_t e) {
+    size_t degenerate = 0;
+    for (size_t t = b; t < e; ++t) {
+      const uint32_t a = indices[3 * t], bb = indices[3 * t + 1], cc = indices[3 * t + 2];
+      degenerate += (a == bb || bb == cc || a == cc) ? 1 : 0;
+    }
+    chunks[c] = degenerate;
+  });
+  size_t degenerate = 0;
+  for (size_t d : chunks) degenerate += d;
+  return degenerate;
 }
 
 /// Drops the triangles using a bad vertex (when `anyBad`), with their face property values,
 /// and counts, but keeps, degenerate ones (a repeated index); both counts go to the mesh's
 /// stats.
 void dropTrianglesOfBadVertices(Mesh& mesh, const std::vector<uint8_t>& bad, bool anyBad) {
+  if (!anyBad) {
+    mesh.stats.droppedTriangles = 0;
+    mesh.stats.degenerateTriangles = countDegenerateTriangles(mesh.indices);
+    return;
+  }
   size_t out = 0, dropped = 0, degenerate = 0;
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
     uint32_t a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
@@ -159,10 +223,12 @@ void writeAnchoredPositions(Mesh& mesh, const WorldVertices& world, const std::v
   if (fromDouble) mesh.positions.assign(3 * n + kVertexPaddingFloats, 0.0f);
   mesh.positions.resize(3 * n + kVertexPaddingFloats);
   std::fill(mesh.positions.begin() + 3 * n, mesh.positions.end(), 0.0f);
-  for (size_t k = 0; k < n; ++k) {
-    glm::dvec3 v = bad[k] ? glm::dvec3(0.0) : world(k) - mesh.anchor;
-    for (int a = 0; a < 3; ++a) mesh.positions[3 * k + a] = float(v[a]);
-  }
+  forEachChunk(n, [&](size_t, size_t b, size_t e) {
+    for (size_t k = b; k < e; ++k) {
+      glm::dvec3 v = bad[k] ? glm::dvec3(0.0) : world(k) - mesh.anchor;
+      for (int a = 0; a < 3; ++a) mesh.positions[3 * k + a] = float(v[a]);
+    }
+  });
 }
 
 /// Moves the vertex normals into the placed mesh's space: n' = M^-T n with M the linear part
@@ -175,11 +241,13 @@ void transformVertexNormals(Mesh& mesh, const LoadOptions& options) {
   if (options.transform) linear = glm::dmat3(*options.transform) * linear;
   if (linear == glm::dmat3(1.0)) return;
   const glm::dmat3 normalFrom = glm::transpose(glm::inverse(linear));
-  for (size_t k = 0; 3 * k + 2 < mesh.vertexNormals.size(); ++k) {
-    float* n = &mesh.vertexNormals[3 * k];
-    const glm::dvec3 m = normalFrom * glm::dvec3(n[0], n[1], n[2]);
-    for (int a = 0; a < 3; ++a) n[a] = float(m[a]);
-  }
+  forEachChunk(mesh.vertexNormals.size() / 3, [&](size_t, size_t b, size_t e) {
+    for (size_t k = b; k < e; ++k) {
+      float* n = &mesh.vertexNormals[3 * k];
+      const glm::dvec3 m = normalFrom * glm::dvec3(n[0], n[1], n[2]);
+      for (int a = 0; a < 3; ++a) n[a] = float(m[a]);
+    }
+  });
 }
 
 /// Throws Error naming the mesh when a property has the wrong number of values.

@@ -3,10 +3,16 @@
 // LoadOptions asks for it: integer face/vertex properties (MeshProperty) and vertex normals
 // (nx ny nz). Requests turn off the binary fast paths only for the elements that carry them
 // (those elements have more than the fast paths' properties anyway).
+// Binary elements of fixed-size items (vertices without list properties; faces whose counts
+// all equal the first) are parsed in parallel, straight into the mesh's buffers; anything
+// else, and any item the parallel readers find wrong, goes to the serial readers, so the mesh
+// and the error messages are the same either way (tests/core/test_ply_parallel.cpp).
 // The header's counts are checked against the file size before anything is allocated.
 #include "core/ply.h"
 
 #include <algorithm>
+#include <atomic>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <string_view>
@@ -15,6 +21,7 @@
 #include "core/error.h"
 #include "core/mapped_file.h"
 #include "core/mesh.h"
+#include "core/parallel.h"
 #include "core/spelling.h"
 
 namespace aperture {
@@ -747,6 +754,174 @@ bool fixedSize(const PlyElement& e, size_t& bytes) {
   return true;
 }
 
+/// Records per task of the parallel parsers: large enough that a task outweighs its
+/// scheduling, small enough that two cores share a mesh evenly.
+constexpr size_t kRecordsPerTask = size_t(1) << 16;
+
+/// Where one scalar of a fixed-size vertex record goes: a coordinate, a kept property or a
+/// normal component (`which`: the axis or the property slot).
+struct VertexField {
+  enum Kind { Coordinate, Property, Normal } kind;
+  int which;
+  size_t offset;  ///< bytes from the start of the record
+  PlyType type;
+};
+
+/// The fields readVertices would fill from one item of `e`, with the same precedence
+/// (coordinates, then kept properties, then normals); everything else is skipped.
+std::vector<VertexField> vertexFields(const PlyElement& e, const int xyz[3],
+                                      const ElementRequest& req) {
+  std::vector<VertexField> fields;
+  size_t offset = 0;
+  for (size_t k = 0; k < e.props.size(); ++k) {
+    const PlyProperty& p = e.props[k];
+    const int ki = int(k);
+    if (ki == xyz[0] || ki == xyz[1] || ki == xyz[2])
+      fields.push_back({VertexField::Coordinate,
+                        ki == xyz[0]   ? 0
+                        : ki == xyz[1] ? 1
+                                       : 2,
+                        offset, p.type});
+    else if (req.slotOf[k] >= 0)
+      fields.push_back({VertexField::Property, req.slotOf[k], offset, p.type});
+    else if (req.keepsNormals() &&
+             (ki == req.normal[0] || ki == req.normal[1] || ki == req.normal[2]))
+      fields.push_back({VertexField::Normal,
+                        ki == req.normal[0]   ? 0
+                        : ki == req.normal[1] ? 1
+                                              : 2,
+                        offset, p.type});
+    offset += plyTypeSize(p.type);
+  }
+  return fields;
+}
+
+/// Parallel reader of a vertex element whose items all have the same size (no list property)
+/// and fit in the data; false (nothing read) otherwise, and the serial readers take over and
+/// report the problem. Values go through the same conversions as in the serial readers, so
+/// the mesh is bit for bit the same: an exactly float x y z layout in host order is copied
+/// (as readVerticesFast does), any other goes through double (as readVertices does).
+bool readVerticesParallel(const PlyElement& e, BinaryReader& r, Mesh& mesh,
+                          const ElementRequest& req) {
+  size_t itemBytes;
+  if (!fixedSize(e, itemBytes) || itemBytes == 0 ||
+      e.count > std::numeric_limits<uint32_t>::max() || e.count > r.remaining() / itemBytes)
+    return false;
+  const int xyz[3] = {findProp(e, "x"), findProp(e, "y"), findProp(e, "z")};
+  if (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0) return false;
+  const char* const items = r.pos();
+  const size_t n = size_t(e.count);
+  const bool copyFloats = itemBytes == 12 && e.props.size() == 3 && !r.swap() && xyz[0] == 0 &&
+                          xyz[1] == 1 && xyz[2] == 2 && e.props[0].type == PlyType::Float32 &&
+                          e.props[1].type == PlyType::Float32 &&
+                          e.props[2].type == PlyType::Float32;
+  bool useDouble = false;
+  for (int a = 0; a < 3; ++a)
+    useDouble = useDouble || e.props[size_t(xyz[a])].type == PlyType::Float64;
+  mesh.vertexCount = n;
+  // finishMesh pads the float positions for Embree in place: room for the padding now saves
+  // it a copy of the whole buffer.
+  if (!useDouble) mesh.positions.reserve(3 * n + kVertexPaddingFloats);
+  if (copyFloats) {
+    mesh.positions.resize(3 * n);
+    parallelFor(n, kRecordsPerTask, [&](size_t b, size_t end) {
+      std::memcpy(mesh.positions.data() + 3 * b, items + 12 * b, 12 * (end - b));
+    });
+    r.advance(12 * n);
+    return true;
+  }
+  if (useDouble)
+    mesh.positionsDouble.resize(3 * n);
+  else
+    mesh.positions.resize(3 * n);
+  if (req.keepsNormals()) mesh.vertexNormals.resize(3 * n);
+  for (int slot : req.slotOf)
+    if (slot >= 0) mesh.properties[size_t(slot)].values.resize(n);
+  const std::vector<VertexField> fields = vertexFields(e, xyz, req);
+  const bool swap = r.swap();
+  parallelFor(n, kRecordsPerTask, [&](size_t b, size_t end) {
+    for (size_t i = b; i < end; ++i) {
+      const char* item = items + i * itemBytes;
+      for (const VertexField& f : fields) {
+        const char* at = item + f.offset;
+        if (f.kind == VertexField::Coordinate) {
+          const double v = loadDouble(f.type, at, swap);
+          if (useDouble)
+            mesh.positionsDouble[3 * i + size_t(f.which)] = v;
+          else
+            mesh.positions[3 * i + size_t(f.which)] = float(v);
+        } else if (f.kind == VertexField::Property) {
+          mesh.properties[size_t(f.which)].values[i] = propertyValue(loadInt(f.type, at, swap));
+        } else {
+          mesh.vertexNormals[3 * i + size_t(f.which)] = float(loadDouble(f.type, at, swap));
+        }
+      }
+    }
+  });
+  r.advance(itemBytes * n);
+  return true;
+}
+
+/// Parallel reader of the layout readFacesFast reads (one list: uchar count, 32-bit indices in
+/// host order) when every face has the count of the first, so items have a fixed size: each
+/// task checks its counts and indices and writes its fans in place. False, with the mesh as it
+/// was, when a count differs, a signed index is negative or the faces do not fit in the data:
+/// the serial reader then reads them (and reports the error at the same place as ever).
+bool readFacesParallel(const PlyElement& e, BinaryReader& r, Mesh& mesh) {
+  if (e.props.size() != 1 || r.swap() || e.count == 0 || r.remaining() == 0) return false;
+  const PlyProperty& p = e.props[0];
+  if (!p.list || p.countType != PlyType::UInt8 ||
+      (p.type != PlyType::Int32 && p.type != PlyType::UInt32) ||
+      (p.name != "vertex_indices" && p.name != "vertex_index"))
+    return false;
+  const size_t corners = static_cast<unsigned char>(*r.pos());
+  const size_t itemBytes = 1 + 4 * corners;
+  if (e.count > r.remaining() / itemBytes) return false;
+  const size_t faces = size_t(e.count);
+  const size_t indicesPerFace = corners >= 3 ? 3 * (corners - 2) : 0;
+  const uint32_t signBit = p.type == PlyType::Int32 ? 0x80000000u : 0u;
+  const size_t before = mesh.indices.size();
+  mesh.indices.resize(before + indicesPerFace * faces);
+  const char* const items = r.pos();
+  std::atomic<bool> irregular{false};
+  parallelFor(faces, kRecordsPerTask, [&](size_t b, size_t end) {
+    uint32_t* out = mesh.indices.data() + before + indicesPerFace * b;
+    uint32_t poly[255];
+    for (size_t i = b; i < end; ++i) {
+      const char* item = items + i * itemBytes;
+      std::memcpy(poly, item + 1, 4 * corners);
+      uint32_t bits = 0;
+      for (size_t k = 0; k < corners; ++k) bits |= poly[k];
+      if (static_cast<unsigned char>(*item) != corners || (bits & signBit)) {
+        irregular.store(true, std::memory_order_relaxed);
+        return;
+      }
+      for (size_t k = 1; k + 1 < corners; ++k) {
+        *out++ = poly[0];
+        *out++ = poly[k];
+        *out++ = poly[k + 1];
+      }
+    }
+  });
+  if (irregular.load()) {
+    mesh.indices.resize(before);
+    return false;
+  }
+  mesh.stats.sourceFaces += faces;
+  r.advance(itemBytes * faces);
+  return true;
+}
+
+/// APERTURE_PLY_SERIAL=1 in the environment (read once) makes loadPlyFromMemory use only the
+/// serial binary readers, to compare them with the parallel ones.
+PlyParsing parsingFromEnvironment() {
+  static const PlyParsing parsing = [] {
+    const char* v = std::getenv("APERTURE_PLY_SERIAL");
+    return v && std::string_view(v) == "1" ? PlyParsing::Serial : PlyParsing::Parallel;
+  }();
+  return parsing;
+}
+
 }  // namespace
 
 Mesh loadPly(const std::string& path, const LoadOptions& options) {
@@ -756,6 +931,11 @@ Mesh loadPly(const std::string& path, const LoadOptions& options) {
 
 Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& path,
                        const LoadOptions& options) {
+  return loadPlyFromMemory(data, size, path, options, parsingFromEnvironment());
+}
+
+Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& path,
+                       const LoadOptions& options, PlyParsing parsing) {
   if (size == 0) throw Error(cat(path, ": file is empty"));
   const PlyHeader h = readPlyHeader(path, data, size);
   checkPlyCountsFitData(path, h, size - h.dataOffset);
@@ -796,12 +976,15 @@ Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& path,
       size_t itemBytes;
       // The fast paths read elements with exactly the positions or the index list, so they
       // never see a requested property or normal (requestFor has checked it exists).
+      const bool parallel = parsing == PlyParsing::Parallel;
       if (e.name == "vertex") {
         const ElementRequest req = requestFor(e);
-        if (!readVerticesFast(e, r, mesh)) readVertices(path, e, r, mesh, req);
+        if (!(parallel && readVerticesParallel(e, r, mesh, req)) && !readVerticesFast(e, r, mesh))
+          readVertices(path, e, r, mesh, req);
       } else if (e.name == "face") {
         const ElementRequest req = requestFor(e);
-        if (!readFacesFast(path, e, r, mesh)) readFaces(path, e, r, mesh, false, req);
+        if (!(parallel && readFacesParallel(e, r, mesh)) && !readFacesFast(path, e, r, mesh))
+          readFaces(path, e, r, mesh, false, req);
       } else if (e.name == "tristrips") {
         readFaces(path, e, r, mesh, true, requestFor(e));
       } else if (fixedSize(e, itemBytes)) {

@@ -67,6 +67,18 @@ PlyHeader readPlyHeader(const std::string& path, const char* data, size_t size);
 /// characters (a digit and a separator) per property. 0 for an element without properties.
 uint64_t plyMinItemBytes(PlyFormat format, const PlyElement& e);
 
+struct Mesh;
+struct LoadOptions;
+
+/// Which readers loadPlyFromMemory uses for binary data: the parallel ones where the items
+/// have a fixed size (the default), or only the serial ones (APERTURE_PLY_SERIAL=1 in the
+/// environment). Both give the same mesh, bit for bit, and the same errors.
+enum class PlyParsing { Parallel, Serial };
+
+/// loadPlyFromMemory (core/mesh.h) with the readers chosen by `parsing`, not the environment.
+Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& name,
+                       const LoadOptions& options, PlyParsing parsing);
+
 /// Throws Error naming `path`, the element and its line when the elements' counts need more
 /// than the `dataBytes` bytes that follow the header (checked before anything is allocated).
 void checkPlyCountsFitData(const std::string& path, const PlyHeader& header, uint64_t dataBytes);
