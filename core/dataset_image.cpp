@@ -345,6 +345,30 @@ void checkDatasetAov(DatasetFormat format, const std::string& aovName) {
   checkDatasetAov(format, aovName, layout.channels, layout.f32 != nullptr);
 }
 
+namespace {
+
+/// The file's bytes in `format` (PNG16 counts its out-of-range values into `stats`).
+std::vector<unsigned char> encodedImage(const std::string& path, DatasetFormat format,
+                                        const ImageView& image, double scale,
+                                        DatasetWriteStats& stats) {
+  const auto bytesOf = [](const std::string& text) {
+    return std::vector<unsigned char>(text.begin(), text.end());
+  };
+  switch (format) {
+    case DatasetFormat::Png16:
+      return encodePng16(path, image, scale, &stats.outOfRange);
+    case DatasetFormat::Tiff:
+      return encodeTiff(path, image);
+    case DatasetFormat::Pfm:
+      return bytesOf(encodePfm(image));
+    case DatasetFormat::Npy:
+      return bytesOf(encodeNpy(image));
+  }
+  throw Error(cat("invalid dataset format value ", int(format)));
+}
+
+}  // namespace
+
 DatasetWriteStats writeDatasetImage(const std::string& path, DatasetFormat format,
                                     const ImageView& image, const std::string& aovName,
                                     const DatasetWriteOptions& options) {
@@ -366,28 +390,8 @@ DatasetWriteStats writeDatasetImage(const std::string& path, DatasetFormat forma
 
   DatasetWriteStats stats;
   try {
-    switch (format) {
-      case DatasetFormat::Png16: {
-        const auto bytes = encodePng16(path, image, scale, &stats.outOfRange);
-        writeBytesAtomically(path, bytes.data(), bytes.size());
-        break;
-      }
-      case DatasetFormat::Tiff: {
-        const auto bytes = encodeTiff(path, image);
-        writeBytesAtomically(path, bytes.data(), bytes.size());
-        break;
-      }
-      case DatasetFormat::Pfm: {
-        const std::string bytes = encodePfm(image);
-        writeBytesAtomically(path, bytes.data(), bytes.size());
-        break;
-      }
-      case DatasetFormat::Npy: {
-        const std::string bytes = encodeNpy(image);
-        writeBytesAtomically(path, bytes.data(), bytes.size());
-        break;
-      }
-    }
+    const std::vector<unsigned char> bytes = encodedImage(path, format, image, scale, stats);
+    writeBytesAtomically(path, bytes.data(), bytes.size());
   } catch (const Error& e) {
     const std::string message = e.what();
     // writeBytesAtomically's errors already name the path.

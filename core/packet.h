@@ -46,34 +46,23 @@ RayLanes rayLanes(typename PacketOf<N>::type& p) {
   return l;
 }
 
-/// Per-lane hit fields of an RTCRayHitN after intersection, as SoA pointers.
+/// Per-lane hit fields of an RTCRayHitN after intersection, as SoA pointers. u, v: Embree's
+/// barycentric hit coordinates, the hit point being (1 − u − v)·v0 + u·v1 + v·v2 for the
+/// triangle's vertices in index-buffer order.
 struct HitLanes {
   const float *tfar, *ngX, *ngY, *ngZ;
   const unsigned *geomID, *primID, *instID;
+  const float *u, *v;
 };
 
 template <int N>
 HitLanes hitLanes(const typename PacketOf<N>::type& p) {
   if constexpr (N == 1)
-    return {&p.ray.tfar,   &p.hit.Ng_x,   &p.hit.Ng_y,     &p.hit.Ng_z,
-            &p.hit.geomID, &p.hit.primID, &p.hit.instID[0]};
+    return {&p.ray.tfar,   &p.hit.Ng_x,      &p.hit.Ng_y, &p.hit.Ng_z, &p.hit.geomID,
+            &p.hit.primID, &p.hit.instID[0], &p.hit.u,    &p.hit.v};
   else
-    return {p.ray.tfar,   p.hit.Ng_x,   p.hit.Ng_y,     p.hit.Ng_z,
-            p.hit.geomID, p.hit.primID, p.hit.instID[0]};
-}
-
-/// Embree's barycentric hit coordinates per lane: the hit point is (1 − u − v)·v0 + u·v1 +
-/// v·v2 for the triangle's vertices in index-buffer order.
-struct BarycentricLanes {
-  const float *u, *v;
-};
-
-template <int N>
-BarycentricLanes barycentricLanes(const typename PacketOf<N>::type& p) {
-  if constexpr (N == 1)
-    return {&p.hit.u, &p.hit.v};
-  else
-    return {p.hit.u, p.hit.v};
+    return {p.ray.tfar,   p.hit.Ng_x,      p.hit.Ng_y, p.hit.Ng_z, p.hit.geomID,
+            p.hit.primID, p.hit.instID[0], p.hit.u,    p.hit.v};
 }
 
 /// An aligned Embree packet of N rays with its lane mask and the SoA views into it: what the

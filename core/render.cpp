@@ -105,10 +105,11 @@ struct ImagePlan {
   const Camera& camera;
   Framebuffer& fb;
   RenderSettings settings;
-  int width, height;    // the camera's image
-  size_t pixelOffset;   // fb index of the image's pixel (0, 0)
-  glm::vec3 eye, axis;  // render space
-  glm::dvec3 origin;    // world position of the render-space origin
+  CameraDescription description;  // the camera's, taken once
+  int width, height;              // the camera's image
+  size_t pixelOffset;             // fb index of the image's pixel (0, 0)
+  glm::vec3 eye, axis;            // render space
+  glm::dvec3 origin;              // world position of the render-space origin
   bool color, depth, distance, normal, position, primId, geomId;
   bool shadingNormal;
   bool rotateNormals;        // normalFrame is not World: normals go through frameFromWorld
@@ -140,8 +141,9 @@ ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSet
       camera(camera_),
       fb(fb_),
       settings(settings_),
-      width(camera_.describe().width),
-      height(camera_.describe().height),
+      description(camera_.describe()),
+      width(description.width),
+      height(description.height),
       pixelOffset(pixelOffset_),
       eye(camera_.renderEye()),
       axis(camera_.viewAxis()),
@@ -155,7 +157,7 @@ ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSet
       geomId(fb_.has(kAovGeomId)),
       shadingNormal(fb_.has(kAovShadingNormal)),
       rotateNormals(settings_.normalFrame != NormalFrame::World),
-      frameFromWorld(normalFrameFromWorld(settings_.normalFrame, camera_.describe())),
+      frameFromWorld(normalFrameFromWorld(settings_.normalFrame, description)),
       propertyValues(propertyTables(scene_, fb_)),
       meshData(shadingNormal || !fb_.properties.empty() || (normal && rotateNormals)),
       layers(fb_.layers > 0
@@ -393,8 +395,7 @@ void storeMeshDataLane(const ImagePlan& plan, const PacketState<N>& st, const Pa
       plan.remapPrimIds ? plan.scene.originalPrimId(object, st.hits.primID[k]) : st.hits.primID[k];
   const Mesh& mesh = plan.scene.objectMesh(object);
   const uint32_t* corner = &mesh.indices[3 * size_t(prim)];
-  const BarycentricLanes bary = barycentricLanes<N>(st.packet);
-  const float u = bary.u[k], v = bary.v[k];
+  const float u = st.hits.u[k], v = st.hits.v[k];
   const glm::vec3 ng(h.nx[k], h.ny[k], h.nz[k]);  // unit, world space
   if (plan.shadingNormal) {
     glm::vec3 ns = ng;
