@@ -71,6 +71,22 @@ const GoldenCase kCases[] = {
      "--lat -30,60"},
     {"fisheye_180", "--camera fisheye --eye 0.2,1,0.3 --dir 0,-0.3,-1 --fisheye-fov 180"},
     {"fisheye_230", "--camera fisheye --eye 0.2,1,0.3 --dir 0,-0.3,-1 --fisheye-fov 230"},
+    // Added before the issue 13 vectorisation: clip planes and the calibrated cameras of
+    // issue 11 (the ray-buffer hashes of every camera, taken first).
+    {"perspective_clip", "--eye 0.3,3,12 --at 0,0.5,0 --fov 40 --clip 8,14"},
+    {"calibrated_pinhole", "--intrinsics 70,72,30.5,22 --eye 0.3,3,12 --at 0,0.5,0"},
+    {"calibrated_opencv",
+     "--intrinsics 70,72,30.5,22 --eye 0.3,3,12 --at 0,0.5,0 --lens-model OPENCV "
+     "--distortion -0.2,0.05,1e-3,-2e-3"},
+    {"calibrated_full_opencv",
+     "--intrinsics 70,72,30.5,22 --eye 0.3,3,12 --at 0,0.5,0 --lens-model FULL_OPENCV "
+     "--distortion -0.2,0.05,1e-3,-2e-3,0.01,0.02,0.001,0.003"},
+    {"calibrated_opencv_fisheye",
+     "--intrinsics 25,25,30.5,22 --eye 0.2,1,0.3 --dir 0,-0.3,-1 --lens-model OPENCV_FISHEYE "
+     "--distortion 0.05,-0.01,0.002,-0.0005"},
+    {"calibrated_radial_fold",
+     "--intrinsics 30,30,30.5,22 --eye 0.3,3,12 --at 0,0.5,0 --lens-model SIMPLE_RADIAL "
+     "--distortion -0.3"},
 };
 
 // Odd sizes: tail blocks with lanes outside the image.
@@ -101,12 +117,13 @@ void writeGolden(const char* file, const std::map<std::string, std::string>& m) 
 
 /// Hashes every ray of every sample of the camera, generated in blocks of bw x bh lanes,
 /// in pixel order (so any block shape gives the same hash when the rays are equal).
-std::string hashRays(const CameraBase& cam, int bw, int bh) {
+std::string hashRays(const CameraBase& cam, int bw, int bh, bool intervals = false) {
   const CameraDescription d = cam.describe();
   const int w = d.width, h = d.height;
   test::Fnv1a hash;
   std::vector<float> org(size_t(w) * h * 3), dir(size_t(w) * h * 3);
   std::vector<int> validity(size_t(w) * h);
+  std::vector<float> interval(intervals ? size_t(w) * h * 2 : 0);
   alignas(64) float ox[16], oy[16], oz[16], dx[16], dy[16], dz[16], tn[16], tf[16], tm[16];
   alignas(64) unsigned mask[16], id[16], flags[16];
   alignas(64) int valid[16];
@@ -124,11 +141,15 @@ std::string hashRays(const CameraBase& cam, int bw, int bh) {
           validity[p] = valid[k] != 0;
           // Rays of invalid lanes are unspecified (finite); only their validity is golden.
           if (!validity[p]) std::fill_n(&org[3 * p], 3, 0.0f), std::fill_n(&dir[3 * p], 3, 0.0f);
+          if (intervals)
+            interval[2 * p] = validity[p] ? tn[k] : 0,
+                         interval[2 * p + 1] = validity[p] ? tf[k] : 0;
         }
       }
     hash.add(org.data(), org.size() * sizeof(float));
     hash.add(dir.data(), dir.size() * sizeof(float));
     hash.add(validity.data(), validity.size() * sizeof(int));
+    hash.add(interval.data(), interval.size() * sizeof(float));
   }
   return hash.hex();
 }
@@ -145,6 +166,13 @@ TEST(Golden, RaysOfEveryCameraAreUnchanged) {
     EXPECT_EQ(packet, hashRays(*cam, 1, 1)) << "16-wide packets differ from single rays";
     EXPECT_EQ(packet, hashRays(*cam, 4, 2)) << "8-wide packets differ from 16-wide ones";
     got[c.name] = packet;
+    // tnear and tfar are only set by the clip planes: hashed for those cases (the hashes of
+    // the others predate them).
+    if (std::strstr(c.flags, "--clip")) {
+      const std::string withIntervals = hashRays(*cam, 4, 4, true);
+      EXPECT_EQ(withIntervals, hashRays(*cam, 1, 1, true)) << "ray intervals differ by packet";
+      got[std::string(c.name) + ".intervals"] = withIntervals;
+    }
   }
   if (updating()) return writeGolden("rays.txt", got);
   const auto want = readGolden("rays.txt");
