@@ -139,9 +139,10 @@ inline void setLane(RayLanes& out, int k, const glm::dvec3& org, const glm::dvec
 /// the perspective and calibrated cameras share it; a constant trip count and restrict
 /// pointers keep it vectorised.
 template <int kLanes>
-inline void writeBlockLanes(RayLanes& out, const glm::dvec3& org, const float* dx, const float* dy,
-                            const float* dz) {
-  // Local restrict pointers: stores through one lane array cannot change the others.
+inline void writeBlockLanes(RayLanes& out, const glm::dvec3& org, const float* __restrict dx,
+                            const float* __restrict dy, const float* __restrict dz) {
+  // Restrict pointers, the inputs included: stores through one lane array cannot change the
+  // others, so the loop compiles to vector stores.
   float* __restrict ox = out.orgX;
   float* __restrict oy = out.orgY;
   float* __restrict oz = out.orgZ;

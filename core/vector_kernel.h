@@ -1,0 +1,21 @@
+#pragma once
+// Per-ISA code in the portable build. The build carries no -march flag (APERTURE_NATIVE is
+// off by default), so the hot loops (ray generation, the frame loop's AOV stores) are marked
+// APERTURE_VECTOR_KERNEL: GCC and Clang compile the function once per x86-64 level (v4:
+// AVX-512, v3: AVX2 + FMA, and the baseline) and pick one at load time through an ifunc, as
+// Embree dispatches its own kernels. Everything inlined into a kernel is compiled for the
+// kernel's level too. GCC only: Clang builds (the fuzz targets) get the baseline code.
+//
+// Rules for a kernel:
+//  - a free function (GCC cannot clone virtual functions): a camera's virtual generate() calls
+//    its kernel with the camera's constants;
+//  - results are bit-identical on every level: the build has -ffp-contract=off (no FMA
+//    contraction) and no fast-math, and IEEE +, −, ×, ÷ and √ round the same in every
+//    vector width. tests/cameras/test_golden.cpp holds the hashes.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
+    !defined(APERTURE_NO_ISA_CLONES)
+#define APERTURE_VECTOR_KERNEL \
+  __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define APERTURE_VECTOR_KERNEL
+#endif
