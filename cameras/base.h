@@ -1,6 +1,7 @@
 #pragma once
 // Shared state of the frame-based cameras: frame, image plane, render origin, pixel mapping,
 // and the packet loop every model uses (PacketCamera).
+#include <cstring>
 #include <limits>
 #include <optional>
 #include <string>
@@ -136,41 +137,38 @@ inline void setLane(RayLanes& out, int k, const glm::dvec3& org, const glm::dvec
 
 /// Writes the kLanes lanes of a block of rays from one origin (double, rounded once) with
 /// directions already rounded to float, and the fixed fields as setLane. The fast paths of
-/// the perspective and calibrated cameras share it; a constant trip count and restrict
-/// pointers keep it vectorised.
+/// the perspective and calibrated cameras share it.
 template <int kLanes>
-inline void writeBlockLanes(RayLanes& out, const glm::dvec3& org, const float* __restrict dx,
-                            const float* __restrict dy, const float* __restrict dz) {
-  // Restrict pointers, the inputs included: stores through one lane array cannot change the
-  // others, so the loop compiles to vector stores.
-  float* __restrict ox = out.orgX;
-  float* __restrict oy = out.orgY;
-  float* __restrict oz = out.orgZ;
-  float* __restrict ddx = out.dirX;
-  float* __restrict ddy = out.dirY;
-  float* __restrict ddz = out.dirZ;
-  float* __restrict tnear = out.tnear;
-  float* __restrict tfar = out.tfar;
-  float* __restrict time = out.time;
-  unsigned* __restrict mask = out.mask;
-  unsigned* __restrict id = out.id;
-  unsigned* __restrict flags = out.flags;
+inline void writeBlockLanes(RayLanes& out, const glm::dvec3& org, const float* dx, const float* dy,
+                            const float* dz) {
+  // Each lane array is filled whole by a fixed-size copy: GCC does not vectorise one loop over
+  // twelve output streams (pointer spills, scalar stores), but a 4 kLanes-byte memcpy is a few
+  // vector moves.
   const float ex = float(org.x), ey = float(org.y), ez = float(org.z);
   const float inf = std::numeric_limits<float>::infinity();
-  for (int k = 0; k < kLanes; ++k) {
-    ddx[k] = dx[k];
-    ddy[k] = dy[k];
-    ddz[k] = dz[k];
-    ox[k] = ex;
-    oy[k] = ey;
-    oz[k] = ez;
-    tnear[k] = 0.0f;
-    tfar[k] = inf;
-    time[k] = 0.0f;
-    mask[k] = 0xFFFFFFFFu;
-    id[k] = unsigned(k);
-    flags[k] = 0;
-  }
+  alignas(64) float fill[kLanes];
+  alignas(64) unsigned word[kLanes];
+  constexpr size_t kBytes = sizeof(float) * kLanes;
+  std::memcpy(out.dirX, dx, kBytes);
+  std::memcpy(out.dirY, dy, kBytes);
+  std::memcpy(out.dirZ, dz, kBytes);
+  for (float& f : fill) f = ex;
+  std::memcpy(out.orgX, fill, kBytes);
+  for (float& f : fill) f = ey;
+  std::memcpy(out.orgY, fill, kBytes);
+  for (float& f : fill) f = ez;
+  std::memcpy(out.orgZ, fill, kBytes);
+  for (float& f : fill) f = inf;
+  std::memcpy(out.tfar, fill, kBytes);
+  for (float& f : fill) f = 0.0f;
+  std::memcpy(out.tnear, fill, kBytes);
+  std::memcpy(out.time, fill, kBytes);
+  for (unsigned& w : word) w = 0;
+  std::memcpy(out.flags, word, kBytes);
+  for (unsigned& w : word) w = 0xFFFFFFFFu;
+  std::memcpy(out.mask, word, kBytes);
+  for (int k = 0; k < kLanes; ++k) word[k] = unsigned(k);
+  std::memcpy(out.id, word, kBytes);
 }
 
 /// The packet loop, shared by every model: Derived provides an inline

@@ -9,6 +9,7 @@
 #include "cameras/models.h"
 #include "core/error.h"
 #include "core/units.h"
+#include "core/vector_kernel.h"
 
 namespace aperture {
 
@@ -20,6 +21,14 @@ PerspectiveCamera::PerspectiveCamera(const CameraParams& p, const glm::dvec3& re
       focusOverD_(focusDistance / d_),
       clip_(p.clip) {
   pinholeCentres_ = spp_ == 1 && lensRadius_ == 0;
+  // rasterToPlane of the pixel centres j + ½ and i + ½ (exact in double), so the table
+  // entries are the per-ray values bit for bit; 16 entries past the edge for the lanes of a
+  // block that crosses it (finite rays, never traced).
+  const ImageWindow win = window();
+  centreU_.resize(size_t(width_) + 16);
+  centreV_.resize(size_t(height_) + 16);
+  for (size_t j = 0; j < centreU_.size(); ++j) centreU_[j] = win.u(double(j) + 0.5);
+  for (size_t i = 0; i < centreV_.size(); ++i) centreV_[i] = win.v(double(i) + 0.5);
   if (clip_ && !(clip_->x >= 0 && clip_->x < clip_->y && std::isfinite(clip_->y)))
     throw Error(cat("camera: clip ", clip_->x, ",", clip_->y,
                     ": needs 0 <= near < far, both finite (planar depths, scene units)"));
@@ -59,22 +68,32 @@ void PerspectiveCamera::clipLanes(RayLanes& out, int lanes) const {
   }
 }
 
+namespace {
+
+/// What the pinhole kernel reads: the frame and the pixel-centre plane coordinates, all
+/// precomputed in double by the camera.
+struct PinholeKernelInput {
+  const double* columnU;  ///< u of column j's centre, j in [0, width + 16)
+  const double* rowV;     ///< v of row i's centre, i in [0, height + 16)
+  glm::dvec3 u, v, dW;    ///< U, V and d·W
+  glm::dvec3 eye;         ///< render-space eye
+  int width, height;
+};
+
+/// The pinhole rays of the kBW x kBH block at (x0, y0): rayAt's pinhole branch term by term,
+/// (u·U + v·V) − d·W times 1 / its length, in double, rounded once. A per-ISA kernel
+/// (core/vector_kernel.h): no divide but the reciprocal, constant trip counts, vector stores.
 template <int kBW, int kBH>
-void PerspectiveCamera::generatePinholeCentres(const PacketRequest& req, RayLanes& out,
-                                               int* valid) const {
+APERTURE_VECTOR_KERNEL void pinholeCentreRays(const PinholeKernelInput& in, int x0, int y0,
+                                              RayLanes& out, int* valid) {
   constexpr int kLanes = kBW * kBH;
-  // The raster centre j + ½ is exact in double, so u and v below are rasterToPlane's values
-  // bit for bit; computing them per lane (rather than gathering from a table) keeps the whole
-  // loop in vector registers.
-  const double x0 = req.x0, y0 = req.y0;
-  const ImageWindow win = window();
-  // rayAt's pinhole branch term by term: (u·U + v·V) − d·W, times 1 / its length.
-  const glm::dvec3 U = frame_.u, V = frame_.v, dW = d_ * frame_.w;
+  const double* __restrict columnU = in.columnU + x0;
+  const double* __restrict rowV = in.rowV + y0;
+  const glm::dvec3 U = in.u, V = in.v, dW = in.dW;
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
   for (int k = 0; k < kLanes; ++k) {
     const LanePixel offset = lanePixel(0, 0, kBW, k);  // a constant once unrolled
-    const double x = (x0 + double(offset.column)) + 0.5, y = (y0 + double(offset.row)) + 0.5;
-    const double u = win.u(x), v = win.v(y);
+    const double u = columnU[offset.column], v = rowV[offset.row];
     const double px = (u * U.x + v * V.x) - dW.x;
     const double py = (u * U.y + v * V.y) - dW.y;
     const double pz = (u * U.z + v * V.z) - dW.z;
@@ -83,10 +102,19 @@ void PerspectiveCamera::generatePinholeCentres(const PacketRequest& req, RayLane
     dy[k] = float(py * invLen);
     dz[k] = float(pz * invLen);
   }
-  writeBlockLanes<kLanes>(out, renderEyeD_, dx, dy, dz);
-  // Locals: the stores to valid[] could otherwise alias them and force reloads every lane.
-  const int ix0 = req.x0, iy0 = req.y0, width = width_, height = height_;
-  for (int k = 0; k < kLanes; ++k) valid[k] = laneInImage(ix0, iy0, kBW, k, width, height) ? -1 : 0;
+  writeBlockLanes<kLanes>(out, in.eye, dx, dy, dz);
+  const int width = in.width, height = in.height;
+  for (int k = 0; k < kLanes; ++k) valid[k] = laneInImage(x0, y0, kBW, k, width, height) ? -1 : 0;
+}
+
+}  // namespace
+
+template <int kBW, int kBH>
+void PerspectiveCamera::generatePinholeCentres(const PacketRequest& req, RayLanes& out,
+                                               int* valid) const {
+  const PinholeKernelInput in{centreU_.data(), centreV_.data(), frame_.u, frame_.v,
+                              d_ * frame_.w,   renderEyeD_,     width_,   height_};
+  pinholeCentreRays<kBW, kBH>(in, req.x0, req.y0, out, valid);
 }
 
 std::optional<glm::dvec2> PerspectiveCamera::project(const glm::dvec3& worldPoint) const {

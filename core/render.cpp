@@ -7,7 +7,9 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <deque>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -17,6 +19,7 @@
 #include "core/packet.h"
 #include "core/parallel.h"
 #include "core/spelling.h"
+#include "core/vector_kernel.h"
 
 namespace aperture {
 
@@ -209,28 +212,30 @@ struct BlockColor {
   float shade[N] = {}, cover[N] = {};
 };
 
-inline bool finiteLane(const RayLanes& l, int k) {
-  return std::isfinite(l.orgX[k]) && std::isfinite(l.orgY[k]) && std::isfinite(l.orgZ[k]) &&
-         std::isfinite(l.dirX[k]) && std::isfinite(l.dirY[k]) && std::isfinite(l.dirZ[k]);
-}
+/// Whether x is finite, as a comparison that vectorises (std::isfinite does not): false for
+/// ±inf and NaN.
+inline bool finite(float x) { return std::fabs(x) <= std::numeric_limits<float>::max(); }
 
 /// Keeps the lanes to trace in Embree's −1/0 mask: the camera gave a ray, the lane lies in
 /// the image and the ray is finite. Counts the skipped non-finite rays; returns the active
-/// lane count.
+/// lane count. Branch-free over the lanes, so it compiles to vector compares.
 template <int N>
 int selectLanes(const ImagePlan& plan, const PacketRequest& req, PacketState<N>& st,
                 TileCounters& count) {
   constexpr int kBW = blockWidthFor(N);
+  const RayLanes& l = st.lanes;
+  const float *ox = l.orgX, *oy = l.orgY, *oz = l.orgZ, *dx = l.dirX, *dy = l.dirY, *dz = l.dirZ;
+  int* __restrict valid = st.valid;
   // Locals: the stores to valid[] could otherwise alias them and force reloads every lane.
   const int x0 = req.x0, y0 = req.y0, width = plan.width, height = plan.height;
   int active = 0, nonFinite = 0;
-  for (int k = 0; k < N; ++k) {
-    const bool inside = laneInImage(x0, y0, kBW, k, width, height);
-    const bool live = st.valid[k] != 0 && inside;
-    const bool finite = finiteLane(st.lanes, k);
-    nonFinite += live && !finite;
-    st.valid[k] = live && finite ? -1 : 0;
-    active += live && finite;
+  for (int k = 0; k < N; ++k) {  // 0/1 integers and & rather than && (no branches)
+    const int live = int(valid[k] != 0) & int(laneInImage(x0, y0, kBW, k, width, height));
+    const int isFinite = int(finite(ox[k])) & int(finite(oy[k])) & int(finite(oz[k])) &
+                         int(finite(dx[k])) & int(finite(dy[k])) & int(finite(dz[k]));
+    nonFinite += live & (isFinite ^ 1);
+    valid[k] = -(live & isFinite);
+    active += live & isFinite;
   }
   count.skipped += uint64_t(nonFinite);
   return active;
@@ -335,34 +340,101 @@ inline unsigned objectId(const HitLanes& h, int k) {
   return h.instID[k] == RTC_INVALID_GEOMETRY_ID ? h.geomID[k] : h.instID[k];
 }
 
-/// Stores the geometry AOVs of hit lane k at framebuffer pixel px (z: the planar depths,
-/// read only when depth is requested).
+/// Where a block's lanes land in one framebuffer channel: the block's top-left pixel, the
+/// channel's row stride and how many of the block's rows and columns lie in the image.
 template <int N>
-void storeGeometryLane(const ImagePlan& plan, const PacketState<N>& st, const PacketHits<N>& h,
-                       int k, const float* z, size_t px) {
-  Framebuffer& fb = plan.fb;
+struct BlockPixels {
+  static constexpr int kBW = blockWidthFor(N), kBH = blockHeightFor(N);
+  size_t first;   ///< pixel index of the block's top-left pixel
+  size_t stride;  ///< pixels per framebuffer row
+  int rows, columns;
+
+  BlockPixels(const ImagePlan& plan, const PacketRequest& req)
+      : first(plan.pixelOffset + size_t(req.y0) * size_t(plan.width) + size_t(req.x0)),
+        stride(size_t(plan.width)),
+        rows(std::min(kBH, plan.height - req.y0)),
+        columns(std::min(kBW, plan.width - req.x0)) {}
+};
+
+/// Writes value[k] of every hit lane k to its pixel of a channel of kC interleaved components
+/// (value[c] holds component c), leaving the other pixels as they are. A block whose rows lie
+/// whole in the image writes each row as one load, blend and store of kBW·kC values (the
+/// tile is this thread's alone, so the read-back is safe); a block cut by the right edge
+/// stores lane by lane.
+template <int N, int kC, class T>
+void storeHitLanes(const BlockPixels<N>& px, const int* hit, const T* const (&value)[kC],
+                   T* channel) {
+  constexpr int kBW = BlockPixels<N>::kBW;
+  T* const base = channel + kC * px.first;
+  if (px.columns == kBW) {
+    for (int r = 0; r < px.rows; ++r) {
+      T* __restrict row = base + kC * size_t(r) * px.stride;
+      for (int j = 0; j < kBW; ++j)
+        for (int c = 0; c < kC; ++c)
+          row[kC * j + c] = hit[r * kBW + j] ? value[c][r * kBW + j] : row[kC * j + c];
+    }
+    return;
+  }
+  for (int r = 0; r < px.rows; ++r)
+    for (int j = 0; j < px.columns; ++j)
+      if (hit[r * kBW + j])
+        for (int c = 0; c < kC; ++c)
+          base[kC * (size_t(r) * px.stride + size_t(j)) + size_t(c)] = value[c][r * kBW + j];
+}
+
+/// Hit points in world space: render-space origin + org + t·dir in double, rounded once.
+template <int N>
+void worldPositions(const ImagePlan& plan, const PacketState<N>& st, float* x, float* y, float* z) {
   const RayLanes& l = st.lanes;
-  const float t = st.hits.tfar[k];
-  if (plan.depth) fb.depth[px] = z[k];
-  if (plan.distance) fb.distance[px] = t;
-  if (plan.normal) {
-    fb.normal[3 * px] = h.nx[k];
-    fb.normal[3 * px + 1] = h.ny[k];
-    fb.normal[3 * px + 2] = h.nz[k];
+  const glm::dvec3 o = plan.origin;
+  for (int k = 0; k < N; ++k) {
+    const double t = st.hits.tfar[k];
+    x[k] = float((o.x + double(l.orgX[k])) + t * double(l.dirX[k]));
+    y[k] = float((o.y + double(l.orgY[k])) + t * double(l.dirY[k]));
+    z[k] = float((o.z + double(l.orgZ[k])) + t * double(l.dirZ[k]));
   }
+}
+
+/// The primitive id of every lane as the user's mesh numbers it (through the cull's remap).
+template <int N>
+void primIds(const ImagePlan& plan, const PacketState<N>& st, const int* hit, uint32_t* out) {
+  if (!plan.remapPrimIds) {
+    std::memcpy(out, st.hits.primID, sizeof(uint32_t) * N);
+    return;
+  }
+  for (int k = 0; k < N; ++k)
+    out[k] = hit[k] ? plan.scene.originalPrimId(objectId(st.hits, k), st.hits.primID[k]) : 0;
+}
+
+/// Stores the geometry AOVs of every hit lane of the packet of `req` (misses keep the
+/// framebuffer's miss values): one pass per requested AOV, only its buffer touched.
+template <int N>
+void storeGeometryAovs(const ImagePlan& plan, const PacketRequest& req, const PacketState<N>& st,
+                       const PacketHits<N>& h) {
+  Framebuffer& fb = plan.fb;
+  const BlockPixels<N> px(plan, req);
+  if (plan.depth) {
+    alignas(64) float z[N];
+    planarDepths<N>(plan, st, z);
+    storeHitLanes<N, 1, float>(px, h.hit, {z}, fb.depth.data());
+  }
+  if (plan.distance) storeHitLanes<N, 1, float>(px, h.hit, {st.hits.tfar}, fb.distance.data());
+  if (plan.normal) storeHitLanes<N, 3, float>(px, h.hit, {h.nx, h.ny, h.nz}, fb.normal.data());
   if (plan.position) {
-    // Hit point in double: render-space origin + org + t·dir, then rounded once.
-    const glm::dvec3 p = plan.origin + glm::dvec3(l.orgX[k], l.orgY[k], l.orgZ[k]) +
-                         double(t) * glm::dvec3(l.dirX[k], l.dirY[k], l.dirZ[k]);
-    fb.position[3 * px] = float(p.x);
-    fb.position[3 * px + 1] = float(p.y);
-    fb.position[3 * px + 2] = float(p.z);
+    alignas(64) float x[N], y[N], z[N];
+    worldPositions<N>(plan, st, x, y, z);
+    storeHitLanes<N, 3, float>(px, h.hit, {x, y, z}, fb.position.data());
   }
-  if (plan.primId)
-    fb.primId[px] = plan.remapPrimIds
-                        ? plan.scene.originalPrimId(objectId(st.hits, k), st.hits.primID[k])
-                        : st.hits.primID[k];
-  if (plan.geomId) fb.geomId[px] = objectId(st.hits, k);
+  if (plan.primId) {
+    alignas(64) uint32_t ids[N];
+    primIds<N>(plan, st, h.hit, ids);
+    storeHitLanes<N, 1, uint32_t>(px, h.hit, {ids}, fb.primId.data());
+  }
+  if (plan.geomId) {
+    alignas(64) uint32_t ids[N];
+    for (int k = 0; k < N; ++k) ids[k] = objectId(st.hits, k);
+    storeHitLanes<N, 1, uint32_t>(px, h.hit, {ids}, fb.geomId.data());
+  }
 }
 
 /// The corner (0, 1, 2 in index-buffer order) with the largest barycentric weight
@@ -425,32 +497,25 @@ void storeMeshDataLane(const ImagePlan& plan, const PacketState<N>& st, const Pa
   }
 }
 
-/// Stores the geometry AOVs of every hit lane of the packet of `req` (misses keep the
-/// framebuffer's miss values); with kMeshData also the mesh data AOVs (storeMeshDataLane).
-template <int N, bool kMeshData>
-void storeGeometryLanes(const ImagePlan& plan, const PacketRequest& req, const PacketState<N>& st,
-                        const PacketHits<N>& h) {
+/// Stores the mesh data AOVs (storeMeshDataLane) of every hit lane of the packet of `req`.
+template <int N>
+void storeMeshData(const ImagePlan& plan, const PacketRequest& req, const PacketState<N>& st,
+                   const PacketHits<N>& h) {
   constexpr int kBW = blockWidthFor(N);
-  alignas(64) float z[N];
-  if (plan.depth) planarDepths<N>(plan, st, z);
   const int x0 = req.x0, y0 = req.y0, width = plan.width;  // not reloaded after stores
   const size_t offset = plan.pixelOffset;
   for (int k = 0; k < N; ++k) {
     if (!h.hit[k]) continue;
     const LanePixel p = lanePixel(x0, y0, kBW, k);
-    const size_t px = offset + size_t(p.row) * size_t(width) + size_t(p.column);
-    storeGeometryLane<N>(plan, st, h, k, z, px);
-    if constexpr (kMeshData) storeMeshDataLane<N>(plan, st, h, k, px);
+    storeMeshDataLane<N>(plan, st, h, k, offset + size_t(p.row) * size_t(width) + size_t(p.column));
   }
 }
 
 template <int N>
 void storeGeometry(const ImagePlan& plan, const PacketRequest& req, const PacketState<N>& st,
                    const PacketHits<N>& h) {
-  if (plan.meshData)
-    storeGeometryLanes<N, true>(plan, req, st, h);
-  else
-    storeGeometryLanes<N, false>(plan, req, st, h);
+  storeGeometryAovs<N>(plan, req, st, h);
+  if (plan.meshData) storeMeshData<N>(plan, req, st, h);
 }
 
 /// Traces the packet of `req`; adds its shading to `color` when given, and stores the
@@ -502,8 +567,11 @@ void renderBlock(const ImagePlan& plan, int bx, int by, PacketState<N>& st, Tile
 }
 
 /// Renders the tile of columns [x0, x1) and rows [y0, y1), block by block (a TileRenderer).
+/// A per-ISA kernel (core/vector_kernel.h): the whole block loop, stores included, is
+/// compiled for each x86-64 level.
 template <int N, bool kNull>
-void renderTile(const ImagePlan& plan, int x0, int y0, int x1, int y1, TileCounters& count) {
+APERTURE_VECTOR_KERNEL void renderTile(const ImagePlan& plan, int x0, int y0, int x1, int y1,
+                                       TileCounters& count) {
   // Denormals flushed on every worker (Embree's recommendation); same mode on all threads.
   _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
   _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);

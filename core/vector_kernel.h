@@ -4,7 +4,8 @@
 // APERTURE_VECTOR_KERNEL: GCC and Clang compile the function once per x86-64 level (v4:
 // AVX-512, v3: AVX2 + FMA, and the baseline) and pick one at load time through an ifunc, as
 // Embree dispatches its own kernels. Everything inlined into a kernel is compiled for the
-// kernel's level too. GCC only: Clang builds (the fuzz targets) get the baseline code.
+// kernel's level too: kernels are `flatten`ed, so every call they make that can be inlined
+// is, and runs at the kernel's level (a call left out of line would run the baseline code). GCC only: Clang builds (the fuzz targets) get the baseline code.
 //
 // Rules for a kernel:
 //  - a free function (GCC cannot clone virtual functions): a camera's virtual generate() calls
@@ -15,7 +16,7 @@
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
     !defined(APERTURE_NO_ISA_CLONES)
 #define APERTURE_VECTOR_KERNEL \
-  __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+  __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"), flatten))
 #else
-#define APERTURE_VECTOR_KERNEL
+#define APERTURE_VECTOR_KERNEL __attribute__((flatten))
 #endif
