@@ -3,37 +3,119 @@
 #include <pmmintrin.h>
 #include <xmmintrin.h>
 
+#include <algorithm>
 #include <chrono>
-#include <cstring>
+#include <cmath>
 
 #include "core/packet.h"
 #include "core/parallel.h"
+#include "core/vector_kernel.h"
 
 namespace aperture {
 
-BaselineTracer::BaselineTracer(const Camera& camera, int width, int height, int tileSize) {
+namespace {
+
+/// Whether `d` is a pinhole perspective camera without a clip: the rays the minimal
+/// generation reproduces.
+bool plainPinhole(const CameraDescription& d) {
+  if (d.type != "perspective" || d.spp != 1) return false;
+  for (const auto& [name, value] : d.extra)
+    if (name == "clip" || name == "aperture_radius") return false;
+  return true;
+}
+
+/// The 16 rays of the 4x4 block at (x0, y0): direction normalize(corner + j·du + i·dv) in
+/// float, origin the eye; lanes outside the image are masked off.
+APERTURE_VECTOR_KERNEL void pinholeBlock(const glm::vec3& eye, const glm::vec3& corner,
+                                         const glm::vec3& du, const glm::vec3& dv, int x0, int y0,
+                                         int width, int height, RTCRay16& r, int* valid) {
+  for (int k = 0; k < 16; ++k) {
+    const float j = float(x0 + (k & 3)), i = float(y0 + (k >> 2));
+    const float x = corner.x + j * du.x + i * dv.x;
+    const float y = corner.y + j * du.y + i * dv.y;
+    const float z = corner.z + j * du.z + i * dv.z;
+    const float inv = 1.0f / std::sqrt(x * x + y * y + z * z);
+    r.org_x[k] = eye.x, r.org_y[k] = eye.y, r.org_z[k] = eye.z;
+    r.dir_x[k] = x * inv, r.dir_y[k] = y * inv, r.dir_z[k] = z * inv;
+    r.tnear[k] = 0.0f, r.tfar[k] = INFINITY, r.time[k] = 0.0f;
+    r.mask[k] = 0xFFFFFFFFu, r.id[k] = unsigned(k), r.flags[k] = 0;
+    valid[k] = (x0 + (k & 3) < width) & (y0 + (k >> 2) < height) ? -1 : 0;
+  }
+}
+
+}  // namespace
+
+BaselineTracer::BaselineTracer(const Camera& camera, int width, int height, int tileSize)
+    : width_(width), height_(height) {
+  const CameraDescription d = camera.describe();
+  pinhole_ = plainPinhole(d);
+  if (pinhole_) {
+    // Image-plane centre of pixel (0, 0) and the steps to the next column and row, from the
+    // description (the screen window at z = 1 scaled to the plane at distance d), in double.
+    const glm::dvec2 centre = d.screenWindowCenter * d.d;
+    const double u0 = centre.x + (0.5 / width - 0.5) * d.vw;
+    const double v0 = centre.y - (0.5 / height - 0.5) * d.vh;
+    p_.eye = camera.renderEye();
+    p_.corner = glm::vec3(u0 * d.u + v0 * d.v - d.d * d.w);
+    p_.du = glm::vec3((d.vw / width) * d.u);
+    p_.dv = glm::vec3(-(d.vh / height) * d.v);
+  }
   const int tilesX = (width + tileSize - 1) / tileSize;
   const int tilesY = (height + tileSize - 1) / tileSize;
   alignas(64) RTCRayHit16 packet;
   RayLanes lanes = rayLanes<16>(packet);
   for (int tile = 0; tile < tilesX * tilesY; ++tile) {
     const int x0 = (tile % tilesX) * tileSize, y0 = (tile / tilesX) * tileSize;
-    const int x1 = std::min(x0 + tileSize, width), y1 = std::min(y0 + tileSize, height);
-    Tile t{rays16_.size(), 0};
-    for (int by = y0; by < y1; by += 4)
-      for (int bx = x0; bx < x1; bx += 4) {
+    const Tile t{x0, y0, std::min(x0 + tileSize, width), std::min(y0 + tileSize, height),
+                 rays16_.size()};
+    rays_ += uint64_t(t.x1 - t.x0) * uint64_t(t.y1 - t.y0);
+    tiles_.push_back(t);
+    if (pinhole_) continue;
+    for (int by = t.y0; by < t.y1; by += 4)
+      for (int bx = t.x0; bx < t.x1; bx += 4) {
         ValidMask valid;
         const PacketRequest req{bx, by, 4, 4, PacketRequest::kCentreRay};
         camera.generate(req, lanes, valid.lanes);
         for (int k = 0; k < 16; ++k) {
-          if (!req.inImage(k, width, height)) valid.lanes[k] = 0;
-          rays_ += valid.lanes[k] != 0;
+          const bool inImage = req.inImage(k, width, height);
+          // Pixels without a ray (outside a fisheye's circle) are not traced or counted.
+          if (inImage && valid.lanes[k] == 0) --rays_;
+          if (!inImage) valid.lanes[k] = 0;
         }
         rays16_.push_back(packet.ray);
         valid_.push_back(valid);
-        ++t.count;
       }
-    tiles_.push_back(t);
+  }
+}
+
+std::string BaselineTracer::rayGeneration() const {
+  return pinhole_ ? "float pinhole in the loop" : "pre-generated";
+}
+
+void BaselineTracer::pinholeRays(int x0, int y0, RTCRay16& rays, int* valid) const {
+  pinholeBlock(p_.eye, p_.corner, p_.du, p_.dv, x0, y0, width_, height_, rays, valid);
+}
+
+void BaselineTracer::traceTilePinhole(const Scene& scene, const Tile& t,
+                                      RTCIntersectContext& ctx) const {
+  alignas(64) RTCRayHit16 packet;
+  alignas(64) int valid[16];
+  for (int by = t.y0; by < t.y1; by += 4)
+    for (int bx = t.x0; bx < t.x1; bx += 4) {
+      pinholeRays(bx, by, packet.ray, valid);
+      clearHits<16>(packet);
+      rtcIntersect16(valid, scene.handle(), &ctx, &packet);
+    }
+}
+
+void BaselineTracer::traceTileStored(const Scene& scene, const Tile& t,
+                                     RTCIntersectContext& ctx) const {
+  alignas(64) RTCRayHit16 packet;
+  const size_t packets = size_t((t.x1 - t.x0 + 3) / 4) * size_t((t.y1 - t.y0 + 3) / 4);
+  for (size_t p = t.firstPacket; p < t.firstPacket + packets; ++p) {
+    packet.ray = rays16_[p];
+    clearHits<16>(packet);
+    rtcIntersect16(valid_[p].lanes, scene.handle(), &ctx, &packet);
   }
 }
 
@@ -45,13 +127,12 @@ double BaselineTracer::traceFrame(const Scene& scene) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    alignas(64) RTCRayHit16 packet;
-    for (size_t t = first; t != last; ++t)
-      for (size_t p = tiles_[t].first; p < tiles_[t].first + tiles_[t].count; ++p) {
-        packet.ray = rays16_[p];
-        clearHits<16>(packet);
-        rtcIntersect16(valid_[p].lanes, scene.handle(), &ctx, &packet);
-      }
+    for (size_t t = first; t != last; ++t) {
+      if (pinhole_)
+        traceTilePinhole(scene, tiles_[t], ctx);
+      else
+        traceTileStored(scene, tiles_[t], ctx);
+    }
   });
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
