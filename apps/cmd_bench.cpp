@@ -35,6 +35,7 @@ struct BenchArgs {
   bool nullTrace = false;  ///< --null: the frame loop without Embree (RenderSettings::nullTrace)
   std::string sweep, json, preset;
   std::string layersMethod;  ///< hidden --layers-method filter|retrace (bench/layers_methods.sh)
+  std::string baselineApi = "packet16";  ///< --baseline-api (BaselineApi)
 };
 
 nlohmann::json toJson(const SampleSummary& s) {
@@ -69,6 +70,7 @@ void validateBenchArgs(const BenchArgs& a) {
     throw Error(cat("--sweep: '", a.sweep, "' is not one of packet, threads, quality, aovs"));
   if (a.nullTrace && a.baseline)
     throw Error("--null measures the frame loop without Embree; --baseline traces with it");
+  parseBaselineApi(a.baselineApi, "--baseline-api");
   if (a.nullTrace && a.sweep == "quality")
     throw Error("--null traces no BVH: --sweep quality measures nothing there");
 }
@@ -193,7 +195,8 @@ void measureNullTrace(const Bench& b, nlohmann::json& j) {
 /// the same scene (same BVH, same robust mode), frame by frame in turn, so drift in the
 /// machine's speed hits both alike. The ratio is the median of the per-pair ratios.
 void measureAgainstBaseline(const Bench& b, nlohmann::json& j) {
-  const BaselineTracer base(*b.camera, b.params.width, b.params.height, b.settings.tileSize);
+  const BaselineTracer base(*b.camera, b.params.width, b.params.height, b.settings.tileSize,
+                            parseBaselineApi(b.args.baselineApi, "--baseline-api"));
   Framebuffer fb(b.params.width, b.params.height, b.aovs);
   std::vector<double> render, bare, ratio;
   for (int f = 0; f < b.args.warmup + b.args.frames; ++f) {
@@ -208,9 +211,9 @@ void measureAgainstBaseline(const Bench& b, nlohmann::json& j) {
   const SampleSummary ratioS = summarize(ratio);
   const bool robust = b.loaded.scene->options().robust;
   printSummary("render:", renderS, b.args.frames);
-  printSummary(
-      robust ? "baseline (rtcIntersect16, robust):" : "baseline (rtcIntersect16, not robust):",
-      bareS, b.args.frames);
+  const std::string label =
+      cat("baseline (", b.args.baselineApi, robust ? ", robust):" : ", not robust):");
+  printSummary(label.c_str(), bareS, b.args.frames);
   std::printf("render / baseline: %.3f (median of %d frame pairs; baseline rays: %s)\n",
               ratioS.median, b.args.frames, base.rayGeneration().c_str());
   j["mrays_per_s"] = toJson(renderS);
@@ -219,6 +222,8 @@ void measureAgainstBaseline(const Bench& b, nlohmann::json& j) {
   j["baseline_mrays_per_s_median"] = bareS.median;
   j["baseline_robust"] = robust;
   j["baseline_ray_generation"] = base.rayGeneration();
+  j["baseline_api"] = b.args.baselineApi;
+  j["baseline_rays_per_frame"] = base.rayCount();
   j["render_over_baseline"] = ratioS.median;
   j["render_over_baseline_pairs"] = toJson(ratioS);
 }
@@ -387,6 +392,10 @@ Command addBenchCommand(CLI::App& app) {
   sub->add_option("--builds", args->builds, "BVH builds to time (median)")->capture_default_str();
   sub->add_flag("--baseline", args->baseline,
                 "Also trace the same rays with bare rtcIntersect16 (no shading, no framebuffer)");
+  sub->add_option("--baseline-api", args->baselineApi,
+                  "Embree call of the baseline: packet16 (rtcIntersect16, as the frame loop), "
+                  "stream-nm or stream-1m (one coherent stream per tile)")
+      ->capture_default_str();
   sub->add_flag("--null", args->nullTrace,
                 "Measure the frame loop's overhead in ns/ray: rays generated and AOVs written, "
                 "every ray a fake hit, no Embree call");

@@ -4,6 +4,7 @@
 #include <xmmintrin.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 
@@ -43,10 +44,37 @@ APERTURE_VECTOR_KERNEL void pinholeBlock(const glm::vec3& eye, const glm::vec3& 
   }
 }
 
+/// Lanes of a traced packet that were active and hit.
+uint64_t packetHits(const RTCRayHit16& packet, const int* valid) {
+  uint64_t n = 0;
+  for (int k = 0; k < 16; ++k)
+    n += valid[k] != 0 && packet.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+  return n;
+}
+
 }  // namespace
 
-BaselineTracer::BaselineTracer(const Camera& camera, int width, int height, int tileSize)
-    : width_(width), height_(height) {
+BaselineApi parseBaselineApi(const std::string& text, const char* flag) {
+  for (BaselineApi api : {BaselineApi::Packet16, BaselineApi::StreamNM, BaselineApi::Stream1M})
+    if (text == baselineApiName(api)) return api;
+  throw Error(cat(flag, ": '", text, "' is not an Embree API of the baseline; choose packet16, ",
+                  "stream-nm or stream-1m"));
+}
+
+const char* baselineApiName(BaselineApi api) {
+  switch (api) {
+    case BaselineApi::StreamNM:
+      return "stream-nm";
+    case BaselineApi::Stream1M:
+      return "stream-1m";
+    default:
+      return "packet16";
+  }
+}
+
+BaselineTracer::BaselineTracer(const Camera& camera, int width, int height, int tileSize,
+                               BaselineApi api)
+    : width_(width), height_(height), api_(api) {
   const CameraDescription d = camera.describe();
   pinhole_ = plainPinhole(d);
   if (pinhole_) {
@@ -96,8 +124,8 @@ void BaselineTracer::pinholeRays(int x0, int y0, RTCRay16& rays, int* valid) con
   pinholeBlock(p_.eye, p_.corner, p_.du, p_.dv, x0, y0, width_, height_, rays, valid);
 }
 
-void BaselineTracer::traceTilePinhole(const Scene& scene, const Tile& t,
-                                      RTCIntersectContext& ctx) const {
+void BaselineTracer::traceTilePinhole(const Scene& scene, const Tile& t, RTCIntersectContext& ctx,
+                                      uint64_t* hits) const {
   alignas(64) RTCRayHit16 packet;
   alignas(64) int valid[16];
   for (int by = t.y0; by < t.y1; by += 4)
@@ -105,36 +133,104 @@ void BaselineTracer::traceTilePinhole(const Scene& scene, const Tile& t,
       pinholeRays(bx, by, packet.ray, valid);
       clearHits<16>(packet);
       rtcIntersect16(valid, scene.handle(), &ctx, &packet);
+      if (hits) *hits += packetHits(packet, valid);
     }
 }
 
-void BaselineTracer::traceTileStored(const Scene& scene, const Tile& t,
-                                     RTCIntersectContext& ctx) const {
+void BaselineTracer::traceTileStored(const Scene& scene, const Tile& t, RTCIntersectContext& ctx,
+                                     uint64_t* hits) const {
   alignas(64) RTCRayHit16 packet;
   const size_t packets = size_t((t.x1 - t.x0 + 3) / 4) * size_t((t.y1 - t.y0 + 3) / 4);
   for (size_t p = t.firstPacket; p < t.firstPacket + packets; ++p) {
     packet.ray = rays16_[p];
     clearHits<16>(packet);
     rtcIntersect16(valid_[p].lanes, scene.handle(), &ctx, &packet);
+    if (hits) *hits += packetHits(packet, valid_[p].lanes);
   }
 }
 
-double BaselineTracer::traceFrame(const Scene& scene) const {
-  const auto start = std::chrono::steady_clock::now();
+void BaselineTracer::blockRays(int x0, int y0, size_t p, RTCRay16& rays, int* valid) const {
+  if (pinhole_) return pinholeRays(x0, y0, rays, valid);
+  rays = rays16_[p];
+  std::copy_n(valid_[p].lanes, 16, valid);
+}
+
+void BaselineTracer::traceTileStream(const Scene& scene, const Tile& t, RTCIntersectContext& ctx,
+                                     uint64_t* hits) const {
+  // Thread-local buffers: one tile's packets (or rays), reused across tiles.
+  thread_local std::vector<RTCRayHit16> packets;
+  thread_local std::vector<RTCRayHit> single;
+  packets.clear();
+  single.clear();
+  alignas(64) int valid[16];
+  size_t p = t.firstPacket;
+  for (int by = t.y0; by < t.y1; by += 4)
+    for (int bx = t.x0; bx < t.x1; bx += 4, ++p) {
+      packets.emplace_back();
+      RTCRayHit16& packet = packets.back();
+      blockRays(bx, by, p, packet.ray, valid);
+      clearHits<16>(packet);
+      // A stream has no lane mask: lanes outside the image get an empty interval.
+      for (int k = 0; k < 16; ++k)
+        if (!valid[k]) packet.ray.tnear[k] = 1.0f, packet.ray.tfar[k] = 0.0f;
+      if (api_ != BaselineApi::Stream1M) continue;
+      for (int k = 0; k < 16; ++k) {
+        if (!valid[k]) continue;
+        RTCRayHit r{};
+        const RTCRay16& q = packet.ray;
+        r.ray = {q.org_x[k], q.org_y[k], q.org_z[k], q.tnear[k], q.dir_x[k], q.dir_y[k],
+                 q.dir_z[k], q.time[k],  q.tfar[k],  q.mask[k],  q.id[k],    q.flags[k]};
+        r.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        r.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        single.push_back(r);
+      }
+    }
+  if (api_ == BaselineApi::StreamNM)
+    rtcIntersectNM(scene.handle(), &ctx, reinterpret_cast<RTCRayHitN*>(packets.data()), 16,
+                   unsigned(packets.size()), sizeof(RTCRayHit16));
+  else
+    rtcIntersect1M(scene.handle(), &ctx, single.data(), unsigned(single.size()), sizeof(RTCRayHit));
+  if (!hits) return;
+  // Masked-off lanes kept clearHits' invalid geomID (their interval is empty).
+  if (api_ == BaselineApi::StreamNM)
+    for (const RTCRayHit16& packet : packets)
+      for (unsigned id : packet.hit.geomID) *hits += id != RTC_INVALID_GEOMETRY_ID;
+  for (const RTCRayHit& r : single) *hits += r.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+}
+
+void BaselineTracer::traceTiles(const Scene& scene, uint64_t* hits) const {
+  std::atomic<uint64_t> total{0};
   parallelFor(tiles_.size(), 1, [&](size_t first, size_t last) {
     _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
     _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    uint64_t count = 0;
+    uint64_t* counter = hits ? &count : nullptr;
     for (size_t t = first; t != last; ++t) {
-      if (pinhole_)
-        traceTilePinhole(scene, tiles_[t], ctx);
+      if (api_ != BaselineApi::Packet16)
+        traceTileStream(scene, tiles_[t], ctx, counter);
+      else if (pinhole_)
+        traceTilePinhole(scene, tiles_[t], ctx, counter);
       else
-        traceTileStored(scene, tiles_[t], ctx);
+        traceTileStored(scene, tiles_[t], ctx, counter);
     }
+    total += count;
   });
+  if (hits) *hits = total;
+}
+
+double BaselineTracer::traceFrame(const Scene& scene) const {
+  const auto start = std::chrono::steady_clock::now();
+  traceTiles(scene, nullptr);
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+uint64_t BaselineTracer::countHits(const Scene& scene) const {
+  uint64_t hits = 0;
+  traceTiles(scene, &hits);
+  return hits;
 }
 
 }  // namespace aperture

@@ -12,17 +12,35 @@
 #include <vector>
 
 #include "core/camera.h"
+#include "core/error.h"
 #include "core/scene.h"
 
 namespace aperture {
+
+/// The Embree call the baseline traces with.
+enum class BaselineApi {
+  Packet16,  ///< rtcIntersect16 per 4x4 block (the frame loop's call)
+  StreamNM,  ///< rtcIntersectNM: the tile's 4x4 packets as one stream of RTCRayHit16
+  Stream1M,  ///< rtcIntersect1M: the tile's rays as one stream of single RTCRayHit
+};
+
+/// Parses "packet16", "stream-nm" or "stream-1m" (Error naming `flag` otherwise).
+BaselineApi parseBaselineApi(const std::string& text, const char* flag);
+const char* baselineApiName(BaselineApi api);
 
 class BaselineTracer {
  public:
   /// Plans the 4x4-pixel packets of every pixel's centre ray (the rays of the geometry AOVs;
   /// at spp 1 the only sample) in the frame loop's tile order (tiles of `tileSize`).
-  BaselineTracer(const Camera& camera, int width, int height, int tileSize);
+  /// Every API traces the same rays with the coherent flag; the streams are the trial of
+  /// issue 13 (does Embree's stream API move the ceiling?).
+  BaselineTracer(const Camera& camera, int width, int height, int tileSize,
+                 BaselineApi api = BaselineApi::Packet16);
   /// Traces every packet with rtcIntersect16 (coherent flag) over TBB tiles; returns seconds.
   double traceFrame(const Scene& scene) const;
+  /// Traces the frame as traceFrame and counts the rays that hit (tests: every API must hit
+  /// what the frame loop hits).
+  uint64_t countHits(const Scene& scene) const;
   uint64_t rayCount() const { return rays_; }
   /// How the rays are made: "float pinhole in the loop" or "pre-generated".
   std::string rayGeneration() const;
@@ -40,10 +58,20 @@ class BaselineTracer {
   struct Pinhole {
     glm::vec3 eye, corner, du, dv;
   };
-  void traceTilePinhole(const Scene& scene, const Tile& t, RTCIntersectContext& ctx) const;
-  void traceTileStored(const Scene& scene, const Tile& t, RTCIntersectContext& ctx) const;
+  void traceTilePinhole(const Scene& scene, const Tile& t, RTCIntersectContext& ctx,
+                        uint64_t* hits) const;
+  void traceTileStored(const Scene& scene, const Tile& t, RTCIntersectContext& ctx,
+                       uint64_t* hits) const;
+  /// The tile's packets (made by the pinhole or copied) as one stream call.
+  void traceTileStream(const Scene& scene, const Tile& t, RTCIntersectContext& ctx,
+                       uint64_t* hits) const;
+  /// Traces every tile in parallel; adds the hit count to `hits` when given.
+  void traceTiles(const Scene& scene, uint64_t* hits) const;
+  /// The rays of the 4x4 block at (x0, y0): packet p of the pre-generated rays, or the pinhole.
+  void blockRays(int x0, int y0, size_t p, RTCRay16& rays, int* valid) const;
 
   int width_, height_;
+  BaselineApi api_;
   bool pinhole_ = false;
   Pinhole p_{};
   std::vector<RTCRay16> rays16_;  // pre-generated rays (not a pinhole)

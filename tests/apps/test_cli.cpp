@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -244,6 +245,30 @@ TEST(Cli, BenchReportsRenderAndBaselineInJson) {
                           "\"build_seconds_median\"", "\"embree_bytes_per_triangle\"", "\"isa\""})
     EXPECT_NE(text.str().find(key), std::string::npos) << key;
   EXPECT_NE(out.find("render / baseline"), std::string::npos) << out;
+}
+
+TEST(Cli, BenchBaselineStreamApisTraceTheSameRays) {
+  // Every Embree API of the baseline traces every pixel: the same ray count in the JSON
+  // (no lane lost or doubled in the stream layouts). The count is the image's pixel count.
+  for (const char* api : {"packet16", "stream-nm", "stream-1m"}) {
+    const std::string json = scratchDir() + "/b_" + api + ".json";
+    std::string out;
+    ASSERT_EQ(runCommand(apertureBinary() +
+                             " bench --quiet --size 61,45 --frames 1 --warmup 0 --builds 1 "
+                             "--baseline --mesh 'procedural:sphere' --baseline-api " +
+                             api + " --json " + json,
+                         &out),
+              0)
+        << out;
+    std::ifstream in(json);
+    const nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_EQ(j["baseline_api"], api);
+    EXPECT_EQ(j["baseline_rays_per_frame"], 61 * 45) << api;
+  }
+  std::string out;
+  EXPECT_NE(
+      runCommand(apertureBinary() + " bench --baseline --baseline-api stream --size 8,8", &out), 0);
+  EXPECT_NE(out.find("--baseline-api: 'stream' is not"), std::string::npos) << out;
 }
 
 TEST(Cli, CameraDescribePrintsFrameConventionsAndVolume) {

@@ -8,7 +8,10 @@
 #include "cameras/base.h"
 #include "cameras/registry.h"
 #include "core/baseline.h"
+#include "core/framebuffer.h"
+#include "core/mesh.h"
 #include "core/packet.h"
+#include "core/render.h"
 #include "tests/support.h"
 
 using namespace aperture;
@@ -61,6 +64,35 @@ TEST(Baseline, OtherCamerasUsePreGeneratedRays) {
         "--eye 0,0,5 --fov 40 --clip 1,9 --size 8,8", "--camera fisheye --eye 0,0,5 --size 8,8"}) {
     const auto camera = makeCameraModel(test::cameraParamsFromFlags(flags), glm::dvec3(0.0));
     EXPECT_EQ(BaselineTracer(*camera, 8, 8, 4).rayGeneration(), "pre-generated") << flags;
+  }
+}
+
+}  // namespace
+
+namespace {
+
+TEST(Baseline, EveryEmbreeApiHitsWhatTheFrameLoopHits) {
+  // The streams (one call per tile) must trace exactly the packet path's rays: the hit count
+  // of each equals the frame loop's on a sphere that covers part of the image, for the
+  // in-loop pinhole and for pre-generated rays (a shifted thin lens at spp 1).
+  Device device;
+  Mesh sphere = makeProcedural("procedural:sphere");
+  LoadOptions world;
+  world.placement = Placement::WorldSpace;
+  finishMesh(sphere, world);
+  Scene scene(device, {&sphere});
+  for (const char* flags :
+       {"--eye 0.3,0.4,3 --at 0,0,0 --fov 45 --size 61,45",
+        "--camera thinlens --eye 0.3,0.4,3 --at 0,0,0 --fov 45 --aperture 0.05 --focus 3 "
+        "--size 61,45"}) {
+    const auto camera = makeCameraModel(test::cameraParamsFromFlags(flags), glm::dvec3(0.0));
+    Framebuffer fb(61, 45, parseAovList("depth"));
+    const RenderStats frameLoop = renderImage(scene, *camera, RenderSettings{}, fb);
+    ASSERT_GT(frameLoop.hits, 100u);
+    ASSERT_LT(frameLoop.hits, uint64_t(61 * 45));
+    for (BaselineApi api : {BaselineApi::Packet16, BaselineApi::StreamNM, BaselineApi::Stream1M})
+      EXPECT_EQ(BaselineTracer(*camera, 61, 45, 16, api).countHits(scene), frameLoop.hits)
+          << flags << " " << baselineApiName(api);
   }
 }
 
