@@ -286,8 +286,8 @@ bool tracePacket(const ImagePlan& plan, const PacketRequest& req, PacketState<N>
 template <int N>
 int findHits(const PacketState<N>& st, PacketHits<N>& out) {
   int count = 0;
-  for (int k = 0; k < N; ++k) {
-    out.hit[k] = st.valid[k] != 0 && st.hits.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+  for (int k = 0; k < N; ++k) {  // & rather than &&: no branch, vector compares
+    out.hit[k] = int(st.valid[k] != 0) & int(st.hits.geomID[k] != RTC_INVALID_GEOMETRY_ID);
     count += out.hit[k];
   }
   out.count = count;
@@ -533,21 +533,20 @@ void renderPass(const ImagePlan& plan, const PacketRequest& req, PacketState<N>&
   if (geometry && plan.layers) traceLayers<N>(*plan.layers, req, st.hits, hits.hit);
 }
 
-/// Writes the block's colour: the mean of its samples (R = G = B = shade, A = coverage).
+/// Writes the block's colour: the mean of its samples (R = G = B = shade, A = coverage), to
+/// every lane in the image (storeHitLanes with every lane "hit": whole rows are plain stores).
 template <int N>
-void storeColor(const ImagePlan& plan, int bx, int by, const BlockColor<N>& color) {
-  constexpr int kBW = blockWidthFor(N);
-  const int width = plan.width, height = plan.height;
-  float* const out = plan.fb.rgba.data() + 4 * plan.pixelOffset;
+void storeColor(const ImagePlan& plan, const PacketRequest& req, const BlockColor<N>& color) {
   const float inv = 1.0f / float(plan.colorSamples);
+  alignas(64) float shade[N], cover[N];
+  alignas(64) int every[N];
   for (int k = 0; k < N; ++k) {
-    if (!laneInImage(bx, by, kBW, k, width, height)) continue;
-    const LanePixel p = lanePixel(bx, by, kBW, k);
-    float* rgba = out + 4 * (size_t(p.row) * size_t(width) + size_t(p.column));
-    const float c = color.shade[k] * inv;
-    rgba[0] = rgba[1] = rgba[2] = c;
-    rgba[3] = color.cover[k] * inv;
+    shade[k] = color.shade[k] * inv;
+    cover[k] = color.cover[k] * inv;
+    every[k] = 1;
   }
+  storeHitLanes<N, 4, float>(BlockPixels<N>(plan, req), every, {shade, shade, shade, cover},
+                             plan.fb.rgba.data());
 }
 
 /// Renders the block of N pixels whose top-left pixel is (row by, column bx): the colour
@@ -563,7 +562,7 @@ void renderBlock(const ImagePlan& plan, int bx, int by, PacketState<N>& st, Tile
     renderPass<N, kNull>(plan, req, st, centre ? nullptr : &color,
                          centre || plan.geometryFromSample, count);
   }
-  if (plan.color) storeColor<N>(plan, bx, by, color);
+  if (plan.color) storeColor<N>(plan, {bx, by, kBW, kBH, 0}, color);
 }
 
 /// Renders the tile of columns [x0, x1) and rows [y0, y1), block by block (a TileRenderer).
