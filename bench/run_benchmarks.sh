@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
-# Runs the throughput benchmarks of bench/RESULTS.md: every scene with its reference camera
-# (../shared/meshes/README.md) at 1920x1080, the frame loop beside the bare rtcIntersect16
-# baseline in the same run, for two AOV sets. Writes bench/results/<scene>-<aovs>.json and
-# prints a Markdown table. Usage: bench/run_benchmarks.sh [FRAMES] (default 10).
+# Runs the throughput benchmarks of bench/RESULTS.md (issue 13's ceiling): every scene with its
+# reference camera (../shared/meshes/README.md) and procedural scenes of 100k to 40M triangles
+# at 1920x1080, the frame loop beside the bare rtcIntersect16 baseline (a minimal float pinhole
+# in the same loop) frame by frame in turn, for two AOV sets. Writes
+# bench/results/<scene>-<aovs>.json and prints a Markdown table.
+# Usage: bench/run_benchmarks.sh [FRAMES] (default 10); SCENES_LIST="bunny dragon" picks scenes,
+# AOVSETS="depth,normal" the AOV sets, BUILDS the timed builds (default 3).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 B=build/apps/aperture
@@ -15,23 +18,28 @@ declare -A SCENES=(
   [dragon]="--mesh $M/stanford/dragon_vrip.ply --eye 0,0.12,0.45 --at 0,0.12,0 --up 0,1,0 --fov 30"
   [crown]="--mesh $M/scenes/crown_flat.ply --eye 0,5.5,24 --at 0,11,-10 --up 0,1,0 --fov 47 --fov-axis x"
   [bathroom]="--mesh $M/scenes/contemporary-bathroom_flat.ply --eye 0.00724,0.91240,-0.22758 --dir -0.751879,0.015471,-0.659119 --up 0.0116337,0.99988,0.0101985 --fov 55"
-  [procedural20M]="--mesh procedural:spheres?tris=20000000"
+  [procedural100k]="--mesh procedural:spheres?tris=100000"
+  [procedural1M]="--mesh procedural:spheres?tris=1000000"
+  [procedural10M]="--mesh procedural:spheres?tris=10000000"
+  [procedural40M]="--mesh procedural:spheres?tris=40000000"
 )
-ORDER=(bunny dragon crown bathroom procedural20M)
+read -r -a ORDER <<<"${SCENES_LIST:-bunny dragon crown bathroom procedural100k procedural1M procedural10M procedural40M}"
+read -r -a AOVS <<<"${AOVSETS:-depth,normal color}"
 for scene in "${ORDER[@]}"; do
-  for aovs in depth,normal color; do
+  for aovs in "${AOVS[@]}"; do
     # shellcheck disable=SC2086
     $B bench --quiet ${SCENES[$scene]} --size 1920,1080 --aov "$aovs" --baseline \
-      --frames "$FRAMES" --warmup 3 --builds 3 --json "$OUT/$scene-${aovs/,/-}.json" >/dev/null
+      --frames "$FRAMES" --warmup 3 --builds "${BUILDS:-3}" \
+      --json "$OUT/$scene-${aovs/,/-}.json" >/dev/null
   done
 done
-python3 - "$OUT" "${ORDER[@]}" <<'PY'
+python3 - "$OUT" "${AOVS[*]}" "${ORDER[@]}" <<'PY'
 import json, sys
-out, scenes = sys.argv[1], sys.argv[2:]
+out, aovsets, scenes = sys.argv[1], sys.argv[2].split(), sys.argv[3:]
 print("| scene | triangles | AOVs | aperture Mrays/s (median) | cv | bare rtcIntersect16 Mrays/s | ratio | build s (median of 3) | Embree B/tri | load MB/s |")
 print("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|")
 for s in scenes:
-    for a in ("depth-normal", "color"):
+    for a in (a.replace(",", "-") for a in aovsets):
         j = json.load(open(f"{out}/{s}-{a}.json"))
         c = j["config"]
         print(f"| {s} | {c['triangles']:,} | {c['aovs']} | {j['mrays_per_s_median']:.1f} | "
