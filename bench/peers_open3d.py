@@ -7,8 +7,10 @@
          geometry_ids (and primitive_uvs, which it always computes). The mesh is read with
          Open3D's own reader and added as one geometry; loading, the BVH build and the rays are
          done before the clock starts. After --warmup untimed casts, --frames casts of the whole
-         image are timed one by one, and Mrays/s = W*H / seconds per cast. --threads goes to
-         both the scene build and cast_rays (`nthreads`; 0 = Open3D's automatic choice).
+         image are timed one by one, and Mrays/s = W*H / seconds per cast. Each cast allocates
+         its output tensors (cast_rays takes no buffers to reuse; aperture's bench reuses its
+         framebuffer); the result is freed after the clock stops. --threads goes to both the
+         scene build and cast_rays (`nthreads`; 0 = Open3D's automatic choice).
   image: casts once and writes the four AOVs to a .npz (t_hit, normal, primid, geomid) for
          bench/peers_check.py --open3d.
 """
