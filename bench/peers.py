@@ -1,24 +1,38 @@
 #!/usr/bin/env python3
-"""Peer comparison (issue 4 item 6): aperture against bare Embree (its own --baseline), Embree's
-viewer (Debian embree-tools) and Mitsuba 3 (llvm_ad_rgb), same mesh, camera and resolution,
-measured side by side in one run. Prints a table and writes it as Markdown to OUT.md.
+"""Peer comparison (issue 4 item 6, issue 13 item 6): aperture against bare Embree (its own
+--baseline), Open3D's RaycastingScene, Embree's viewer (Debian embree-tools) and Mitsuba 3
+(llvm_ad_rgb), same mesh, camera and resolution, measured side by side in one run. Prints a
+table and writes it as Markdown to OUT.md, with the CPU model (lscpu), the date, the thread count
+and the exact command in its header.
 
     bash bench/install-peers.sh            # once, as root
-    python3 bench/peers.py --aperture build/apps/aperture --repeat 2 --check out/peers out/peers.md
+    python3 bench/peers.py --aperture build/apps/aperture --repeat 3 --check out/peers out/peers.md
 
-Per scene and repetition, one after the other:
-  aperture  `aperture bench --aov color --spp 1 --baseline` (16-wide packets, --threads):
-            median Mrays/s of the render and of bare rtcIntersect16 on the same rays.
+Every peer gets the same worker-thread count: --threads N, or all the CPUs this process may run on
+(0); the number is passed explicitly to each and recorded. Per scene and repetition, one after
+the other:
+  aperture  `aperture bench --aov color --spp 1 --baseline` (16-wide packets): median Mrays/s of
+            the render and of bare rtcIntersect16 on the same rays. The color AOV is the eye-light
+            |N.D|, the work of the viewer's eyelight shader and Mitsuba's geo_normal AOV: the
+            viewer and Mitsuba ratios use this figure.
+  aperture  `aperture bench --aov distance,normal,primid,geomid`: median Mrays/s with the AOVs
+            Open3D's cast_rays returns; the Open3D ratio uses this figure.
+  open3d    bench/peers_open3d.py time: RaycastingScene.cast_rays on aperture's own rays (the
+            pixel centres of the same camera, bench/peer_rays.py, built before the clock),
+            median Mrays/s over the same number of frames (see that file).
   viewer    `viewer --shader eyelight --benchmark WARMUP FRAMES` (legacy mode: FRAMES timed frames);
             it prints BENCHMARK_RENDER_MRAYPS_AVG = W*H*fps/1e6, the mean over the timed frames
             (the viewer reports no median). eyelight is its cheapest shader, the same |N.D| as
             aperture's color AOV; the viewer traces one ray at a time (Debian's binary imports
             rtcIntersect1 and rtcOccluded1 only: `nm -D /usr/bin/viewer`).
   mitsuba   bench/peers_mitsuba.py time: median Mrays/s of the render alone (see that file).
-Rays per frame are W*H (1 spp, primary rays only) for all three.
+Rays per frame are W*H (1 spp, primary rays only) for all.
 
-Camera conventions (checked by --check, which renders one frame of each and compares):
+Camera conventions (checked by --check, which renders one frame of each and compares, before any
+timing; a failed Open3D check stops the run, since its rays would not be aperture's):
   aperture: right-handed, U = up x W right, row 0 at the top, --fov on --fov-axis.
+  Open3D:   handed aperture's rays (bench/peer_rays.py); --check requires the same triangle on
+            >= 99.9 % of pixels and distances within 1e-4 relative (bench/peers_check.py).
   viewer:   --vp/--vi (or --vd)/--vu; --fov is the VERTICAL field of view in degrees; the
             default --righthanded matches aperture (no mirroring). A horizontal fov (crown) is
             converted: fov_y = 2 atan(tan(fov_x / 2) * H / W). The viewer shoots rays through
@@ -61,9 +75,15 @@ SCENES = {
                      dir=(-0.751879, 0.015471, -0.659119), up=(0.0116337, 0.99988, 0.0101985),
                      fov=55.0, axis="y", size=(1024, 1024)),
 }
-# aperture / viewer targets of the issue (none for the bunny).
-VIEWER_TARGET = {"dragon": 2.0, "crown": 2.0, "bathroom": 4.0}
-BASELINE_TARGET = 0.9
+# Targets, aperture's Mrays/s over the peer's: issue 13 item 6 (Open3D, viewer) and item 2 (bare
+# Embree on the same rays). None for Mitsuba.
+OPEN3D_TARGET = 4.0
+VIEWER_TARGET = 2.5
+BASELINE_TARGET = 0.95
+# Untimed frames before the timed ones, for every peer (Mitsuba compiles its kernels in the first).
+WARMUP = 3
+# What Open3D's cast_rays returns, in aperture's AOV names (docs/aovs.md).
+GEOMETRY_AOVS = ("distance", "normal", "primid", "geomid")
 
 
 def csv(v):
@@ -77,6 +97,29 @@ def vertical_fov(s):
     return math.degrees(2 * math.atan(math.tan(math.radians(s["fov"]) / 2) * h / w))
 
 
+def cpu_model():
+    """lscpu's "Model name" (/proc/cpuinfo's "model name" without lscpu)."""
+    try:
+        out = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
+        for line in out.splitlines():
+            if line.startswith("Model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    with open("/proc/cpuinfo") as f:
+        return next((l.split(":", 1)[1].strip() for l in f if l.startswith("model name")), platform.processor())
+
+
+def worker_threads(requested):
+    """The thread count every peer gets: the one asked for, else every CPU this process may use."""
+    return requested if requested > 0 else len(os.sched_getaffinity(0))
+
+
+def debian_version(package):
+    p = subprocess.run(["dpkg-query", "-W", "-f=${Version}", package], capture_output=True, text=True)
+    return p.stdout.strip() if p.returncode == 0 else "?"
+
+
 def run(cmd, log):
     log.append(" ".join(shlex.quote(c) for c in cmd))
     p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -85,11 +128,11 @@ def run(cmd, log):
     return p.stdout + p.stderr
 
 
-def camera_args_aperture(s, mesh):
+def camera_args_aperture(s, mesh, aovs):
     a = ["--mesh", mesh, "--eye", csv(s["eye"])]
     a += ["--at", csv(s["at"])] if "at" in s else ["--dir", csv(s["dir"])]
     a += ["--up", csv(s["up"]), "--fov", repr(s["fov"]), "--fov-axis", s["axis"],
-          "--size", "%d,%d" % s["size"], "--spp", "1", "--aov", "color"]
+          "--size", "%d,%d" % s["size"], "--spp", "1", "--aov", aovs]
     return a
 
 
@@ -101,7 +144,8 @@ def camera_args_viewer(s, mesh):
     return a
 
 
-def camera_args_mitsuba(s, mesh):
+def camera_args_python(s, mesh):
+    """The camera flags of peers_mitsuba.py and peers_open3d.py."""
     # --opt=value: argparse would take "-0.02,..." for an option.
     a = ["--mesh=" + mesh, "--eye=" + csv(s["eye"])]
     a += ["--at=" + csv(s["at"])] if "at" in s else ["--dir=" + csv(s["dir"])]
@@ -110,50 +154,111 @@ def camera_args_mitsuba(s, mesh):
     return a
 
 
+def aperture_bench(name, tag, s, mesh, aovs, extra, args, tmp, log):
+    j = os.path.join(tmp, f"{name}_aperture_{tag}.json")
+    run([args.aperture, "bench", *camera_args_aperture(s, mesh, aovs), "--threads", str(args.threads),
+         "--frames", str(args.frames), "--warmup", str(WARMUP), "--builds", "1", *extra, "--quiet", "--json", j], log)
+    with open(j) as f:
+        return json.load(f)
+
+
+def python_peer(name, script, s, mesh, args, tmp, log):
+    j = os.path.join(tmp, f"{name}_{os.path.splitext(script)[0]}.json")
+    run([args.python, os.path.join(HERE, script), "time", *camera_args_python(s, mesh), "--threads", str(args.threads),
+         "--frames", str(args.frames), "--warmup", str(WARMUP), "--json", j], log)
+    with open(j) as f:
+        return json.load(f)
+
+
 def measure(name, s, mesh, args, tmp, log):
     out = {}
-    j = os.path.join(tmp, f"{name}_aperture.json")
-    run([args.aperture, "bench", *camera_args_aperture(s, mesh), "--threads", str(args.threads), "--frames", str(args.frames),
-         "--warmup", "3", "--builds", "1", "--baseline", "--quiet", "--json", j], log)
-    with open(j) as f:
-        a = json.load(f)
-    out["aperture"] = a["mrays_per_s_median"]
-    out["baseline"] = a["baseline_mrays_per_s_median"]
-    out["isa"] = a["config"]["isa"]
-    out["threads"] = a["config"]["threads"]
+    a = aperture_bench(name, "color", s, mesh, "color", ["--baseline"], args, tmp, log)
+    out["aperture"], out["baseline"] = a["mrays_per_s_median"], a["baseline_mrays_per_s_median"]
+    out["isa"], out["threads"] = a["config"]["isa"], a["config"]["threads"]
+    a = aperture_bench(name, "geometry", s, mesh, ",".join(GEOMETRY_AOVS), [], args, tmp, log)
+    out["aperture_geometry"] = a["mrays_per_s_median"]
 
-    vt = ["--threads", str(args.threads)] if args.threads > 0 else []
-    text = run([*camera_args_viewer(s, mesh), *vt, "--benchmark", "3", str(args.frames)], log)
+    o = python_peer(name, "peers_open3d.py", s, mesh, args, tmp, log)
+    out["open3d"], out["open3d_version"] = o["mrays_per_s_median"], o["config"]["open3d"]
+
+    viewer = [*camera_args_viewer(s, mesh), "--threads", str(args.threads), "--benchmark", str(WARMUP), str(args.frames)]
+    text = run(viewer, log)
     m = re.search(r"BENCHMARK_RENDER_MRAYPS_AVG\s+([0-9.eE+-]+)", text)
     if not m:
         sys.exit(f"peers: no BENCHMARK_RENDER_MRAYPS_AVG in the viewer's output:\n{text[-2000:]}")
     out["viewer"] = float(m.group(1))
 
-    j = os.path.join(tmp, f"{name}_mitsuba.json")
-    run([args.python, os.path.join(HERE, "peers_mitsuba.py"), "time", *camera_args_mitsuba(s, mesh),
-         "--threads", str(args.threads), "--frames", str(args.frames), "--warmup", "2", "--json", j], log)
-    with open(j) as f:
-        out["mitsuba"] = json.load(f)["mrays_per_s_median"]
+    o = python_peer(name, "peers_mitsuba.py", s, mesh, args, tmp, log)
+    out["mitsuba"], out["mitsuba_version"] = o["mrays_per_s_median"], o["config"]["mitsuba"]
     return out
 
 
 def check(name, s, mesh, args, log):
+    """Renders one frame with every peer, compares with peers_check.py; exits if Open3D's differs."""
     d = args.check
     exr, ppm = os.path.join(d, f"{name}_aperture.exr"), os.path.join(d, f"{name}_viewer.ppm")
     npy, png = os.path.join(d, f"{name}_mitsuba.npy"), os.path.join(d, f"{name}_check.png")
+    npz, stem = os.path.join(d, f"{name}_open3d.npz"), os.path.join(d, f"{name}_aperture")
     js = os.path.join(d, f"{name}_check.json")
-    run([args.aperture, "render", *camera_args_aperture(s, mesh), "--quiet", "--out", exr], log)
+    run([args.aperture, "render", *camera_args_aperture(s, mesh, "color"), "--quiet", "--out", exr], log)
+    # One AOV per .npy: exact uint32 ids (an EXR reader may hand them back as float).
+    for aov in GEOMETRY_AOVS:
+        run([args.aperture, "render", *camera_args_aperture(s, mesh, aov), "--quiet", "--out", f"{stem}_{aov}.npy"],
+            log)
     run([*camera_args_viewer(s, mesh), "-o", ppm], log)
-    run([args.python, os.path.join(HERE, "peers_mitsuba.py"), "image", *camera_args_mitsuba(s, mesh),
-         "--out", npy], log)
+    run([args.python, os.path.join(HERE, "peers_mitsuba.py"), "image", *camera_args_python(s, mesh), "--out", npy], log)
+    run([args.python, os.path.join(HERE, "peers_open3d.py"), "image", *camera_args_python(s, mesh),
+         "--threads", str(args.threads), "--out", npz], log)
     print(run([args.python, os.path.join(HERE, "peers_check.py"), "--aperture", exr, "--viewer", ppm,
-               "--mitsuba", npy, "--png", png, "--json", js], log).rstrip())
+               "--mitsuba", npy, "--aperture-geometry", stem, "--open3d", npz, "--mesh", mesh,
+               "--png", png, "--json", js],
+              log).rstrip())
     with open(js) as f:
         return json.load(f)
 
 
+def busy_warning(load0):
+    """A Markdown line (and stderr) when the load average at the start says other work was running
+    (the one at the end counts the peers' own threads)."""
+    if load0[0] < 0.5:
+        return []
+    line = (f"**Not an idle machine** (load average {load0[0]:.2f} at the start): other work shared the "
+            "CPUs; do not quote these figures.")
+    print("peers: " + line.replace("**", ""), file=sys.stderr)
+    return [line, ""]
+
+
 def fmt(x, nd=2):
     return "—" if x is None else f"{x:.{nd}f}"
+
+
+def against(ratio, target, nd=2):
+    return f"{ratio:.{nd}f} " + ("✓" if ratio >= target else "✗") + f" (≥{target:g})"
+
+
+def table(h, rs):
+    """Markdown table, first column left-aligned, the others right-aligned."""
+    rule = "|" + "|".join("---" if i == 0 else "---:" for i in range(len(h))) + "|"
+    return "\n".join(["| " + " | ".join(h) + " |", rule]
+                     + ["| " + " | ".join(r) + " |" for r in rs])
+
+
+def plain(h, rs):
+    w = [max(len(h[i]), *(len(r[i]) for r in rs)) for i in range(len(h))]
+    return "\n".join("  ".join(c.ljust(w[i]) if i == 0 else c.rjust(w[i]) for i, c in enumerate(r)) for r in [h, *rs])
+
+
+def peer_row(m, targets):
+    """aperture against Open3D, the viewer and Mitsuba: Mrays/s and ratios (targets marked or not)."""
+    ro, rv, rm = m["aperture_geometry"] / m["open3d"], m["aperture"] / m["viewer"], m["aperture"] / m["mitsuba"]
+    return [fmt(m["aperture_geometry"]), fmt(m["open3d"]), against(ro, OPEN3D_TARGET) if targets else f"{ro:.2f}",
+            fmt(m["aperture"]), fmt(m["viewer"]), against(rv, VIEWER_TARGET) if targets else f"{rv:.2f}",
+            fmt(m["mitsuba"]), f"{rm:.2f}"]
+
+
+PEER_HEAD = ["aperture geometry AOVs Mrays/s", "Open3D Mrays/s", "× Open3D", "aperture color Mrays/s",
+             "viewer Mrays/s", "× viewer", "Mitsuba Mrays/s", "× Mitsuba"]
+KEYS = ("aperture", "aperture_geometry", "baseline", "open3d", "viewer", "mitsuba")
 
 
 def main():
@@ -162,14 +267,18 @@ def main():
     ap.add_argument("--aperture", default=os.environ.get("APERTURE_BIN", os.path.join(ROOT, "build/apps/aperture")))
     ap.add_argument("--python", default=os.path.join(
         os.environ.get("APERTURE_PEERS_VENV", os.path.expanduser("~/.cache/aperture-peers/venv")), "bin/python"),
-        help="python with mitsuba (bench/install-peers.sh)")
+        help="python with mitsuba and open3d (bench/install-peers.sh)")
     ap.add_argument("--meshes", default=os.environ.get("APERTURE_MESHES", os.path.join(ROOT, "..", "shared", "meshes")))
     ap.add_argument("--scenes", default="dragon,crown,bathroom", help="comma list of " + ",".join(SCENES))
     ap.add_argument("--repeat", type=int, default=2, help="side-by-side runs per scene (medians reported)")
     ap.add_argument("--frames", type=int, default=10, help="timed frames per peer and run")
-    ap.add_argument("--threads", type=int, default=0, help="worker threads for every peer (0 = all cores)")
-    ap.add_argument("--check", metavar="DIR", help="also render one image per peer and compare them (PNGs here)")
+    ap.add_argument("--threads", type=int, default=0,
+                    help="worker threads for every peer (0 = every CPU this process may use; the number is recorded)")
+    ap.add_argument("--check", metavar="DIR",
+                    help="first render one image per peer and compare them (PNGs here); stops if Open3D's differs")
     args = ap.parse_args()
+    command = shlex.join([sys.executable, *sys.argv])
+    args.threads = worker_threads(args.threads)
     scenes = [x for x in args.scenes.split(",") if x]
     for x in scenes:
         if x not in SCENES:
@@ -185,61 +294,63 @@ def main():
     with tempfile.TemporaryDirectory(prefix="aperture-peers-") as tmp:
         for x in scenes:
             s, mesh = SCENES[x], os.path.abspath(os.path.join(args.meshes, SCENES[x]["mesh"]))
+            if args.check:
+                checks[x] = check(x, s, mesh, args, log)
             for r in range(args.repeat):
                 t = time.time()
                 m = measure(x, s, mesh, args, tmp, log)
                 runs[x].append(m)
-                print(f"{x} run {r + 1}: aperture {m['aperture']:.2f}, baseline {m['baseline']:.2f}, "
-                      f"viewer {m['viewer']:.2f}, mitsuba {m['mitsuba']:.2f} Mrays/s ({time.time() - t:.0f} s)",
-                      file=sys.stderr)
-            if args.check:
-                checks[x] = check(x, s, mesh, args, log)
+                print(f"{x} run {r + 1}: aperture {m['aperture']:.2f} (geometry AOVs {m['aperture_geometry']:.2f}), "
+                      f"baseline {m['baseline']:.2f}, open3d {m['open3d']:.2f}, viewer {m['viewer']:.2f}, "
+                      f"mitsuba {m['mitsuba']:.2f} Mrays/s ({time.time() - t:.0f} s)", file=sys.stderr)
     load1 = os.getloadavg()
 
-    head = ["scene", "size", "aperture Mrays/s", "baseline Mrays/s", "aperture/baseline", "viewer Mrays/s",
-            "aperture/viewer", "Mitsuba Mrays/s", "aperture/Mitsuba"]
-    rows, per_run = [], []
+    rows, bare, per_run = [], [], []
     for x in scenes:
-        med = {k: statistics.median(m[k] for m in runs[x]) for k in ("aperture", "baseline", "viewer", "mitsuba")}
-        rb, rv = med["aperture"] / med["baseline"], med["aperture"] / med["viewer"]
-        tb = "✓" if rb >= BASELINE_TARGET else "✗"
-        tv = "" if x not in VIEWER_TARGET else (" ✓" if rv >= VIEWER_TARGET[x] else " ✗") + f" (≥{VIEWER_TARGET[x]:g})"
-        rows.append([x, "%dx%d" % SCENES[x]["size"], fmt(med["aperture"]), fmt(med["baseline"]),
-                     f"{rb:.3f} {tb} (≥{BASELINE_TARGET:g})", fmt(med["viewer"]), f"{rv:.2f}{tv}",
-                     fmt(med["mitsuba"]), f"{med['aperture'] / med['mitsuba']:.2f}"])
+        med = {k: statistics.median(m[k] for m in runs[x]) for k in KEYS}
+        size = "%dx%d" % SCENES[x]["size"]
+        rows.append([x, size, *peer_row(med, True)])
+        bare.append([x, size, fmt(med["aperture"]), fmt(med["baseline"]),
+                     against(med["aperture"] / med["baseline"], BASELINE_TARGET, 3)])
         for i, m in enumerate(runs[x]):
-            per_run.append([x, str(i + 1), fmt(m["aperture"]), fmt(m["baseline"]), f"{m['aperture'] / m['baseline']:.3f}",
-                            fmt(m["viewer"]), f"{m['aperture'] / m['viewer']:.2f}", fmt(m["mitsuba"]),
-                            f"{m['aperture'] / m['mitsuba']:.2f}"])
+            per_run.append([x, str(i + 1), *peer_row(m, False), fmt(m["baseline"])])
 
-    def table(h, rs):
-        return "\n".join(["| " + " | ".join(h) + " |", "|" + "|".join("---" if i == 0 else "---:" for i in range(len(h))) + "|"]
-                         + ["| " + " | ".join(r) + " |" for r in rs])
-
-    def plain(h, rs):
-        w = [max(len(h[i]), *(len(r[i]) for r in rs)) for i in range(len(h))]
-        return "\n".join("  ".join(c.ljust(w[i]) if i == 0 else c.rjust(w[i]) for i, c in enumerate(r)) for r in [h, *rs])
-
+    head = ["scene", "size", *PEER_HEAD]
     print(plain(head, rows))
-    cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.processor())
     first = runs[scenes[0]][0]
     md = [f"## Peer comparison ({time.strftime('%Y-%m-%d %H:%M')})", "",
-          f"Machine: {cpu}, {os.cpu_count()} hardware threads; {first['threads']} worker threads for every peer; Embree ISA "
-          f"{first['isa']}; load average {load0[0]:.2f} at the start, {load1[0]:.2f} at the end. "
-          f"Medians of {args.repeat} side-by-side runs per scene, {args.frames} timed frames each; "
-          "1 spp primary rays, Mrays/s = W·H / seconds per frame.", "",
-          table(head, rows), "", "Each run:", "",
-          table(["scene", "run", *head[2:]], per_run), ""]
+          "Command:", "", "```", command, "```", "",
+          f"CPU: {cpu_model()} (lscpu), {os.cpu_count()} hardware threads; {args.threads} worker threads for every "
+          f"peer; aperture's Embree ISA {first['isa']}; Open3D {first['open3d_version']} (open3d-cpu), "
+          f"Mitsuba {first['mitsuba_version']} (llvm_ad_rgb), Embree viewer "
+          f"(embree-tools {debian_version('embree-tools')}); "
+          f"load average {load0[0]:.2f} at the start, {load1[0]:.2f} at the end. "
+          f"Medians of {args.repeat} side-by-side run(s) per scene, {args.frames} timed frames each after "
+          f"{WARMUP} untimed; "
+          "1 spp primary rays, Mrays/s = W·H / seconds per frame. × Open3D: aperture with the AOVs "
+          "cast_rays returns (distance, normal, primid, geomid) on the same rays; × viewer and × Mitsuba: "
+          "aperture's color AOV (eye-light |N·D|, what the viewer's eyelight shader and Mitsuba's "
+          "geo_normal AOV compute).", "",
+          *busy_warning(load0),
+          table(head, rows), "",
+          "Against bare Embree (`aperture bench --baseline`: rtcIntersect16 on the same rays):", "",
+          table(["scene", "size", "aperture color Mrays/s", "baseline Mrays/s", "aperture/baseline"], bare), "",
+          "Each run:", "",
+          table(["scene", "run", *PEER_HEAD, "baseline Mrays/s"], per_run), ""]
     if checks:
-        ch = [[x, f"{100 * c['viewer']['coverage_mismatch']:.3f}%", f"{c['viewer']['eyelight_absdiff_median']:.1e}",
+        ch = [[x, f"{100 * c['open3d']['same_triangle']:.3f}%", f"{c['open3d']['distance_rel_max']:.1e}",
+               f"{100 * c['viewer']['coverage_mismatch']:.3f}%", f"{c['viewer']['eyelight_absdiff_median']:.1e}",
                f"{100 * c['mitsuba']['coverage_mismatch']:.3f}%", f"{c['mitsuba']['eyelight_absdiff_median']:.1e}"]
               for x, c in checks.items()]
         md += ["Same image? Against aperture's (`--check`; side-by-side PNGs in " + f"`{args.check}`):", "",
-               table(["scene", "viewer coverage differs", "viewer median abs Δ eye-light",
-                      "Mitsuba coverage differs", "Mitsuba median abs Δ eye-light"], ch), "",
-               "The viewer samples pixel corners (aperture and Mitsuba pixel centres) and stores 8 bits, "
-               "hence its small differences on silhouettes.", ""]
-    md += ["Commands ($TMP: a temporary directory):", "", "```", *dict.fromkeys(c.replace(tmp, "$TMP") for c in log), "```", ""]
+               table(["scene", "Open3D same triangle", "Open3D max rel Δ distance", "viewer coverage differs",
+                      "viewer median abs Δ eye-light", "Mitsuba coverage differs", "Mitsuba median abs Δ eye-light"],
+                     ch), "",
+               "Open3D traces aperture's own rays (pass marks: the same triangle on ≥ 99.9 % of pixels, distances "
+               "within 1e-4). The viewer samples pixel corners (aperture and Mitsuba pixel centres) and stores 8 "
+               "bits, hence its small differences on silhouettes.", ""]
+    commands = dict.fromkeys(c.replace(tmp, "$TMP") for c in log)
+    md += ["Commands ($TMP: a temporary directory):", "", "```", *commands, "```", ""]
     with open(args.markdown, "w") as f:
         f.write("\n".join(md))
     print(f"peers: wrote {args.markdown}", file=sys.stderr)

@@ -2,15 +2,17 @@
 """aperture's Python module against Open3D's RaycastingScene (issue 12), same rays, same AOVs,
 measured side by side in one run.
 
-    python3 -m venv /tmp/o3d && /tmp/o3d/bin/pip install open3d-cpu numpy   # once
-    PYTHONPATH=<dir holding the aperture package> /tmp/o3d/bin/python bench/python_open3d.py \
+    bash bench/install-peers.sh   # once, as root: open3d-cpu in ~/.cache/aperture-peers/venv
+    PYTHONPATH=<dir holding the aperture package> ~/.cache/aperture-peers/venv/bin/python \
+        bench/python_open3d.py \
         --mesh ../shared/meshes/stanford/dragon_vrip.ply --cameras 100 --size 640,480 --rounds 3
 
 Cameras: N views on a circle around the dragon's reference camera of shared/meshes/README.md
 (eye (0, 0.12, 0.45) turned about the vertical axis through (0, 0.12, 0), vertical fov 30°).
 Rays: aperture's pixel centres, u = ((j + ½)/W − ½)·vw, v = −((i + ½)/H − ½)·vh, d = 1,
-computed here in NumPy (float64, then float32) and handed to Open3D's cast_rays, so both trace
-the same rays; the script checks that both report the same triangle on ≥ 99.9 % of pixels.
+computed in NumPy by bench/peer_rays.py (float64, then float32) and handed to Open3D's
+cast_rays, so both trace the same rays; the script checks that both report the same triangle
+on ≥ 99.9 % of pixels.
 AOVs: ray distance, geometric normal, primitive id, geometry id (what cast_rays returns).
 
 Timed, per round, one after the other:
@@ -21,23 +23,15 @@ Reports the median over rounds of Mrays/s for each and their ratio.
 import argparse
 import math
 import os
-import platform
 import statistics
-import subprocess
+import sys
 import time
 
 import numpy as np
 
-
-def cpu_model():
-    try:
-        out = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
-        for line in out.splitlines():
-            if line.startswith("Model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor()
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from peer_rays import pinhole_rays  # noqa: E402
+from peers import cpu_model  # noqa: E402
 
 
 def orbit(n, centre=(0.0, 0.12, 0.0), radius=0.45):
@@ -45,28 +39,6 @@ def orbit(n, centre=(0.0, 0.12, 0.0), radius=0.45):
     cx, cy, cz = centre
     return [(cx + radius * math.sin(2 * math.pi * k / n), cy, cz + radius * math.cos(2 * math.pi * k / n))
             for k in range(n)]
-
-
-def pinhole_rays(eye, at, up, fov_deg, width, height):
-    """Rays (H, W, 6) float32 through aperture's pixel centres (docs/cameras.md)."""
-    eye, at, up = (np.asarray(x, dtype=np.float64) for x in (eye, at, up))
-    w = eye - at
-    w /= np.linalg.norm(w)
-    u = np.cross(up, w)
-    u /= np.linalg.norm(u)
-    v = np.cross(w, u)
-    vh = 2.0 * math.tan(math.radians(fov_deg) / 2.0)
-    vw = vh * width / height
-    j = (np.arange(width) + 0.5) / width - 0.5
-    i = (np.arange(height) + 0.5) / height - 0.5
-    pu = j[None, :, None] * vw
-    pv = -i[:, None, None] * vh
-    d = pu * u + pv * v - w
-    d /= np.linalg.norm(d, axis=-1, keepdims=True)
-    rays = np.empty((height, width, 6), dtype=np.float32)
-    rays[..., :3] = eye
-    rays[..., 3:] = d
-    return rays
 
 
 def main():
@@ -84,7 +56,7 @@ def main():
     at, up, fov = (0.0, 0.12, 0.0), (0.0, 1.0, 0.0), 30.0
     eyes = orbit(args.cameras)
     cams = [aperture.Camera.look_at(eye=e, at=at, up=up, fov=fov, size=(width, height)) for e in eyes]
-    rays = [o3d.core.Tensor(pinhole_rays(e, at, up, fov, width, height)) for e in eyes]
+    rays = [o3d.core.Tensor(pinhole_rays(e, up, fov, width, height, at=at)) for e in eyes]
 
     t0 = time.perf_counter()
     scene = aperture.Scene(args.mesh)

@@ -1,0 +1,131 @@
+#!/usr/bin/env python3
+"""Open3D side of the peer comparison (run with the venv python of bench/install-peers.sh).
+
+  time:  traces aperture's own rays (bench/peer_rays.py: the pixel centres of the camera given,
+         float32) with `RaycastingScene.cast_rays`, which returns the AOVs aperture renders with
+         --aov distance,normal,primid,geomid: t_hit, primitive_normals, primitive_ids,
+         geometry_ids (and primitive_uvs, which it always computes). The mesh is read with
+         Open3D's own reader and added as one geometry; loading, the BVH build and the rays are
+         done before the clock starts. After --warmup untimed casts, --frames casts of the whole
+         image are timed one by one, and Mrays/s = W*H / seconds per cast. Each cast allocates
+         its output tensors (cast_rays takes no buffers to reuse; aperture's bench reuses its
+         framebuffer); the result is freed after the clock stops. --threads goes to both the
+         scene build and cast_rays (`nthreads`; 0 = Open3D's automatic choice).
+  image: casts once and writes the four AOVs to a .npz (t_hit, normal, primid, geomid) for
+         bench/peers_check.py --open3d.
+"""
+import argparse
+import json
+import os
+import statistics
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from peer_rays import pinhole_rays  # noqa: E402
+
+
+def vec3(s):
+    v = [float(x) for x in s.split(",")]
+    if len(v) != 3:
+        raise argparse.ArgumentTypeError(f"expected X,Y,Z, got {s!r}")
+    return v
+
+
+def size2(s):
+    v = [int(x) for x in s.split(",")]
+    if len(v) != 2 or min(v) <= 0:
+        raise argparse.ArgumentTypeError(f"expected W,H, got {s!r}")
+    return v
+
+
+def read_mesh(o3d, path):
+    """Vertices (N, 3) float32 and triangles (M, 3) uint32 of the mesh at path, by Open3D's reader
+    (the triangles in the file's order, as aperture's primid numbers them)."""
+    mesh = o3d.io.read_triangle_mesh(path)
+    vertices = np.asarray(mesh.vertices, dtype=np.float32)
+    triangles = np.asarray(mesh.triangles, dtype=np.uint32)
+    if len(triangles) == 0:
+        sys.exit(f"peers_open3d: {path}: Open3D read no triangles")
+    return vertices, triangles
+
+
+def load_scene(o3d, path, threads):
+    """A RaycastingScene holding the mesh at path as geometry 0; returns it and its triangle count."""
+    vertices, triangles = read_mesh(o3d, path)
+    scene = o3d.t.geometry.RaycastingScene(nthreads=threads)
+    scene.add_triangles(o3d.core.Tensor(vertices), o3d.core.Tensor(triangles))
+    return scene, len(triangles)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("mode", choices=["time", "image"])
+    ap.add_argument("--mesh", required=True, help="PLY or OBJ file (Open3D's reader)")
+    ap.add_argument("--eye", type=vec3, required=True)
+    g = ap.add_mutually_exclusive_group(required=True)
+    g.add_argument("--at", type=vec3)
+    g.add_argument("--dir", type=vec3)
+    ap.add_argument("--up", type=vec3, default=[0.0, 1.0, 0.0])
+    ap.add_argument("--fov", type=float, required=True, help="degrees")
+    ap.add_argument("--fov-axis", choices=["x", "y"], default="y")
+    ap.add_argument("--size", type=size2, required=True, help="W,H")
+    ap.add_argument("--frames", type=int, default=10)
+    ap.add_argument("--warmup", type=int, default=2)
+    ap.add_argument("--threads", type=int, default=0, help="Open3D nthreads (0 = automatic)")
+    ap.add_argument("--json", help="time: write the figures here")
+    ap.add_argument("--out", help="image: .npz to write")
+    args = ap.parse_args()
+
+    import open3d as o3d
+
+    w, h = args.size
+    rays = o3d.core.Tensor(pinhole_rays(args.eye, args.up, args.fov, w, h, at=args.at, view=args.dir,
+                                        fov_axis=args.fov_axis))
+    t0 = time.perf_counter()
+    scene, triangles = load_scene(o3d, args.mesh, args.threads)
+    load_s = time.perf_counter() - t0
+
+    if args.mode == "image":
+        r = scene.cast_rays(rays, nthreads=args.threads)
+        np.savez(args.out, t_hit=r["t_hit"].numpy(), normal=r["primitive_normals"].numpy(),
+                 primid=r["primitive_ids"].numpy(), geomid=r["geometry_ids"].numpy())
+        return 0
+
+    for _ in range(args.warmup):
+        scene.cast_rays(rays, nthreads=args.threads)
+    secs = []
+    for _ in range(args.frames):
+        t = time.perf_counter()
+        r = scene.cast_rays(rays, nthreads=args.threads)
+        secs.append(time.perf_counter() - t)
+        del r  # freed outside the clock
+    mrays = [w * h / s / 1e6 for s in secs]
+    med = statistics.median(mrays)
+    cv = statistics.pstdev(mrays) / statistics.mean(mrays)
+    res = {
+        "mrays_per_s_median": med,
+        "mrays_per_s_min": min(mrays),
+        "mrays_per_s_max": max(mrays),
+        "mrays_per_s_cv": cv,
+        "frames": args.frames,
+        "warmup": args.warmup,
+        "load_and_build_seconds": load_s,
+        "triangles": triangles,
+        "config": {"call": "RaycastingScene.cast_rays", "rays": "aperture's pixel centres, float32",
+                   "outputs": "t_hit, geometry_ids, primitive_ids, primitive_uvs, primitive_normals",
+                   "width": w, "height": h, "spp": 1, "open3d": o3d.__version__,
+                   "nthreads": args.threads},
+    }
+    print(f"open3d: median {med:.2f} Mrays/s (min {min(mrays):.2f}, max {max(mrays):.2f}, "
+          f"cv {100 * cv:.1f}%, {args.frames} casts)", file=sys.stderr)
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(res, f, indent=2)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
