@@ -143,7 +143,9 @@ TEST_P(PacketPaths, PixelCentreKernelsEqualTheScalarPathBitForBit) {
         checkBlocks(*cam, p, shape, 0, 0, s, outside);
         if (::testing::Test::HasFatalFailure()) return;
         // Where the edges cut the blocks, the lanes past them were checked too.
-        if (p.width % shape.blockW != 0 || p.height % shape.blockH != 0) EXPECT_GT(outside, 0);
+        if (p.width % shape.blockW != 0 || p.height % shape.blockH != 0) {
+          EXPECT_GT(outside, 0);
+        }
         // Blocks off the 4-pixel grid (not the frame loop's, but allowed by the contract).
         checkBlocks(*cam, p, shape, 1, 1, s, outside);
         if (::testing::Test::HasFatalFailure()) return;
