@@ -5,6 +5,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <type_traits>
 
 #include "cameras/frame.h"
 #include "cameras/image_window.h"
@@ -199,5 +200,84 @@ class PacketCamera : public CameraBase {
     return static_cast<const Derived&>(*this).rayAt(x, y, lensX, lensY, renderOrg, dir);
   }
 };
+
+/// The stores of a block of kLanes rays: origins and directions already rounded to float,
+/// and the fixed fields as setLane. Every pointer is a restrict *parameter*: GCC honours
+/// restrict on parameters (inlined too), but not on local copies such as writeBlockLanes
+/// makes; there it needs more run-time alias checks than it allows (10) and leaves the loop
+/// scalar.
+template <int kLanes>
+inline void storeBlockLanes(float* __restrict orgX, float* __restrict orgY, float* __restrict orgZ,
+                            float* __restrict dirX, float* __restrict dirY, float* __restrict dirZ,
+                            float* __restrict tnear, float* __restrict tfar, float* __restrict time,
+                            unsigned* __restrict mask, unsigned* __restrict id,
+                            unsigned* __restrict flags, const float* __restrict ox,
+                            const float* __restrict oy, const float* __restrict oz,
+                            const float* __restrict dx, const float* __restrict dy,
+                            const float* __restrict dz) {
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int k = 0; k < kLanes; ++k) {
+    orgX[k] = ox[k];
+    orgY[k] = oy[k];
+    orgZ[k] = oz[k];
+    dirX[k] = dx[k];
+    dirY[k] = dy[k];
+    dirZ[k] = dz[k];
+    tnear[k] = 0.0f;
+    tfar[k] = inf;
+    time[k] = 0.0f;
+    mask[k] = 0xFFFFFFFFu;
+    id[k] = unsigned(k);
+    flags[k] = 0;
+  }
+}
+
+/// Writes the kLanes lanes of a block of rays with per-lane origins (storeBlockLanes into
+/// `out`): the parallel projections, and the kernels of the other models with the origin
+/// copied to every lane (vector stores either way).
+template <int kLanes>
+inline void writeBlockLanesWithOrigins(RayLanes& out, const float* ox, const float* oy,
+                                       const float* oz, const float* dx, const float* dy,
+                                       const float* dz) {
+  storeBlockLanes<kLanes>(out.orgX, out.orgY, out.orgZ, out.dirX, out.dirY, out.dirZ, out.tnear,
+                          out.tfar, out.time, out.mask, out.id, out.flags, ox, oy, oz, dx, dy, dz);
+}
+
+/// writeBlockLanesWithOrigins for rays from one origin (double, rounded once).
+template <int kLanes>
+inline void writeBlockLanesFromOrigin(RayLanes& out, const glm::dvec3& org, const float* dx,
+                                      const float* dy, const float* dz) {
+  alignas(64) float ox[kLanes], oy[kLanes], oz[kLanes];
+  for (int k = 0; k < kLanes; ++k) {
+    ox[k] = float(org.x);
+    oy[k] = float(org.y);
+    oz[k] = float(org.z);
+  }
+  writeBlockLanesWithOrigins<kLanes>(out, ox, oy, oz, dx, dy, dz);
+}
+
+/// valid[k] of a kBW x kBH block at (column x0, row y0) whose every pixel has a ray: −1
+/// inside the width x height image, 0 past its right or bottom edge (laneInImage).
+template <int kBW, int kBH>
+inline void writeBlockInImage(int x0, int y0, int width, int height, int* __restrict valid) {
+  for (int k = 0; k < kBW * kBH; ++k)
+    valid[k] = laneInImage(x0, y0, kBW, k, width, height) ? -1 : 0;
+}
+
+/// Calls f(bw, bh) with the frame loop's block shape (4x4, 4x2, 2x2 or 1x1) as
+/// std::integral_constant arguments, so a kernel gets constant trip counts
+/// (kernel<decltype(bw)::value, decltype(bh)::value>). False, without calling f, for any other
+/// shape.
+template <class F>
+inline bool withBlockShape(int blockW, int blockH, F&& f) {
+  using Four = std::integral_constant<int, 4>;
+  using Two = std::integral_constant<int, 2>;
+  using One = std::integral_constant<int, 1>;
+  if (blockW == 4 && blockH == 4) return f(Four{}, Four{}), true;
+  if (blockW == 4 && blockH == 2) return f(Four{}, Two{}), true;
+  if (blockW == 2 && blockH == 2) return f(Two{}, Two{}), true;
+  if (blockW == 1 && blockH == 1) return f(One{}, One{}), true;
+  return false;
+}
 
 }  // namespace aperture

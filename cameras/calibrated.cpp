@@ -3,8 +3,10 @@
 // Raster position (x, y) (pixel (i, j) centre at (j + ½, i + ½)) → the source's pixel
 // coordinates (sourcePixelOfRaster) → the lens's exact inverse (Lens::unproject) → a unit
 // camera-space direction d (OpenCV axes: x right, y down, z forward) → the world direction
-// d.x·U − d.y·V − d.z·W, normalised. Origin e. Pixel centres read d from the sensor's
-// DirectionTable; other samples compute it. A pixel the lens maps no ray to is a miss.
+// d.x·U − d.y·V − d.z·W, normalised. Origin e. Pixel centres of a distorted lens read d from
+// the sensor's DirectionTable, those of an undistorted pinhole compute it in closed form (a
+// vector kernel: cheaper than the table's 25 bytes per ray); other samples compute it. A
+// pixel the lens maps no ray to is a miss.
 #include "cameras/calibrated.h"
 
 #include <cmath>
@@ -14,6 +16,7 @@
 #include "cameras/models.h"
 #include "core/error.h"
 #include "core/units.h"
+#include "core/vector_kernel.h"
 
 namespace aperture {
 
@@ -151,12 +154,84 @@ std::optional<CalibratedView> calibratedViewOf(const CameraParams& p) {
 
 namespace {
 
+/// What the pixel-centre kernels need of a calibrated camera: its frame, render-space eye and
+/// image size.
+struct CalibratedFrame {
+  glm::dvec3 u, v, w, eye;
+  int width, height;
+};
+
+/// World direction of camera-space (OpenCV axes) direction (cx, cy, cz), rounded to float:
+/// (cx·U − cy·V) − cz·W normalised with one reciprocal, as CalibratedCamera::worldDirection
+/// (which the scalar path calls), term by term.
+inline void worldDirectionLane(const CalibratedFrame& f, double cx, double cy, double cz, float& dx,
+                               float& dy, float& dz) {
+  const double gx = (cx * f.u.x - cy * f.v.x) - cz * f.w.x;
+  const double gy = (cx * f.u.y - cy * f.v.y) - cz * f.w.y;
+  const double gz = (cx * f.u.z - cy * f.v.z) - cz * f.w.z;
+  const double inv = 1.0 / std::sqrt((gx * gx + gy * gy) + gz * gz);
+  dx = float(gx * inv);
+  dy = float(gy * inv);
+  dz = float(gz * inv);
+}
+
+/// A kBW x kBH block of pixel centres inside the image from the direction table: each block
+/// row is kBW contiguous entries of one table block (the frame loop's blocks lie on the
+/// table's 4 x 4 grid; the caller checks), read with vector loads, then rotated.
+template <int kBW, int kBH>
+APERTURE_VECTOR_KERNEL void tableCentres(const CalibratedFrame& f, const DirectionTable& table,
+                                         int x0, int y0, RayLanes& out, int* valid) {
+  constexpr int kLanes = kBW * kBH;
+  const double *tx = table.x(), *ty = table.y(), *tz = table.z();
+  const unsigned char* tv = table.validity();
+  alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
+  for (int row = 0; row < kBH; ++row) {
+    const size_t t0 = table.index(y0 + row, x0);
+    for (int col = 0; col < kBW; ++col) {
+      const int k = row * kBW + col;
+      const size_t t = t0 + size_t(col);
+      worldDirectionLane(f, tx[t], ty[t], tz[t], dx[k], dy[k], dz[k]);
+      valid[k] = tv[t] ? -1 : 0;
+    }
+  }
+  writeBlockLanesFromOrigin<kLanes>(out, f.eye, dx, dy, dz);
+}
+
+/// The undistorted pinhole lens in closed form (no table): Lens::unproject of the source
+/// pixel p, normalize((p − c) / f, 1) as GLM computes it (v · (1 / √(v·v))), then rotated.
+struct PinholeLens {
+  double fx, fy, cx, cy;
+  double sourceOffset;  ///< source pixel minus raster position: 0 or −½ (sourcePixelOfRaster)
+};
+
+/// A kBW x kBH block of pixel centres of an undistorted pinhole lens, lanes past the image's
+/// edges included. x and y are divided once per column and row of the block.
+template <int kBW, int kBH>
+APERTURE_VECTOR_KERNEL void pinholeCentres(const CalibratedFrame& f, const PinholeLens& lens,
+                                           int x0, int y0, RayLanes& out, int* valid) {
+  constexpr int kLanes = kBW * kBH;
+  double xs[kBW], ys[kBH];
+  for (int col = 0; col < kBW; ++col)
+    xs[col] = ((((double(x0) + double(col)) + 0.5) + lens.sourceOffset) - lens.cx) / lens.fx;
+  for (int row = 0; row < kBH; ++row)
+    ys[row] = ((((double(y0) + double(row)) + 0.5) + lens.sourceOffset) - lens.cy) / lens.fy;
+  alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
+  // Block rows of kBW lanes (lanePixel's order), so the inner loop reads xs[] in order.
+  for (int row = 0; row < kBH; ++row)
+    for (int col = 0; col < kBW; ++col) {
+      const int k = row * kBW + col;
+      const double x = xs[col], y = ys[row];
+      const double s = 1.0 / std::sqrt((x * x + y * y) + 1.0);
+      worldDirectionLane(f, x * s, y * s, s, dx[k], dy[k], dz[k]);
+    }
+  writeBlockLanesFromOrigin<kLanes>(out, f.eye, dx, dy, dz);
+  writeBlockInImage<kBW, kBH>(x0, y0, f.width, f.height, valid);
+}
+
 class CalibratedCamera final : public CameraBase {
  public:
   CalibratedCamera(const CameraParams& p, const glm::dvec3& renderOrigin)
-      : CameraBase(p, renderOrigin, "calibrated"),
-        sensor_(calibratedSensorOf(p)),
-        table_(DirectionTable::of(sensor_)) {
+      : CameraBase(p, renderOrigin, "calibrated"), sensor_(calibratedSensorOf(p)) {
     rejectShift();
     // The pinhole part of the lens as the lecture's image plane at d = 1: u = (x − px) / fx,
     // v = (py − y) / fy for raster (x, y) and the principal point (px, py) in raster terms.
@@ -166,23 +241,23 @@ class CalibratedCamera final : public CameraBase {
     vw_ = width_ / lens.fx();
     vh_ = height_ / lens.fy();
     shift_ = ImageWindow::shiftForPrincipalPoint(pp.x, pp.y, width_, height_);
+    // An undistorted pinhole's directions cost less to compute than to read from memory.
+    if (!lens.distorted())
+      pinhole_ = PinholeLens{lens.fx(), lens.fy(), lens.cx(), lens.cy(),
+                             sensor_.pixelCentre == PixelCentre::Integer ? -0.5 : 0.0};
+    else
+      table_ = DirectionTable::of(sensor_);
   }
 
   void generate(const PacketRequest& req, RayLanes& out, int* valid) const override {
     const bool centres = req.centreRay() || spp_ == 1;
-    const bool whole = req.x0 + req.blockW <= width_ && req.y0 + req.blockH <= height_;
-    // Whole blocks of pixel centres, in the frame loop's shapes: loops with constant trips.
-    if (centres && whole) {
-      if (req.blockW == 4 && req.blockH == 4) return generateCentres<4, 4>(req, out, valid);
-      if (req.blockW == 4 && req.blockH == 2) return generateCentres<4, 2>(req, out, valid);
-      if (req.blockW == 2 && req.blockH == 2) return generateCentres<2, 2>(req, out, valid);
-    }
+    if (centres && generateCentres(req, out, valid)) return;
     for (int k = 0; k < req.lanes(); ++k) {
       const LanePixel px = req.pixel(k);
       const bool inImage = px.inImage(width_, height_);
       glm::dvec3 dir;
       bool hasRay;
-      if (centres && inImage) {  // the table holds exactly what rayAt computes here
+      if (centres && inImage && table_) {  // the table holds exactly what rayAt computes here
         hasRay = table_->valid(px.row, px.column);
         dir = worldDirection(table_->at(px.row, px.column));  // (0, 0, 1) where there is no ray
       } else {
@@ -239,60 +314,40 @@ class CalibratedCamera final : public CameraBase {
     c.lens = lp;
     c.extra.emplace_back("valid_region", lens.validRegion().text(lens.info().fisheye));
     c.extra.emplace_back("valid_pixels",
-                         cat(table_->validCount(), " of ", size_t(width_) * size_t(height_)));
+                         cat(validPixels(), " of ", size_t(width_) * size_t(height_)));
   }
 
  private:
   /// The world direction of camera-space direction d (OpenCV axes): d.x·U − d.y·V − d.z·W,
-  /// normalised with one reciprocal (generateCentres computes the same, term by term).
+  /// normalised with one reciprocal (worldDirectionLane computes the same, term by term).
   glm::dvec3 worldDirection(const glm::dvec3& d) const {
     const glm::dvec3 g = (d.x * frame_.u - d.y * frame_.v) - d.z * frame_.w;
     const double inv = 1.0 / std::sqrt((g.x * g.x + g.y * g.y) + g.z * g.z);
     return g * inv;
   }
 
-  /// A whole kBW x kBH block of pixel centres from the table (bit-identical to the generic
-  /// loop: the same operations in the same order).
-  template <int kBW, int kBH>
-  void generateCentres(const PacketRequest& req, RayLanes& out, int* valid) const {
-    constexpr int kLanes = kBW * kBH;
-    // Gather the block's table entries ((0, 0, 1) where there is no ray), then one flat loop
-    // of constant trip count that vectorises: worldDirection term by term.
-    alignas(64) double cx[kLanes], cy[kLanes], cz[kLanes];
-    const double *tx = table_->x(), *ty = table_->y(), *tz = table_->z();
-    const unsigned char* tv = table_->validity();
+  /// Pixel centres in the frame loop's block shapes: the closed-form kernel of an undistorted
+  /// pinhole, else the table kernel for blocks inside the image on the table's grid. False
+  /// for the requests neither takes (the generic loop then fills them).
+  bool generateCentres(const PacketRequest& req, RayLanes& out, int* valid) const {
+    const CalibratedFrame f{frame_.u, frame_.v, frame_.w, renderEyeD_, width_, height_};
+    if (pinhole_)
+      return withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
+        constexpr int kBW = decltype(bw)::value, kBH = decltype(bh)::value;
+        pinholeCentres<kBW, kBH>(f, *pinhole_, req.x0, req.y0, out, valid);
+      });
     constexpr int kB = DirectionTable::kBlock;
-    if (kBW == kB && req.x0 % kB == 0 && req.y0 % kB + kBH <= kB) {
-      // The packet is whole rows of one table block: kLanes contiguous entries.
-      const size_t t0 = table_->index(req.y0, req.x0);
-      for (int k = 0; k < kLanes; ++k) {
-        cx[k] = tx[t0 + size_t(k)];
-        cy[k] = ty[t0 + size_t(k)];
-        cz[k] = tz[t0 + size_t(k)];
-        valid[k] = tv[t0 + size_t(k)] ? -1 : 0;
-      }
-    } else {
-      for (int k = 0; k < kLanes; ++k) {
-        const LanePixel px = lanePixel(req.x0, req.y0, kBW, k);
-        const size_t t = table_->index(px.row, px.column);
-        cx[k] = tx[t];
-        cy[k] = ty[t];
-        cz[k] = tz[t];
-        valid[k] = tv[t] ? -1 : 0;
-      }
-    }
-    const glm::dvec3 U = frame_.u, V = frame_.v, W = frame_.w;
-    alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
-    for (int k = 0; k < kLanes; ++k) {
-      const double gx = (cx[k] * U.x - cy[k] * V.x) - cz[k] * W.x;
-      const double gy = (cx[k] * U.y - cy[k] * V.y) - cz[k] * W.y;
-      const double gz = (cx[k] * U.z - cy[k] * V.z) - cz[k] * W.z;
-      const double inv = 1.0 / std::sqrt((gx * gx + gy * gy) + gz * gz);
-      dx[k] = float(gx * inv);
-      dy[k] = float(gy * inv);
-      dz[k] = float(gz * inv);
-    }
-    writeBlockLanes<kLanes>(out, renderEyeD_, dx, dy, dz);
+    const bool whole = req.x0 + req.blockW <= width_ && req.y0 + req.blockH <= height_;
+    if (!whole || req.x0 % kB + req.blockW > kB) return false;
+    return withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
+      constexpr int kBW = decltype(bw)::value, kBH = decltype(bh)::value;
+      tableCentres<kBW, kBH>(f, *table_, req.x0, req.y0, out, valid);
+    });
+  }
+
+  /// Pixels with a ray: every pixel of an undistorted pinhole (its inverse refuses none).
+  size_t validPixels() const {
+    return table_ ? table_->validCount() : size_t(width_) * size_t(height_);
   }
 
   bool rayAt(double x, double y, glm::dvec3& dir) const {
@@ -302,6 +357,8 @@ class CalibratedCamera final : public CameraBase {
   }
 
   CalibratedSensor sensor_;
+  /// The undistorted pinhole in closed form, or else the table of the distorted lens.
+  std::optional<PinholeLens> pinhole_;
   std::shared_ptr<const DirectionTable> table_;
 };
 

@@ -7,14 +7,51 @@
 //   dir = cos(lat)·sin(lon)·U + sin(lat)·V − cos(lat)·cos(lon)·W
 // so (lon, lat) = (0, 0) looks along −W, lon = +90° along +U, lat = +90° along +V. Origin e.
 #include <cmath>
+#include <vector>
 
 #include "cameras/models.h"
 #include "core/error.h"
 #include "core/units.h"
+#include "core/vector_kernel.h"
 
 namespace aperture {
 
 namespace {
+
+/// What the pixel-centre kernel needs: the camera's sines and cosines of the centres'
+/// longitudes (per column) and latitudes (per row), the frame and the image size.
+struct EquirectCentres {
+  const double *sinLon, *cosLon, *sinLat, *cosLat;
+  glm::dvec3 u, v, w;
+  int width, height;
+};
+
+/// A kBW x kBH block of rays through pixel centres, rayAt() term by term from the tabulated
+/// sines and cosines (the same libm calls on the same arguments, made once per column and
+/// row by the camera): g = (cos lat·sin lon)·U + sin lat·V − (cos lat·cos lon)·W, g / |g|.
+template <int kBW, int kBH>
+APERTURE_VECTOR_KERNEL void equirectCentres(const EquirectCentres& c, const glm::dvec3& eye, int x0,
+                                            int y0, RayLanes& out, int* valid) {
+  constexpr int kLanes = kBW * kBH;
+  alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
+  // Block rows of kBW lanes (lanePixel's order): the inner loop reads the columns' sines and
+  // cosines as contiguous runs.
+  for (int row = 0; row < kBH; ++row)
+    for (int col = 0; col < kBW; ++col) {
+      const int k = row * kBW + col;
+      const double cosLat = c.cosLat[y0 + row], sinLat = c.sinLat[y0 + row];
+      const double a = cosLat * c.sinLon[x0 + col], b = cosLat * c.cosLon[x0 + col];
+      const double gx = (a * c.u.x + sinLat * c.v.x) - b * c.w.x;
+      const double gy = (a * c.u.y + sinLat * c.v.y) - b * c.w.y;
+      const double gz = (a * c.u.z + sinLat * c.v.z) - b * c.w.z;
+      const double length = std::sqrt((gx * gx + gy * gy) + gz * gz);
+      dx[k] = float(gx / length);
+      dy[k] = float(gy / length);
+      dz[k] = float(gz / length);
+    }
+  writeBlockLanesFromOrigin<kLanes>(out, eye, dx, dy, dz);
+  writeBlockInImage<kBW, kBH>(x0, y0, c.width, c.height, valid);
+}
 
 class EquirectCamera final : public PacketCamera<EquirectCamera> {
  public:
@@ -32,6 +69,35 @@ class EquirectCamera final : public PacketCamera<EquirectCamera> {
     lonPerPixel_ = (lon.y - lon.x) * kRadPerDeg / width_;
     lat1_ = lat.y * kRadPerDeg;
     latPerPixel_ = (lat.y - lat.x) * kRadPerDeg / height_;
+    // The pixel centres' sines and cosines, as rayAt() computes them; the tables run past the
+    // right and bottom edges by a block, for the lanes of blocks that cross them.
+    constexpr int kPast = 3;
+    for (int j = 0; j < width_ + kPast; ++j) {
+      const double lonJ = lon0_ + (double(j) + 0.5) * lonPerPixel_;
+      sinLon_.push_back(std::sin(lonJ));
+      cosLon_.push_back(std::cos(lonJ));
+    }
+    for (int i = 0; i < height_ + kPast; ++i) {
+      const double latI = lat1_ - (double(i) + 0.5) * latPerPixel_;
+      sinLat_.push_back(std::sin(latI));
+      cosLat_.push_back(std::cos(latI));
+    }
+  }
+
+  /// Rays through pixel centres (every sample at 1 spp, the centre ray at any spp) in the
+  /// frame loop's block shapes take the tabulated kernel; everything else the packet loop.
+  void generate(const PacketRequest& req, RayLanes& out, int* valid) const override {
+    if (spp_ == 1 || req.centreRay()) {
+      const EquirectCentres c{sinLon_.data(), cosLon_.data(), sinLat_.data(),
+                              cosLat_.data(), frame_.u,       frame_.v,
+                              frame_.w,       width_,         height_};
+      const bool done = withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
+        constexpr int kBW = decltype(bw)::value, kBH = decltype(bh)::value;
+        equirectCentres<kBW, kBH>(c, renderEyeD_, req.x0, req.y0, out, valid);
+      });
+      if (done) return;
+    }
+    PacketCamera::generate(req, out, valid);
   }
 
   bool usesLens() const { return false; }
@@ -73,6 +139,8 @@ class EquirectCamera final : public PacketCamera<EquirectCamera> {
 
  private:
   double lon0_ = 0, lonPerPixel_ = 0, lat1_ = 0, latPerPixel_ = 0;  // radians
+  /// sin and cos of the longitude of column j's centre and of the latitude of row i's centre
+  std::vector<double> sinLon_, cosLon_, sinLat_, cosLat_;
 };
 
 const ParamSpec kLon{"lon",     ParamKind::Vec2,

@@ -9,14 +9,86 @@
 //   dir = sin(theta)·(a/rho·U + b/rho·V) − cos(theta)·W   (−W at rho = 0)
 // Origin e. Image right is +U, image up is +V.
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 #include "cameras/models.h"
 #include "core/error.h"
+#include "core/parallel.h"
 #include "core/units.h"
+#include "core/vector_kernel.h"
 
 namespace aperture {
 
 namespace {
+
+/// The trigonometry of the pixel centres, which does not separate into rows and columns (θ
+/// grows with ρ = √(a² + b²)), tabulated over one quadrant of the image: the centres of
+/// columns j and W − 1 − j lie at exactly opposite a (x − cx is a multiple of ½, so exact,
+/// and negated), likewise rows and b, so mirrored pixels share ρ, sin θ / ρ and cos θ bit
+/// for bit. Entry (qi, qj) holds pixel (H/2 + qi, W/2 + qj)'s values (integer halves); pixel
+/// (i, j) reads entry (|2i + 1 − H| / 2, |2j + 1 − W| / 2). 17 bytes per entry, a quarter of
+/// the pixels: 8.9 MB for 1920 x 1080, where a per-pixel table would take 35 MB.
+struct FisheyeQuadrant {
+  enum Kind : uint8_t { kNoRay = 0, kRay = 1, kAxis = 2 };  ///< ρ > 1, 0 < ρ <= 1, ρ = 0
+  int columns = 0, rows = 0;                                ///< entries per row, rows
+  std::vector<double> sinOverRho, cosTheta;  ///< sin θ / ρ and cos θ (0 and 1 where no ray)
+  std::vector<uint8_t> kind;
+};
+
+/// What the pixel-centre kernel needs of the camera.
+struct FisheyeCentres {
+  const FisheyeQuadrant& quadrant;
+  double cx, cy, radius;
+  glm::dvec3 u, v, w, eye;
+  glm::vec3 axis;  ///< −W rounded: the direction of the centre pixel and of pixels without a ray
+  int width, height;
+};
+
+/// A kBW x kBH block of rays through pixel centres, FisheyeCamera::rayAt term by term: a and b
+/// once per column and row, sin θ / ρ and cos θ from the quadrant table, then
+/// g = (s·a)·U + (s·b)·V − cos θ·W and g / |g|; −W where ρ = 0 or there is no ray.
+template <int kBW, int kBH>
+APERTURE_VECTOR_KERNEL void fisheyeCentres(const FisheyeCentres& c, int x0, int y0, RayLanes& out,
+                                           int* valid) {
+  constexpr int kLanes = kBW * kBH;
+  double as[kBW], bs[kBH];
+  int qjs[kBW], qis[kBH];
+  for (int col = 0; col < kBW; ++col) {
+    as[col] = (((double(x0) + double(col)) + 0.5) - c.cx) / c.radius;
+    const int twice = 2 * (x0 + col) + 1 - c.width;
+    qjs[col] = (twice < 0 ? -twice : twice) / 2;
+  }
+  for (int row = 0; row < kBH; ++row) {
+    bs[row] = (c.cy - ((double(y0) + double(row)) + 0.5)) / c.radius;
+    const int twice = 2 * (y0 + row) + 1 - c.height;
+    qis[row] = (twice < 0 ? -twice : twice) / 2;
+  }
+  const double* sinOverRho = c.quadrant.sinOverRho.data();
+  const double* cosTheta = c.quadrant.cosTheta.data();
+  const uint8_t* kind = c.quadrant.kind.data();
+  alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
+  // Block rows of kBW lanes (lanePixel's order), so the inner loop reads as[] in order.
+  for (int row = 0; row < kBH; ++row)
+    for (int col = 0; col < kBW; ++col) {
+      const int k = row * kBW + col;
+      const double a = as[col], b = bs[row];
+      const size_t q = size_t(qis[row]) * size_t(c.quadrant.columns) + size_t(qjs[col]);
+      const double s = sinOverRho[q], cosT = cosTheta[q];
+      const double sa = s * a, sb = s * b;
+      const double gx = (sa * c.u.x + sb * c.v.x) - cosT * c.w.x;
+      const double gy = (sa * c.u.y + sb * c.v.y) - cosT * c.w.y;
+      const double gz = (sa * c.u.z + sb * c.v.z) - cosT * c.w.z;
+      const double length = std::sqrt((gx * gx + gy * gy) + gz * gz);
+      const bool ray = kind[q] == FisheyeQuadrant::kRay;
+      dx[k] = ray ? float(gx / length) : c.axis.x;
+      dy[k] = ray ? float(gy / length) : c.axis.y;
+      dz[k] = ray ? float(gz / length) : c.axis.z;
+      const LanePixel px = lanePixel(x0, y0, kBW, k);
+      valid[k] = (kind[q] != FisheyeQuadrant::kNoRay && px.inImage(c.width, c.height)) ? -1 : 0;
+    }
+  writeBlockLanesFromOrigin<kLanes>(out, c.eye, dx, dy, dz);
+}
 
 class FisheyeCamera final : public PacketCamera<FisheyeCamera> {
  public:
@@ -27,6 +99,24 @@ class FisheyeCamera final : public PacketCamera<FisheyeCamera> {
     radius_ = 0.5 * std::min(width_, height_);
     cx_ = 0.5 * width_;
     cy_ = 0.5 * height_;
+    buildQuadrant();
+  }
+
+  /// Rays through pixel centres (every sample at 1 spp, the centre ray at any spp) in the
+  /// frame loop's block shapes take the quadrant-table kernel; everything else the packet loop.
+  void generate(const PacketRequest& req, RayLanes& out, int* valid) const override {
+    if (spp_ == 1 || req.centreRay()) {
+      const FisheyeCentres c{quadrant_, cx_,         cy_,
+                             radius_,   frame_.u,    frame_.v,
+                             frame_.w,  renderEyeD_, glm::vec3(-frame_.w),
+                             width_,    height_};
+      const bool done = withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
+        constexpr int kBW = decltype(bw)::value, kBH = decltype(bh)::value;
+        fisheyeCentres<kBW, kBH>(c, req.x0, req.y0, out, valid);
+      });
+      if (done) return;
+    }
+    PacketCamera::generate(req, out, valid);
   }
 
   bool usesLens() const { return false; }
@@ -71,7 +161,39 @@ class FisheyeCamera final : public PacketCamera<FisheyeCamera> {
   }
 
  private:
+  /// Fills quadrant_ with rayAt's ρ, sin θ / ρ and cos θ, with entries past the image's right
+  /// and bottom edges for the lanes of blocks that cross them.
+  void buildQuadrant() {
+    // A lane at most 3 pixels past the edge, column W + 2, reads entry |2(W + 2) + 1 − W| / 2.
+    FisheyeQuadrant& q = quadrant_;
+    q.columns = (width_ + 5) / 2 + 1;
+    q.rows = (height_ + 5) / 2 + 1;
+    const size_t n = size_t(q.columns) * size_t(q.rows);
+    q.sinOverRho.assign(n, 0.0);
+    q.cosTheta.assign(n, 1.0);
+    q.kind.assign(n, FisheyeQuadrant::kNoRay);
+    parallelFor(size_t(q.rows), 16, [&](size_t rowBegin, size_t rowEnd) {
+      for (size_t qi = rowBegin; qi < rowEnd; ++qi)
+        for (int qj = 0; qj < q.columns; ++qj) {
+          const double x = double(width_ / 2 + qj) + 0.5, y = double(height_ / 2 + int(qi)) + 0.5;
+          const double a = (x - cx_) / radius_, b = (cy_ - y) / radius_;
+          const double rho = std::sqrt(a * a + b * b);
+          const size_t k = qi * size_t(q.columns) + size_t(qj);
+          if (rho > 1.0) continue;
+          if (rho == 0.0) {
+            q.kind[k] = FisheyeQuadrant::kAxis;
+            continue;
+          }
+          const double theta = rho * halfFov_;
+          q.sinOverRho[k] = std::sin(theta) / rho;
+          q.cosTheta[k] = std::cos(theta);
+          q.kind[k] = FisheyeQuadrant::kRay;
+        }
+    });
+  }
+
   double halfFov_ = 0, radius_ = 1, cx_ = 0, cy_ = 0;
+  FisheyeQuadrant quadrant_;
 };
 
 const ParamSpec kFisheyeFov{"fisheye_fov",

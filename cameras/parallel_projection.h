@@ -23,6 +23,11 @@ class ParallelCamera final : public PacketCamera<ParallelCamera> {
     return true;
   }
 
+  /// Rays through pixel centres (every sample at 1 spp, the centre ray at any spp) in the
+  /// frame loop's block shapes take a vector kernel that computes exactly rayAt()'s
+  /// expressions; everything else the shared packet loop.
+  void generate(const PacketRequest& req, RayLanes& out, int* valid) const override;
+
   std::optional<glm::dvec2> project(const glm::dvec3& worldPoint) const override;
   ViewVolume viewVolume(double nearDist, double farDist) const override;
   const glm::dvec3& direction() const { return dir_; }

@@ -49,6 +49,13 @@ void PerspectiveCamera::generateUnclipped(const PacketRequest& req, RayLanes& ou
     if (req.blockW == 2 && req.blockH == 2) return generatePinholeCentres<2, 2>(req, out, valid);
     if (req.blockW == 1 && req.blockH == 1) return generatePinholeCentres<1, 1>(req, out, valid);
   }
+  // Thin-lens rays through pixel centres and the lens centre: thinlens.cpp's kernel.
+  if (lensRadius_ > 0 && (spp_ == 1 || req.centreRay())) {
+    const glm::dvec3 lens = lensRadius_ * (0.0 * frame_.u + 0.0 * frame_.v);  // rayAt's L
+    const ThinLensCentres c{window(),    frame_.u, frame_.v,          d_ * frame_.w,
+                            focusOverD_, lens,     renderEyeD_ + lens};
+    if (generateThinLensCentres(c, req, out, valid)) return;
+  }
   PacketCamera::generate(req, out, valid);
 }
 

@@ -5,10 +5,38 @@
 #include "cameras/models.h"
 #include "cameras/perspective.h"
 #include "core/error.h"
+#include "core/vector_kernel.h"
 
 namespace aperture {
 
 namespace {
+
+/// The kernel of generateThinLensCentres for a kBW x kBH block. u depends on the column only
+/// and v on the row only: kBW + kBH divides for them per block.
+template <int kBW, int kBH>
+APERTURE_VECTOR_KERNEL void thinLensCentres(const ThinLensCentres& c, int x0, int y0, RayLanes& out,
+                                            int* valid) {
+  constexpr int kLanes = kBW * kBH;
+  double us[kBW], vs[kBH];
+  for (int col = 0; col < kBW; ++col) us[col] = c.window.u((double(x0) + double(col)) + 0.5);
+  for (int row = 0; row < kBH; ++row) vs[row] = c.window.v((double(y0) + double(row)) + 0.5);
+  alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
+  // Block rows of kBW lanes (lanePixel's order), so the inner loop reads us[] in order.
+  for (int row = 0; row < kBH; ++row)
+    for (int col = 0; col < kBW; ++col) {
+      const int k = row * kBW + col;
+      const double u = us[col], v = vs[row];
+      const double tx = ((u * c.u.x + v * c.v.x) - c.dW.x) * c.focusOverD - c.lens.x;
+      const double ty = ((u * c.u.y + v * c.v.y) - c.dW.y) * c.focusOverD - c.lens.y;
+      const double tz = ((u * c.u.z + v * c.v.z) - c.dW.z) * c.focusOverD - c.lens.z;
+      const double length = std::sqrt((tx * tx + ty * ty) + tz * tz);
+      dx[k] = float(tx / length);
+      dy[k] = float(ty / length);
+      dz[k] = float(tz / length);
+    }
+  writeBlockLanesFromOrigin<kLanes>(out, c.origin, dx, dy, dz);
+  writeBlockInImage<kBW, kBH>(x0, y0, c.window.width, c.window.height, valid);
+}
 
 const ParamSpec kAperture{"aperture",
                           ParamKind::Number,
@@ -38,6 +66,14 @@ std::unique_ptr<CameraBase> makeThinLensCamera(const CameraParams& p,
 }
 
 }  // namespace
+
+bool generateThinLensCentres(const ThinLensCentres& c, const PacketRequest& req, RayLanes& out,
+                             int* valid) {
+  return withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
+    constexpr int kBW = decltype(bw)::value, kBH = decltype(bh)::value;
+    thinLensCentres<kBW, kBH>(c, req.x0, req.y0, out, valid);
+  });
+}
 
 const CameraModel& thinLensModel() {
   static const CameraModel m{"thinlens",

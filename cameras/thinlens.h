@@ -1,6 +1,11 @@
 #pragma once
-// Thin-lens helpers: lens points on the aperture disk.
+// Thin-lens helpers: lens points on the aperture disk, and the rays through pixel centres and
+// the lens centre.
 #include <cmath>
+#include <glm/glm.hpp>
+
+#include "cameras/image_window.h"
+#include "core/camera.h"
 
 namespace aperture {
 
@@ -27,5 +32,23 @@ inline void concentricDisk(double sx, double sy, double& diskX, double& diskY) {
   diskX = r * std::cos(phi);
   diskY = r * std::sin(phi);
 }
+
+/// What the thin lens's pixel-centre kernel needs of the camera (PerspectiveCamera with a lens
+/// radius r > 0): at the lens centre (lens sample (½, ½), every sample at 1 spp and the centre
+/// ray at any spp) the lens point is L = r·(0·U + 0·V), a constant (±0 per component).
+struct ThinLensCentres {
+  ImageWindow window;
+  glm::dvec3 u, v, dW;  ///< U, V and d·W
+  double focusOverD;    ///< f / d
+  glm::dvec3 lens;      ///< L at the lens centre
+  glm::dvec3 origin;    ///< render-space e + L
+};
+
+/// Fills a block of thin-lens rays through pixel centres and the lens centre with
+/// PerspectiveCamera::rayAt's expressions term by term (toFocus = (f/d)·pinhole − L,
+/// toFocus / |toFocus|), as a vector kernel, with valid −1 inside the width x height image and
+/// 0 past it. False, filling nothing, for block shapes other than the frame loop's.
+bool generateThinLensCentres(const ThinLensCentres& c, const PacketRequest& req, RayLanes& out,
+                             int* valid);
 
 }  // namespace aperture
