@@ -136,42 +136,6 @@ inline void setLane(RayLanes& out, int k, const glm::dvec3& org, const glm::dvec
   out.flags[k] = 0;
 }
 
-/// Writes the kLanes lanes of a block of rays from one origin (double, rounded once) with
-/// directions already rounded to float, and the fixed fields as setLane. The fast paths of
-/// the perspective and calibrated cameras share it.
-template <int kLanes>
-inline void writeBlockLanes(RayLanes& out, const glm::dvec3& org, const float* dx, const float* dy,
-                            const float* dz) {
-  // Each lane array is filled whole by a fixed-size copy: GCC does not vectorise one loop over
-  // twelve output streams (pointer spills, scalar stores), but a 4 kLanes-byte memcpy is a few
-  // vector moves.
-  const float ex = float(org.x), ey = float(org.y), ez = float(org.z);
-  const float inf = std::numeric_limits<float>::infinity();
-  alignas(64) float fill[kLanes];
-  alignas(64) unsigned word[kLanes];
-  constexpr size_t kBytes = sizeof(float) * kLanes;
-  std::memcpy(out.dirX, dx, kBytes);
-  std::memcpy(out.dirY, dy, kBytes);
-  std::memcpy(out.dirZ, dz, kBytes);
-  for (float& f : fill) f = ex;
-  std::memcpy(out.orgX, fill, kBytes);
-  for (float& f : fill) f = ey;
-  std::memcpy(out.orgY, fill, kBytes);
-  for (float& f : fill) f = ez;
-  std::memcpy(out.orgZ, fill, kBytes);
-  for (float& f : fill) f = inf;
-  std::memcpy(out.tfar, fill, kBytes);
-  for (float& f : fill) f = 0.0f;
-  std::memcpy(out.tnear, fill, kBytes);
-  std::memcpy(out.time, fill, kBytes);
-  for (unsigned& w : word) w = 0;
-  std::memcpy(out.flags, word, kBytes);
-  for (unsigned& w : word) w = 0xFFFFFFFFu;
-  std::memcpy(out.mask, word, kBytes);
-  for (int k = 0; k < kLanes; ++k) word[k] = unsigned(k);
-  std::memcpy(out.id, word, kBytes);
-}
-
 /// The packet loop, shared by every model: Derived provides an inline
 /// `bool rayAt(x, y, lensX, lensY, org, dir) const` and `bool usesLens() const`. generate()
 /// and the scalar ray() both call rayAt, so packets equal the scalar path exactly.
@@ -243,7 +207,8 @@ inline void writeBlockLanesWithOrigins(RayLanes& out, const float* ox, const flo
                           out.tfar, out.time, out.mask, out.id, out.flags, ox, oy, oz, dx, dy, dz);
 }
 
-/// writeBlockLanesWithOrigins for rays from one origin (double, rounded once).
+/// writeBlockLanesWithOrigins for rays from one origin (double, rounded once): the kernels of
+/// the perspective, thin-lens, panorama and calibrated cameras.
 template <int kLanes>
 inline void writeBlockLanesFromOrigin(RayLanes& out, const glm::dvec3& org, const float* dx,
                                       const float* dy, const float* dz) {

@@ -34,47 +34,6 @@ PerspectiveCamera::PerspectiveCamera(const CameraParams& p, const glm::dvec3& re
                     ": needs 0 <= near < far, both finite (planar depths, scene units)"));
 }
 
-void PerspectiveCamera::generate(const PacketRequest& req, RayLanes& out, int* valid) const {
-  generateUnclipped(req, out, valid);
-  if (clip_) clipLanes(out, req.lanes());
-}
-
-void PerspectiveCamera::generateUnclipped(const PacketRequest& req, RayLanes& out,
-                                          int* valid) const {
-  // Pinhole rays through pixel centres: every sample at spp 1, the centre ray at any spp.
-  if (pinholeCentres_ || (req.centreRay() && lensRadius_ == 0)) {
-    // The frame loop's block shapes get loops with constant trip counts.
-    if (req.blockW == 4 && req.blockH == 4) return generatePinholeCentres<4, 4>(req, out, valid);
-    if (req.blockW == 4 && req.blockH == 2) return generatePinholeCentres<4, 2>(req, out, valid);
-    if (req.blockW == 2 && req.blockH == 2) return generatePinholeCentres<2, 2>(req, out, valid);
-    if (req.blockW == 1 && req.blockH == 1) return generatePinholeCentres<1, 1>(req, out, valid);
-  }
-  // Thin-lens rays through pixel centres and the lens centre: thinlens.cpp's kernel.
-  if (lensRadius_ > 0 && (spp_ == 1 || req.centreRay())) {
-    const glm::dvec3 lens = lensRadius_ * (0.0 * frame_.u + 0.0 * frame_.v);  // rayAt's L
-    const ThinLensCentres c{window(),    frame_.u, frame_.v,          d_ * frame_.w,
-                            focusOverD_, lens,     renderEyeD_ + lens};
-    if (generateThinLensCentres(c, req, out, valid)) return;
-  }
-  PacketCamera::generate(req, out, valid);
-}
-
-void PerspectiveCamera::clipLanes(RayLanes& out, int lanes) const {
-  // Every origin lies on the plane through e perpendicular to the axis (the eye, or a lens
-  // point), so a ray reaches depth z at t = z / cos, cos its direction's cosine with the axis:
-  // the clip planes are planes of constant depth, as Blender's clip_start and clip_end. The
-  // cosine is taken of the float direction Embree traces. Perspective and thin-lens rays
-  // always point forwards (cos > 0); the floor only keeps invalid lanes finite.
-  const glm::dvec3 axis = -frame_.w;
-  for (int k = 0; k < lanes; ++k) {
-    const double cosine =
-        double(out.dirX[k]) * axis.x + double(out.dirY[k]) * axis.y + double(out.dirZ[k]) * axis.z;
-    const double c = std::max(cosine, 1e-9);
-    out.tnear[k] = float(clip_->x / c);
-    out.tfar[k] = float(clip_->y / c);
-  }
-}
-
 namespace {
 
 /// What the pinhole kernel reads: the frame and the pixel-centre plane coordinates, all
@@ -109,19 +68,53 @@ APERTURE_VECTOR_KERNEL void pinholeCentreRays(const PinholeKernelInput& in, int 
     dy[k] = float(py * invLen);
     dz[k] = float(pz * invLen);
   }
-  writeBlockLanes<kLanes>(out, in.eye, dx, dy, dz);
-  const int width = in.width, height = in.height;
-  for (int k = 0; k < kLanes; ++k) valid[k] = laneInImage(x0, y0, kBW, k, width, height) ? -1 : 0;
+  writeBlockLanesFromOrigin<kLanes>(out, in.eye, dx, dy, dz);
+  writeBlockInImage<kBW, kBH>(x0, y0, in.width, in.height, valid);
 }
 
 }  // namespace
 
-template <int kBW, int kBH>
-void PerspectiveCamera::generatePinholeCentres(const PacketRequest& req, RayLanes& out,
-                                               int* valid) const {
-  const PinholeKernelInput in{centreU_.data(), centreV_.data(), frame_.u, frame_.v,
-                              d_ * frame_.w,   renderEyeD_,     width_,   height_};
-  pinholeCentreRays<kBW, kBH>(in, req.x0, req.y0, out, valid);
+void PerspectiveCamera::generate(const PacketRequest& req, RayLanes& out, int* valid) const {
+  generateUnclipped(req, out, valid);
+  if (clip_) clipLanes(out, req.lanes());
+}
+
+void PerspectiveCamera::generateUnclipped(const PacketRequest& req, RayLanes& out,
+                                          int* valid) const {
+  // Pinhole rays through pixel centres: every sample at spp 1, the centre ray at any spp.
+  if (pinholeCentres_ || (req.centreRay() && lensRadius_ == 0)) {
+    const PinholeKernelInput in{centreU_.data(), centreV_.data(), frame_.u, frame_.v,
+                                d_ * frame_.w,   renderEyeD_,     width_,   height_};
+    const bool done = withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
+      pinholeCentreRays<decltype(bw)::value, decltype(bh)::value>(in, req.x0, req.y0, out, valid);
+    });
+    if (done) return;
+  }
+  // Thin-lens rays through pixel centres and the lens centre: thinlens.cpp's kernel.
+  if (lensRadius_ > 0 && (spp_ == 1 || req.centreRay())) {
+    const glm::dvec3 lens = lensRadius_ * (0.0 * frame_.u + 0.0 * frame_.v);  // rayAt's L
+    const ThinLensCentres c{
+        centreU_.data(), centreV_.data(), width_,      height_, frame_.u,
+        frame_.v,        d_ * frame_.w,   focusOverD_, lens,    renderEyeD_ + lens};
+    if (generateThinLensCentres(c, req, out, valid)) return;
+  }
+  PacketCamera::generate(req, out, valid);
+}
+
+void PerspectiveCamera::clipLanes(RayLanes& out, int lanes) const {
+  // Every origin lies on the plane through e perpendicular to the axis (the eye, or a lens
+  // point), so a ray reaches depth z at t = z / cos, cos its direction's cosine with the axis:
+  // the clip planes are planes of constant depth, as Blender's clip_start and clip_end. The
+  // cosine is taken of the float direction Embree traces. Perspective and thin-lens rays
+  // always point forwards (cos > 0); the floor only keeps invalid lanes finite.
+  const glm::dvec3 axis = -frame_.w;
+  for (int k = 0; k < lanes; ++k) {
+    const double cosine =
+        double(out.dirX[k]) * axis.x + double(out.dirY[k]) * axis.y + double(out.dirZ[k]) * axis.z;
+    const double c = std::max(cosine, 1e-9);
+    out.tnear[k] = float(clip_->x / c);
+    out.tfar[k] = float(clip_->y / c);
+  }
 }
 
 std::optional<glm::dvec2> PerspectiveCamera::project(const glm::dvec3& worldPoint) const {

@@ -34,7 +34,7 @@ class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
       dir = toFocus / glm::length(toFocus);
     } else {
       org = renderEyeD_;
-      // One reciprocal, three products (as generatePinholeCentres, which must match it).
+      // One reciprocal, three products (as pinholeCentreRays, which must match it).
       dir = pinhole * (1.0 / std::sqrt((pinhole.x * pinhole.x + pinhole.y * pinhole.y) +
                                        pinhole.z * pinhole.z));
     }
@@ -60,8 +60,6 @@ class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
 
  private:
   void generateUnclipped(const PacketRequest& req, RayLanes& out, int* valid) const;
-  template <int kBW, int kBH>
-  void generatePinholeCentres(const PacketRequest& req, RayLanes& out, int* valid) const;
   /// Sets tnear and tfar of lanes [0, lanes) from the clip depths.
   void clipLanes(RayLanes& out, int lanes) const;
 
@@ -70,7 +68,7 @@ class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
   /// 1 spp without a lens: rays through pixel centres, the vectorised path.
   bool pinholeCentres_ = false;
   /// u of every column's centre and v of every row's centre (ImageWindow, in double): the
-  /// pinhole kernel's per-ray divides, done once per camera.
+  /// pinhole and thin-lens kernels' per-ray divides, done once per camera.
   std::vector<double> centreU_, centreV_;
 };
 

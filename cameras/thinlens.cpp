@@ -11,15 +11,14 @@ namespace aperture {
 
 namespace {
 
-/// The kernel of generateThinLensCentres for a kBW x kBH block. u depends on the column only
-/// and v on the row only: kBW + kBH divides for them per block.
+/// The kernel of generateThinLensCentres for a kBW x kBH block; u and v of the pixel centres
+/// come from the camera's tables (no per-ray divide for them).
 template <int kBW, int kBH>
 APERTURE_VECTOR_KERNEL void thinLensCentres(const ThinLensCentres& c, int x0, int y0, RayLanes& out,
                                             int* valid) {
   constexpr int kLanes = kBW * kBH;
-  double us[kBW], vs[kBH];
-  for (int col = 0; col < kBW; ++col) us[col] = c.window.u((double(x0) + double(col)) + 0.5);
-  for (int row = 0; row < kBH; ++row) vs[row] = c.window.v((double(y0) + double(row)) + 0.5);
+  const double* __restrict us = c.columnU + x0;
+  const double* __restrict vs = c.rowV + y0;
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
   // Block rows of kBW lanes (lanePixel's order), so the inner loop reads us[] in order.
   for (int row = 0; row < kBH; ++row)
@@ -35,7 +34,7 @@ APERTURE_VECTOR_KERNEL void thinLensCentres(const ThinLensCentres& c, int x0, in
       dz[k] = float(tz / length);
     }
   writeBlockLanesFromOrigin<kLanes>(out, c.origin, dx, dy, dz);
-  writeBlockInImage<kBW, kBH>(x0, y0, c.window.width, c.window.height, valid);
+  writeBlockInImage<kBW, kBH>(x0, y0, c.width, c.height, valid);
 }
 
 const ParamSpec kAperture{"aperture",

@@ -37,7 +37,9 @@ inline void concentricDisk(double sx, double sy, double& diskX, double& diskY) {
 /// radius r > 0): at the lens centre (lens sample (½, ½), every sample at 1 spp and the centre
 /// ray at any spp) the lens point is L = r·(0·U + 0·V), a constant (±0 per component).
 struct ThinLensCentres {
-  ImageWindow window;
+  const double* columnU;  ///< u of column j's centre (PerspectiveCamera's table)
+  const double* rowV;     ///< v of row i's centre
+  int width, height;
   glm::dvec3 u, v, dW;  ///< U, V and d·W
   double focusOverD;    ///< f / d
   glm::dvec3 lens;      ///< L at the lens centre
