@@ -353,6 +353,13 @@ void failSceneImages(BatchPlan& plan, const SceneImages& images, const std::stri
   }
 }
 
+/// After Ctrl-C: the scene's images not yet done are interrupted.
+void markInterrupted(BatchPlan& plan, const SceneImages& images) {
+  for (size_t i = images.first; i < images.last; ++i)
+    if (plan.results[i].status == ImageStatus::Pending)
+      plan.results[i].status = ImageStatus::Interrupted;
+}
+
 /// "camera_files": the COLMAP text model of every image of one scene whose EXR exists
 /// (rendered now or reused), in the scene's output directory's sparse/ (sparse.shard-K-of-N/
 /// for a shard); sparse.<scene>/ when scenes share their output directory.
@@ -397,8 +404,9 @@ void renderScenes(BatchPlan& plan, const BatchArgs& a, const Device& device, Bat
   for (const SceneImages& s : sceneImagesOf(plan))
     if (s.toRender) pending.push_back(s);
   std::optional<BatchClock::time_point> start;
+  // After Ctrl-C the scenes still to come are not loaded: their images are interrupted.
   const std::function<PipelinedScene(size_t)> load = [&](size_t k) {
-    return loadBatchScene(device, plan, pending[k], a.quiet);
+    return gInterrupted ? PipelinedScene() : loadBatchScene(device, plan, pending[k], a.quiet);
   };
   const std::function<void(size_t, PipelinedScene&)> render = [&](size_t k, PipelinedScene& s) {
     if (!start) start = BatchClock::now();
@@ -407,6 +415,7 @@ void renderScenes(BatchPlan& plan, const BatchArgs& a, const Device& device, Bat
       progress.startScene(images.scene + 1, plan.jobs.scenes.size(),
                           plan.jobs.scenes[images.scene].sceneName, images.toRender);
     SceneReport& report = run.scenes[images.scene];
+    if (gInterrupted) return markInterrupted(plan, images);
     if (!s.loaded) {
       report.error = s.error;
       failSceneImages(plan, images, s.error, progress);
