@@ -23,6 +23,17 @@ std::string hms(double seconds) {
 Progress::Progress(size_t total, bool quiet)
     : total_(total), quiet_(quiet), tty_(::isatty(STDERR_FILENO) == 1), start_(BatchClock::now()) {}
 
+void Progress::startScene(size_t k, size_t count, const std::string& name, size_t images) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  scene_ = "scene " + std::to_string(k) + "/" + std::to_string(count) + " ";
+  if (quiet_) return;
+  clearLine();
+  drawn_ = false;
+  std::fprintf(stderr, "aperture: scene %zu/%zu '%s': %zu images to render\n", k, count,
+               name.c_str(), images);
+  std::fflush(stderr);
+}
+
 void Progress::rendered(const ImageResult& r) {
   std::lock_guard<std::mutex> lock(mutex_);
   rays_ += r.rays;
@@ -41,16 +52,16 @@ void Progress::finished(const ImageResult& r) {
                  r.error.c_str());
   }
   if (tty_) {
-    std::fprintf(stderr, "\r\033[K[%zu/%zu images] %.1f Mrays/s  elapsed %s  ETA %s", done_, total_,
-                 mrays, hms(elapsed).c_str(), hms(eta).c_str());
+    std::fprintf(stderr, "\r\033[K[%s%zu/%zu images] %.1f Mrays/s  elapsed %s  ETA %s",
+                 scene_.c_str(), done_, total_, mrays, hms(elapsed).c_str(), hms(eta).c_str());
     drawn_ = true;
   } else if (r.status == ImageStatus::Ok) {
     std::fprintf(stderr,
-                 "aperture: [%zu/%zu images] %s -> %s (render %.3f s, %.1f Mrays/s; write %.3f s); "
-                 "elapsed %s, ETA %s\n",
-                 done_, total_, imageLabel(*r.image).c_str(), r.image->output.c_str(),
-                 r.renderSeconds, r.mrays(), r.writeSeconds, hms(elapsed).c_str(),
-                 hms(eta).c_str());
+                 "aperture: [%s%zu/%zu images] %s -> %s (render %.3f s, %.1f Mrays/s; write %.3f "
+                 "s); elapsed %s, ETA %s\n",
+                 scene_.c_str(), done_, total_, imageLabel(*r.image).c_str(),
+                 r.image->output.c_str(), r.renderSeconds, r.mrays(), r.writeSeconds,
+                 hms(elapsed).c_str(), hms(eta).c_str());
   }
   std::fflush(stderr);
 }

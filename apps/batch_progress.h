@@ -25,6 +25,9 @@ class Progress {
  public:
   Progress(size_t total, bool quiet);
 
+  /// Scene `k` (1-based) of `count` of a job with "scenes" starts rendering `images` images:
+  /// logged, and shown as "scene k/count" in the progress line until the next one.
+  void startScene(size_t k, size_t count, const std::string& name, size_t images);
   /// An image finished rendering (its rays count towards Mrays/s).
   void rendered(const ImageResult& r);
   /// An image is done (written or failed).
@@ -38,6 +41,7 @@ class Progress {
   std::mutex mutex_;
   size_t total_, done_ = 0;
   uint64_t rays_ = 0;
+  std::string scene_;  ///< "scene k/K " in a job with "scenes", else ""
   bool quiet_, tty_, drawn_ = false;
   BatchClock::time_point start_;
 };

@@ -13,7 +13,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-nlohmann::json imageEntry(const ImageResult& r) {
+nlohmann::json imageEntry(const BatchRun& run, const ImageResult& r) {
   const JobImage& image = *r.image;
   const glm::dvec3& eye = image.params.eye;
   nlohmann::json e = {{"index", image.index},
@@ -26,6 +26,7 @@ nlohmann::json imageEntry(const ImageResult& r) {
                       {"rays", r.rays},
                       {"mrays_per_s", r.mrays()},
                       {"eye", {eye.x, eye.y, eye.z}}};
+  if (run.jobFile->multiScene) e["scene"] = run.jobFile->scenes[image.scene].sceneName;
   if (!image.preview.empty()) e["preview"] = image.preview;
   e["files"] = image.files;
   if (!r.staleReason.empty()) e["stale"] = r.staleReason;
@@ -81,38 +82,74 @@ Totals totalsOf(const std::vector<ImageResult>& results) {
   return t;
 }
 
-nlohmann::json sceneSummary(const BatchRun& run) {
-  if (!run.scene->scene) {  // nothing to render: nothing loaded
-    std::vector<std::string> meshes;
-    for (const MeshPlacement& m : run.job->meshes) meshes.push_back(m.spec);
-    return {{"meshes", meshes}, {"bvh_builds", 0}};
-  }
-  const BuildStats& build = run.scene->scene->stats();
-  return {{"meshes", run.scene->names},
-          {"load_seconds", run.scene->loadSeconds},
+/// One scene's mesh and BVH figures (the top-level keys of a one-scene job's summary).
+nlohmann::json sceneFigures(const SceneReport& scene) {
+  if (!scene.loaded) return {{"meshes", scene.meshes}, {"bvh_builds", 0}};
+  return {{"meshes", scene.meshes},
+          {"load_seconds", scene.loadSeconds},
           {"bvh_builds", 1},
-          {"build_seconds", build.buildSeconds},
-          {"triangles", build.triangles},
-          {"unique_triangles", build.uniqueTriangles},
-          {"instances", run.scene->scene->instanceCount()},
-          {"embree_bytes", build.embreeBytes}};
+          {"build_seconds", scene.build.buildSeconds},
+          {"triangles", scene.build.triangles},
+          {"unique_triangles", scene.build.uniqueTriangles},
+          {"instances", scene.instances},
+          {"embree_bytes", scene.build.embreeBytes}};
 }
 
-void printTable(const std::vector<ImageResult>& results) {
+/// A job with "scenes": each scene's figures, and load, build and BVH counts summed.
+nlohmann::json scenesSummary(const BatchRun& run) {
+  nlohmann::json scenes = nlohmann::json::array();
+  size_t builds = 0;
+  double loadSeconds = 0, buildSeconds = 0;
+  for (const SceneReport& r : run.scenes) {
+    nlohmann::json s = sceneFigures(r);
+    s["name"] = r.name;
+    s["images"] = r.images;
+    if (!r.error.empty()) s["error"] = r.error;
+    scenes.push_back(s);
+    builds += r.loaded;
+    loadSeconds += r.loadSeconds;
+    buildSeconds += r.build.buildSeconds;
+  }
+  return {{"scene_count", run.scenes.size()},
+          {"bvh_builds", builds},
+          {"load_seconds", loadSeconds},
+          {"build_seconds", buildSeconds},
+          {"scenes", scenes}};
+}
+
+nlohmann::json sceneSummary(const BatchRun& run) {
+  return run.jobFile->multiScene ? scenesSummary(run) : sceneFigures(run.scenes.front());
+}
+
+/// "scene/camera" in a job with "scenes", else the camera's name.
+std::string tableName(const BatchRun& run, const JobImage& image) {
+  if (!run.jobFile->multiScene) return image.camera;
+  return run.jobFile->scenes[image.scene].sceneName + "/" + image.camera;
+}
+
+void printTable(const BatchRun& run, const std::vector<ImageResult>& results) {
   std::printf("%-20s %7s  %-11s %9s %8s %9s  %s\n", "camera", "frame", "status", "render s",
               "write s", "Mrays/s", "output");
   for (const ImageResult& r : results)
-    std::printf("%-20s %7d  %-11s %9.3f %8.3f %9.1f  %s\n", r.image->camera.c_str(), r.image->frame,
-                imageStatusName(r.status), r.renderSeconds, r.writeSeconds, r.mrays(),
-                r.image->output.c_str());
+    std::printf("%-20s %7d  %-11s %9.3f %8.3f %9.1f  %s\n", tableName(run, *r.image).c_str(),
+                r.image->frame, imageStatusName(r.status), r.renderSeconds, r.writeSeconds,
+                r.mrays(), r.image->output.c_str());
 }
 
 void printTotals(const BatchRun& run, const std::vector<ImageResult>& results) {
   const Totals t = totalsOf(results);
-  char bvh[64] = "nothing to render, nothing loaded";
-  if (run.scene->scene)
-    std::snprintf(bvh, sizeof bvh, "BVH built once in %.3f s",
-                  run.scene->scene->stats().buildSeconds);
+  char bvh[96] = "nothing to render, nothing loaded";
+  size_t builds = 0;
+  double buildSeconds = 0;
+  for (const SceneReport& s : run.scenes) {
+    builds += s.loaded;
+    buildSeconds += s.build.buildSeconds;
+  }
+  if (builds == 1)
+    std::snprintf(bvh, sizeof bvh, "BVH built once in %.3f s", buildSeconds);
+  else if (builds > 1)
+    std::snprintf(bvh, sizeof bvh, "%zu BVHs built in %.3f s, loads overlapping renders", builds,
+                  buildSeconds);
   std::printf(
       "%zu images ok, %zu failed, %zu skipped, %zu interrupted; %.3f s elapsed (render %.3f s, "
       "write %.3f s%s), %.1f Mrays/s; %s\n",
@@ -144,24 +181,40 @@ std::map<std::string, std::map<uint32_t, uint64_t>> idCountsOf(const Framebuffer
   return counts;
 }
 
-std::string defaultSummaryPath(const Job& job, const Shard& shard) {
+SceneReport unloadedSceneReport(const Job& scene) {
+  SceneReport r;
+  r.name = scene.sceneName;
+  for (const MeshPlacement& m : scene.meshes) r.meshes.push_back(m.spec);
+  return r;
+}
+
+void recordLoadedScene(SceneReport& report, const LoadedScene& scene) {
+  report.meshes = scene.names;
+  report.loaded = true;
+  report.loadSeconds = scene.loadSeconds;
+  report.build = scene.scene->stats();
+  report.instances = scene.scene->instanceCount();
+}
+
+std::string defaultSummaryPath(const JobFile& jobFile, const Shard& shard) {
   const std::string name =
       shard.n > 1 ? cat("summary.shard-", shard.k, "-of-", shard.n, ".json") : "summary.json";
-  return (fs::path(job.outputDirectory) / name).lexically_normal().string();
+  return (fs::path(jobFile.outputDirectory) / name).lexically_normal().string();
 }
 
 nlohmann::json batchSummary(const BatchRun& run, const std::vector<ImageResult>& results) {
-  const Job& job = *run.job;
+  // Size, spp and AOVs are the first scene's (shared unless an entry of "scenes" overrides them).
+  const Job& job = run.jobFile->scenes.front();
   const Totals t = totalsOf(results);
   nlohmann::json images = nlohmann::json::array();
-  for (const ImageResult& r : results) images.push_back(imageEntry(r));
+  for (const ImageResult& r : results) images.push_back(imageEntry(run, r));
   nlohmann::json s = {
-      {"job", fs::absolute(job.path).lexically_normal().string()},
+      {"job", fs::absolute(run.jobFile->path).lexically_normal().string()},
       {"aperture_version", APERTURE_VERSION},
       {"shard", {{"k", run.shard->k}, {"n", run.shard->n}, {"from", run.shard->origin}}},
       {"resume", run.resume},
       {"overlap_writes", run.overlap},
-      {"images_in_job", job.images.size()},
+      {"images_in_job", run.jobFile->imageCount()},
       {"images_in_shard", results.size()},
       {"images_ok", countOf(results, ImageStatus::Ok)},
       {"images_failed", countOf(results, ImageStatus::Failed)},
@@ -191,7 +244,7 @@ nlohmann::json batchSummary(const BatchRun& run, const std::vector<ImageResult>&
 int reportBatch(const BatchRun& run, const std::vector<ImageResult>& results,
                 const nlohmann::json& summary, const std::string& summaryPath) {
   if (!run.quiet) {
-    printTable(results);
+    printTable(run, results);
     printTotals(run, results);
   }
   const bool written = writeSummary(summary, summaryPath, run.quiet);

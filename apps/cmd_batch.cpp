@@ -1,7 +1,8 @@
 // `aperture batch`: many views of one scene from a job file; the BVH is built once, images
-// render with all cores while a writer thread encodes the previous image. This file holds the
-// command line and the run's steps; the pieces live in batch_*.h, shard.h, resume.h and
-// merge_summaries.h.
+// render with all cores while a writer thread encodes the previous image. A job of several
+// scenes ("scenes") renders scene k while scene k+1 loads and builds (apps/scene_pipeline.h). This
+// file holds the command line and the run's steps; the pieces live in batch_*.h, shard.h, resume.h
+// and merge_summaries.h.
 #include <algorithm>
 #include <csignal>
 #include <cstdio>
@@ -19,6 +20,7 @@
 #include "apps/outputs.h"
 #include "apps/render_options.h"
 #include "apps/resume.h"
+#include "apps/scene_pipeline.h"
 #include "apps/scene_setup.h"
 #include "apps/shard.h"
 #include "apps/view.h"
@@ -58,29 +60,78 @@ class SigintGuard {
   struct sigaction previous_ {};
 };
 
-/// What this run does: the job, its shard and one result per image of the shard.
+/// What this run does: the job file (its scenes), its shard and one result per image of the
+/// shard, in job order (scene by scene).
 struct BatchPlan {
-  Job job;
+  JobFile jobs;
   Shard shard;
   std::vector<ImageResult> results;
   size_t toRender = 0;
   std::vector<std::string> removedTemporaries;
 };
 
-/// --max-memory: refuses the job before anything is loaded when its estimate is too large.
-void checkJobMemory(const Job& job, const std::string& maxMemory) {
+/// The results of one scene: plan.results[first, last).
+struct SceneImages {
+  size_t scene = 0, first = 0, last = 0;
+  size_t toRender = 0;
+};
+
+/// The mesh specs, largest image and per-pixel bytes of one scene, for the memory estimate.
+struct SceneFootprint {
+  std::vector<std::string> specs;
+  uint64_t pixels = 0, bytesPerPixel = 0;
+};
+
+SceneFootprint footprintOf(const Job& job) {
+  SceneFootprint f;
+  for (const MeshPlacement& m : job.meshes)
+    if (std::find(f.specs.begin(), f.specs.end(), m.spec) == f.specs.end())
+      f.specs.push_back(m.spec);
+  for (const JobImage& image : job.images)
+    f.pixels = std::max(f.pixels, uint64_t(image.params.width) * uint64_t(image.params.height));
+  // Two framebuffers live at once: the image being rendered and the one being written.
+  f.bytesPerPixel = framebufferBytesPerPixel(job.aovs) * 2 + (job.previewPattern.empty() ? 0 : 4);
+  return f;
+}
+
+/// The memory of scenes a and b alive together (meshes, BVHs), with the larger framebuffers.
+MemoryEstimate pairEstimate(const SceneFootprint& a, const SceneFootprint& b) {
+  std::vector<std::string> specs = a.specs;
+  specs.insert(specs.end(), b.specs.begin(), b.specs.end());
+  return estimateMemory(specs, std::max(a.pixels, b.pixels), 1, 0,
+                        std::max(a.bytesPerPixel, b.bytesPerPixel));
+}
+
+/// --max-memory: refuses the job before anything is loaded when its estimate is too large. With
+/// "scenes", two consecutive scenes are alive at once (one rendering, the next loading): the
+/// estimate is that of the largest consecutive pair.
+void checkJobMemory(const JobFile& jobs, const std::string& maxMemory) {
   const uint64_t limit = parseMemoryLimit("--max-memory", maxMemory);
   if (!limit) return;
-  std::vector<std::string> specs;
-  for (const MeshPlacement& m : job.meshes)
-    if (std::find(specs.begin(), specs.end(), m.spec) == specs.end()) specs.push_back(m.spec);
-  uint64_t pixels = 0;
-  for (const JobImage& f : job.images)
-    pixels = std::max(pixels, uint64_t(f.params.width) * uint64_t(f.params.height));
-  // Two framebuffers live at once: the image being rendered and the one being written.
-  const uint64_t perPixel =
-      framebufferBytesPerPixel(job.aovs) * 2 + (job.previewPattern.empty() ? 0 : 4);
-  checkMemoryLimit(estimateMemory(specs, pixels, 1, 0, perPixel), limit, "--max-memory", maxMemory);
+  std::vector<SceneFootprint> footprints;
+  for (const Job& job : jobs.scenes) footprints.push_back(footprintOf(job));
+  if (footprints.size() == 1) {
+    const SceneFootprint& f = footprints.front();
+    checkMemoryLimit(estimateMemory(f.specs, f.pixels, 1, 0, f.bytesPerPixel), limit,
+                     "--max-memory", maxMemory);
+    return;
+  }
+  size_t worst = 0;
+  MemoryEstimate largest;
+  for (size_t k = 0; k + 1 < footprints.size(); ++k) {
+    const MemoryEstimate e = pairEstimate(footprints[k], footprints[k + 1]);
+    if (e.total() > largest.total()) {
+      largest = e;
+      worst = k;
+    }
+  }
+  try {
+    checkMemoryLimit(largest, limit, "--max-memory", maxMemory);
+  } catch (const Error& e) {
+    throw Error(cat(jobs.path, ": scenes '", jobs.scenes[worst].sceneName, "' and '",
+                    jobs.scenes[worst + 1].sceneName,
+                    "', alive together (one renders while the next loads): ", e.what()));
+  }
 }
 
 /// Every file of the plan's images (EXR, dataset files, previews) (what the temporary sweep looks
@@ -116,7 +167,7 @@ void sweepTemporaries(BatchPlan& plan, const std::string& summaryPath, const Bat
 void checkOutputs(BatchPlan& plan, bool quiet) {
   size_t reused = 0, stale = 0, missing = 0;
   for (ImageResult& r : plan.results) {
-    const OutputCheck check = checkOutput(plan.job, *r.image);
+    const OutputCheck check = checkOutput(plan.jobs.scenes[r.image->scene], *r.image);
     if (check.state == OutputCheck::State::Reusable) {
       r.status = ImageStatus::Skipped;
       ++reused;
@@ -134,7 +185,16 @@ void checkOutputs(BatchPlan& plan, bool quiet) {
 }
 
 std::string summaryPathOf(const BatchArgs& a, const BatchPlan& plan) {
-  return a.summary.empty() ? defaultSummaryPath(plan.job, plan.shard) : a.summary;
+  return a.summary.empty() ? defaultSummaryPath(plan.jobs, plan.shard) : a.summary;
+}
+
+/// The one-line form's job as a job file of one scene.
+JobFile cameraFileJobFile(const CameraFileBatch& b) {
+  JobFile file;
+  file.scenes.push_back(cameraFileJob(b));
+  file.path = file.scenes.front().path;
+  file.outputDirectory = file.scenes.front().outputDirectory;
+  return file;
 }
 
 /// Everything is validated (shard, job file, cameras, mesh files, memory) before anything is
@@ -143,18 +203,19 @@ BatchPlan planBatch(const BatchArgs& a) {
   BatchPlan plan;
   plan.shard = parseShard(a.shard);
   if (a.files.empty()) checkDeepHasLayers(a.cameraFile.deep, a.cameraFile.layers);
-  plan.job = a.files.empty() ? cameraFileJob(a.cameraFile) : parseJob(a.files.front());
-  checkJobMemory(plan.job, a.maxMemory);
+  plan.jobs = a.files.empty() ? cameraFileJobFile(a.cameraFile) : readJobFile(a.files.front());
+  checkJobMemory(plan.jobs, a.maxMemory);
   if (!a.quiet && !plan.shard.origin.empty())
     std::fprintf(stderr, "aperture: shard %zu of %zu from %s\n", plan.shard.k, plan.shard.n,
                  plan.shard.origin.c_str());
   if (!a.quiet && a.shard.empty() && !unshardedSchedulerNote().empty())
     std::fprintf(stderr, "aperture: note: %s\n", unshardedSchedulerNote().c_str());
-  for (const JobImage& image : plan.job.images)
-    if (plan.shard.contains(image.index)) {
-      plan.results.emplace_back();
-      plan.results.back().image = &image;
-    }
+  for (const Job& job : plan.jobs.scenes)
+    for (const JobImage& image : job.images)
+      if (plan.shard.contains(image.index)) {
+        plan.results.emplace_back();
+        plan.results.back().image = &image;
+      }
   if (a.resume) {
     sweepTemporaries(plan, summaryPathOf(a, plan), a);
     checkOutputs(plan, a.quiet);
@@ -163,21 +224,41 @@ BatchPlan planBatch(const BatchArgs& a) {
   return plan;
 }
 
+/// Each scene's results in the plan (results are in scene order), scenes without any included.
+std::vector<SceneImages> sceneImagesOf(const BatchPlan& plan) {
+  std::vector<SceneImages> scenes(plan.jobs.scenes.size());
+  for (size_t s = 0; s < scenes.size(); ++s) scenes[s].scene = s;
+  size_t at = 0;
+  for (SceneImages& s : scenes) {
+    s.first = at;
+    while (at < plan.results.size() && plan.results[at].image->scene == s.scene) {
+      s.toRender += plan.results[at].status != ImageStatus::Skipped;
+      ++at;
+    }
+    s.last = at;
+  }
+  return scenes;
+}
+
 int printDryRun(const BatchPlan& plan) {
   std::printf("%s: %zu images in the job, %zu in this shard, %zu to render\n",
-              plan.job.path.c_str(), plan.job.images.size(), plan.results.size(), plan.toRender);
-  for (const ImageResult& r : plan.results)
-    std::printf("%6zu  %-20s %7d  %-9s %s%s%s\n", r.image->index, r.image->camera.c_str(),
-                r.image->frame, r.status == ImageStatus::Skipped ? "skip" : "render",
-                r.image->output.c_str(),
+              plan.jobs.path.c_str(), plan.jobs.imageCount(), plan.results.size(), plan.toRender);
+  for (const ImageResult& r : plan.results) {
+    const std::string camera =
+        plan.jobs.multiScene ? plan.jobs.scenes[r.image->scene].sceneName + "/" + r.image->camera
+                             : r.image->camera;
+    std::printf("%6zu  %-20s %7d  %-9s %s%s%s\n", r.image->index, camera.c_str(), r.image->frame,
+                r.status == ImageStatus::Skipped ? "skip" : "render", r.image->output.c_str(),
                 r.staleReason.empty() ? "" : "  stale: ", r.staleReason.c_str());
+  }
   return 0;
 }
 
-/// Renders the images not skipped, handing each to the writer; returns the render seconds.
-double renderImages(BatchPlan& plan, const LoadedScene& scene, const BatchArgs& a,
-                    Progress& progress) {
-  const Job& job = plan.job;
+/// Renders the scene's images not skipped, handing each to the writer (drained before
+/// returning, so the scene can be released); returns the render seconds.
+double renderImages(BatchPlan& plan, const SceneImages& images, const LoadedScene& scene,
+                    const BatchArgs& a, Progress& progress) {
+  const Job& job = plan.jobs.scenes[images.scene];
   const PreviewOptions preview = batchPreviewOptions(job, scene.worldLo, scene.worldHi);
   double renderSeconds = 0;
   auto write = [&](ImageWriter::Task& task) {
@@ -191,7 +272,8 @@ double renderImages(BatchPlan& plan, const LoadedScene& scene, const BatchArgs& 
     progress.finished(*task.result);
   };
   ImageWriter writer(write, !a.noOverlap, 1);
-  for (ImageResult& r : plan.results) {
+  for (size_t i = images.first; i < images.last; ++i) {
+    ImageResult& r = plan.results[i];
     if (r.status == ImageStatus::Skipped) continue;
     if (gInterrupted) {
       r.status = ImageStatus::Interrupted;
@@ -215,18 +297,20 @@ double renderImages(BatchPlan& plan, const LoadedScene& scene, const BatchArgs& 
   return renderSeconds;
 }
 
-std::vector<CameraParams> camerasToRender(const BatchPlan& plan) {
+std::vector<CameraParams> camerasToRender(const BatchPlan& plan, const SceneImages& images) {
   std::vector<CameraParams> cameras;
-  for (const ImageResult& r : plan.results)
-    if (r.status != ImageStatus::Skipped) cameras.push_back(r.image->params);
+  for (size_t i = images.first; i < images.last; ++i)
+    if (plan.results[i].status != ImageStatus::Skipped)
+      cameras.push_back(plan.results[i].image->params);
   return cameras;
 }
 
-BatchRun describeRun(const BatchPlan& plan, const BatchArgs& a, const LoadedScene& scene) {
+BatchRun describeRun(const BatchPlan& plan, const BatchArgs& a) {
   BatchRun run;
-  run.job = &plan.job;
+  run.jobFile = &plan.jobs;
   run.shard = &plan.shard;
-  run.scene = &scene;
+  for (const Job& job : plan.jobs.scenes) run.scenes.push_back(unloadedSceneReport(job));
+  for (const ImageResult& r : plan.results) ++run.scenes[r.image->scene].images;
   run.resume = a.resume;
   run.overlap = !a.noOverlap;
   run.quiet = a.quiet;
@@ -234,19 +318,56 @@ BatchRun describeRun(const BatchPlan& plan, const BatchArgs& a, const LoadedScen
   return run;
 }
 
-/// The job's scene through the one scene set-up; culled for the images this run renders.
-LoadedScene loadBatchScene(const Device& device, const BatchPlan& plan, bool quiet) {
-  const SceneSpec spec = plan.job.sceneSpec();
-  LoadedScene s = loadSceneMeshes(spec, quiet);
-  buildLoadedScene(device, s, spec, quiet, camerasToRender(plan));
-  return s;
+/// A scene as the pipeline hands it over: loaded and built, or why it could not be.
+struct PipelinedScene {
+  std::unique_ptr<LoadedScene> loaded;
+  std::string error;
+};
+
+/// One scene through the one scene set-up; culled for the images this run renders of it.
+/// In a job with "scenes", a scene that fails to load fails its images only; a one-scene job
+/// stops with the error, as before anything is rendered.
+PipelinedScene loadBatchScene(const Device& device, const BatchPlan& plan,
+                              const SceneImages& images, bool quiet) {
+  const SceneSpec spec = plan.jobs.scenes[images.scene].sceneSpec();
+  try {
+    auto s = std::make_unique<LoadedScene>(loadSceneMeshes(spec, quiet));
+    buildLoadedScene(device, *s, spec, quiet, camerasToRender(plan, images));
+    return {std::move(s), ""};
+  } catch (const std::exception& e) {
+    if (!plan.jobs.multiScene) throw;
+    return {nullptr, e.what()};
+  }
 }
 
-/// "camera_files": the COLMAP text model of every image of this run whose EXR exists (rendered
-/// now or reused), in the output directory's sparse/ (sparse.shard-K-of-N/ for a shard).
-void writeRenderedCameras(const BatchPlan& plan, bool quiet) {
+/// A scene that could not be loaded: its images fail with the reason.
+void failSceneImages(BatchPlan& plan, const SceneImages& images, const std::string& error,
+                     Progress& progress) {
+  const std::string& name = plan.jobs.scenes[images.scene].sceneName;
+  for (size_t i = images.first; i < images.last; ++i) {
+    ImageResult& r = plan.results[i];
+    if (r.status == ImageStatus::Skipped) continue;
+    r.status = ImageStatus::Failed;
+    r.error = cat("scene '", name, "' could not be loaded: ", error);
+    progress.finished(r);
+  }
+}
+
+/// After Ctrl-C: the scene's images not yet done are interrupted.
+void markInterrupted(BatchPlan& plan, const SceneImages& images) {
+  for (size_t i = images.first; i < images.last; ++i)
+    if (plan.results[i].status == ImageStatus::Pending)
+      plan.results[i].status = ImageStatus::Interrupted;
+}
+
+/// "camera_files": the COLMAP text model of every image of one scene whose EXR exists
+/// (rendered now or reused), in the scene's output directory's sparse/ (sparse.shard-K-of-N/
+/// for a shard); sparse.<scene>/ when scenes share their output directory.
+void writeRenderedCameras(const BatchPlan& plan, const SceneImages& images, bool quiet) {
+  const Job& job = plan.jobs.scenes[images.scene];
   CameraFile file;
-  for (const ImageResult& r : plan.results) {
+  for (size_t i = images.first; i < images.last; ++i) {
+    const ImageResult& r = plan.results[i];
     if (r.status != ImageStatus::Ok && r.status != ImageStatus::Skipped) continue;
     const std::optional<CalibratedView> view = calibratedViewOf(r.image->params);
     if (!view) continue;
@@ -257,41 +378,74 @@ void writeRenderedCameras(const BatchPlan& plan, bool quiet) {
       same = file.sensors.end() - 1;
     }
     const std::string name = std::filesystem::path(r.image->output)
-                                 .lexically_relative(plan.job.outputDirectory)
+                                 .lexically_relative(job.outputDirectory)
                                  .generic_string();
     file.images.push_back({name, int(same - file.sensors.begin()), view->worldToCamera});
   }
   if (file.images.empty()) return;
-  const std::string name = plan.shard.n > 1
-                               ? cat("sparse.shard-", plan.shard.k, "-of-", plan.shard.n)
-                               : std::string("sparse");
-  file.path = (std::filesystem::path(plan.job.outputDirectory) / name).string();
+  bool sharedDirectory = false;
+  for (const Job& other : plan.jobs.scenes)
+    sharedDirectory |= &other != &job && other.outputDirectory == job.outputDirectory;
+  std::string name = sharedDirectory ? "sparse." + job.sceneName : std::string("sparse");
+  if (plan.shard.n > 1) name += cat(".shard-", plan.shard.k, "-of-", plan.shard.n);
+  file.path = (std::filesystem::path(job.outputDirectory) / name).string();
   writeColmapText(file, file.path);
   if (!quiet)
     std::fprintf(stderr, "aperture: wrote the COLMAP model of %zu images to %s\n",
                  file.images.size(), file.path.c_str());
 }
 
+/// Renders every scene that has images to render: scene k renders while the next such scene
+/// loads and builds (apps/scene_pipeline.h). The clock starts when the first scene is built
+/// (nothing can overlap its load), as it does for a one-scene job.
+void renderScenes(BatchPlan& plan, const BatchArgs& a, const Device& device, BatchRun& run,
+                  Progress& progress) {
+  std::vector<SceneImages> pending;
+  for (const SceneImages& s : sceneImagesOf(plan))
+    if (s.toRender) pending.push_back(s);
+  std::optional<BatchClock::time_point> start;
+  // After Ctrl-C the scenes still to come are not loaded: their images are interrupted.
+  const std::function<PipelinedScene(size_t)> load = [&](size_t k) {
+    return gInterrupted ? PipelinedScene() : loadBatchScene(device, plan, pending[k], a.quiet);
+  };
+  const std::function<void(size_t, PipelinedScene&)> render = [&](size_t k, PipelinedScene& s) {
+    if (!start) start = BatchClock::now();
+    const SceneImages& images = pending[k];
+    if (plan.jobs.multiScene)
+      progress.startScene(images.scene + 1, plan.jobs.scenes.size(),
+                          plan.jobs.scenes[images.scene].sceneName, images.toRender);
+    SceneReport& report = run.scenes[images.scene];
+    if (gInterrupted) return markInterrupted(plan, images);
+    if (!s.loaded) {
+      report.error = s.error;
+      failSceneImages(plan, images, s.error, progress);
+      return;
+    }
+    recordLoadedScene(report, *s.loaded);
+    run.renderSeconds += renderImages(plan, images, *s.loaded, a, progress);
+  };
+  pipelineScenes(pending.size(), load, render);
+  run.elapsedSeconds = start ? secondsSince(*start) : 0;
+}
+
 int runBatch(const BatchArgs& a) {
   BatchPlan plan = planBatch(a);
   if (a.dryRun) return printDryRun(plan);
 
-  ThreadLimit threads(plan.job.threads);
+  ThreadLimit threads(plan.jobs.scenes.front().threads);
   Device device;
-  // With everything up to date, no mesh is loaded and no BVH built.
-  const LoadedScene scene = plan.toRender ? loadBatchScene(device, plan, a.quiet) : LoadedScene();
-  BatchRun run = describeRun(plan, a, scene);
+  BatchRun run = describeRun(plan, a);
   run.threads = threads.threads();
   run.isa = device.isaName();
   Progress progress(plan.toRender, a.quiet);
   SigintGuard sigint;
   gInterrupted = 0;
-  const auto start = BatchClock::now();
-  run.renderSeconds = renderImages(plan, scene, a, progress);
+  // With everything up to date, no mesh is loaded and no BVH built.
+  renderScenes(plan, a, device, run, progress);
   progress.end();
-  run.elapsedSeconds = secondsSince(start);
   run.interrupted = gInterrupted != 0;
-  if (plan.job.cameraFiles) writeRenderedCameras(plan, a.quiet);
+  for (const SceneImages& s : sceneImagesOf(plan))
+    if (plan.jobs.scenes[s.scene].cameraFiles) writeRenderedCameras(plan, s, a.quiet);
   return reportBatch(run, plan.results, batchSummary(run, plan.results), summaryPathOf(a, plan));
 }
 

@@ -142,7 +142,8 @@ std::string expandOutputPattern(const std::string& pattern, const std::string& c
       out += n;
     } else {
       throw Error(cat("'", pattern, "': unknown placeholder '{", field,
-                      "}' (known: {camera}, {frame}, {frame:0Nd}, {image})"));
+                      "}' (known: {camera}, {frame}, {frame:0Nd}, {image}; {scene} in a job with ",
+                      "\"scenes\")"));
     }
     i = close;
   }
@@ -172,7 +173,7 @@ const Preset* readPreset(const Object& top, Job& job) {
   try {
     preset = &findPreset(*presetName);
   } catch (const Error& e) {
-    top.fail("preset", e.what());
+    top.fail(top.keyPath("preset"), e.what());
   }
   job.build.quality = parseBvhQuality(preset->bvhQuality);
   job.build.robust = preset->robust;
@@ -189,19 +190,21 @@ AovSet readAovs(const Object& top) {
   } else if (a->is_array()) {
     for (size_t k = 0; k < a->size(); ++k) {
       if (!(*a)[k].is_string())
-        top.fail(indexPath("aovs", k), cat("expected a string, got ", Object::typeName((*a)[k])));
+        top.fail(indexPath(top.keyPath("aovs"), k),
+                 cat("expected a string, got ", Object::typeName((*a)[k])));
       list += (list.empty() ? "" : ",") + (*a)[k].get<std::string>();
     }
   } else {
-    top.fail("aovs", cat("expected a string or an array of strings, got ", Object::typeName(*a)));
+    top.fail(top.keyPath("aovs"),
+             cat("expected a string or an array of strings, got ", Object::typeName(*a)));
   }
   AovSet aovs;
   try {
     aovs = parseAovSet(list);
   } catch (const Error& e) {
-    top.fail("aovs", e.what());
+    top.fail(top.keyPath("aovs"), e.what());
   }
-  if (aovs.empty()) top.fail("aovs", "no AOV requested");
+  if (aovs.empty()) top.fail(top.keyPath("aovs"), "no AOV requested");
   return aovs;
 }
 
@@ -288,14 +291,15 @@ void readOutputEntry(const Object& entry, const std::string& baseDir, Job& job) 
 void readOutputSettings(const Object& top, const Preset* preset, const std::string& baseDir,
                         Job& job) {
   if (!top.has("output") && !top.has("outputs"))
-    top.fail("output", "required key is missing (give \"output\" or \"outputs\")");
+    top.fail(top.keyPath("output"), "required key is missing (give \"output\" or \"outputs\")");
   job.outputPattern = top.string("output").value_or("");
   if (top.has("outputs")) {
     const json& entries = top.array("outputs");
-    if (entries.empty()) top.fail("outputs", "needs at least one entry");
+    if (entries.empty()) top.fail(top.keyPath("outputs"), "needs at least one entry");
     for (size_t k = 0; k < entries.size(); ++k)
-      readOutputEntry(Object(top.file(), indexPath("outputs", k), entries[k], {"aov", "path"}),
-                      baseDir, job);
+      readOutputEntry(
+          Object(top.file(), indexPath(top.keyPath("outputs"), k), entries[k], {"aov", "path"}),
+          baseDir, job);
   }
   job.writesExr = !job.outputPattern.empty();
   if (top.has("depth_scale")) {
@@ -303,7 +307,7 @@ void readOutputSettings(const Object& top, const Preset* preset, const std::stri
     try {
       checkDepthScale("depth_scale", job.dataset.depthScale);
     } catch (const Error& e) {
-      top.fail("depth_scale", e.what());
+      top.fail(top.keyPath("depth_scale"), e.what());
     }
   }
   job.previewPattern = top.string("preview").value_or("");
@@ -311,7 +315,7 @@ void readOutputSettings(const Object& top, const Preset* preset, const std::stri
     job.exr.compression = parseExrCompression(
         top.string("compression").value_or(preset ? preset->compression : "zip"));
   } catch (const Error& e) {
-    top.fail("compression", e.what());
+    top.fail(top.keyPath("compression"), e.what());
   }
   job.exr.halfColor = top.boolean("half", preset ? preset->halfColor : false);
 }
@@ -334,14 +338,14 @@ void readMeshDataKeys(const Object& top, Job& job) {
   try {
     job.render.normalFrame = parseNormalFrame(top.string("normal_frame").value_or("world"));
   } catch (const Error& e) {
-    top.fail("normal_frame", e.what());
+    top.fail(top.keyPath("normal_frame"), e.what());
   }
   job.idCounts = top.boolean("id_counts", false);
 }
 
 void readPerformance(const Object& top, Job& job) {
   if (top.has("performance")) {
-    const Object p(top.file(), "performance", top.required("performance"),
+    const Object p(top.file(), top.keyPath("performance"), top.required("performance"),
                    {"packet", "tile", "threads", "bvh_quality", "robust", "compact", "cull"});
     job.render.packetWidth = p.integer("packet", 16);
     job.render.tileSize = p.integer("tile", 32);
@@ -362,7 +366,7 @@ void readPerformance(const Object& top, Job& job) {
   try {
     validateRenderSettings(job.render);
   } catch (const Error& e) {
-    top.fail("performance", e.what());
+    top.fail(top.keyPath("performance"), e.what());
   }
 }
 
@@ -389,8 +393,9 @@ MeshPlacement readMesh(const Object& m, const std::string& baseDir) {
 
 /// "scene": every mesh file must exist before anything is loaded.
 void readScene(const Object& top, const std::string& baseDir, Job& job) {
-  if (!top.has("scene")) top.fail("scene", "required key is missing");
-  const Object scene(top.file(), "scene", top.required("scene"), {"meshes", "placement"});
+  if (!top.has("scene")) top.fail(top.keyPath("scene"), "required key is missing");
+  const Object scene(top.file(), top.keyPath("scene"), top.required("scene"),
+                     {"meshes", "placement"});
   const std::string placement = scene.string("placement").value_or("camera-relative");
   if (placement == "world-space")
     job.placement = Placement::WorldSpace;
@@ -398,9 +403,9 @@ void readScene(const Object& top, const std::string& baseDir, Job& job) {
     scene.fail(scene.keyPath("placement"),
                cat("'", placement, "': must be camera-relative or world-space"));
   const json& meshes = scene.array("meshes");
-  if (meshes.empty()) scene.fail("scene.meshes", "needs at least one mesh");
+  if (meshes.empty()) scene.fail(scene.keyPath("meshes"), "needs at least one mesh");
   for (size_t k = 0; k < meshes.size(); ++k) {
-    const Object m(top.file(), indexPath("scene.meshes", k), meshes[k],
+    const Object m(top.file(), indexPath(scene.keyPath("meshes"), k), meshes[k],
                    {"path", "transform", "matrix"});
     job.meshes.push_back(readMesh(m, baseDir));
   }
@@ -412,7 +417,7 @@ std::string expandFor(const Object& top, const char* key, const std::string& pat
   try {
     return resolve(baseDir, expandOutputPattern(pattern, camera, frame, image));
   } catch (const Error& e) {
-    top.fail(key, e.what());
+    top.fail(top.keyPath(key), e.what());
   }
 }
 
@@ -439,7 +444,7 @@ void expandImageFiles(const Object& top, const std::string& baseDir, const Job& 
 /// listed, in the order listed), each a calibrated camera named by its image name.
 void readCameraFileImages(const Object& top, const CameraParams& defaults,
                           const std::string& baseDir, Job& job) {
-  const Object c(top.file(), "cameras", top.required("cameras"), {"from", "images"});
+  const Object c(top.file(), top.keyPath("cameras"), top.required("cameras"), {"from", "images"});
   const std::optional<std::string> from = c.string("from");
   if (!from) c.fail(c.keyPath("from"), "required key is missing");
   std::vector<std::string> names;
@@ -474,13 +479,13 @@ void readCameraFileImages(const Object& top, const CameraParams& defaults,
 /// "cameras": each entry expands into its images, in job order.
 void readCameras(const Object& top, const CameraParams& defaults, const std::string& baseDir,
                  Job& job) {
-  if (!top.has("cameras")) top.fail("cameras", "required key is missing");
+  if (!top.has("cameras")) top.fail(top.keyPath("cameras"), "required key is missing");
   if (top.required("cameras").is_object()) return readCameraFileImages(top, defaults, baseDir, job);
   const json& cameras = top.array("cameras");
-  if (cameras.empty()) top.fail("cameras", "needs at least one camera");
+  if (cameras.empty()) top.fail(top.keyPath("cameras"), "needs at least one camera");
   std::set<std::string> names;
   for (size_t ci = 0; ci < cameras.size(); ++ci) {
-    const Object c(top.file(), indexPath("cameras", ci), cameras[ci], jobCameraKeys());
+    const Object c(top.file(), indexPath(top.keyPath("cameras"), ci), cameras[ci], jobCameraKeys());
     const JobCamera cam = parseJobCamera(c, defaults, kMaxJobImages - job.images.size());
     if (!names.insert(cam.name).second)
       c.fail(c.keyPath("name"), cat("'", cam.name, "': a camera of that name already exists"));
@@ -503,9 +508,10 @@ void checkOutputs(const Object& top, const std::string& baseDir, Job& job) {
     try {
       checkPreviewRange(*range);
     } catch (const Error& e) {
-      top.fail("preview_range", cat("[", range->x, ", ", range->y, "]: ", e.what()));
+      top.fail(top.keyPath("preview_range"), cat("[", range->x, ", ", range->y, "]: ", e.what()));
     }
-    if (job.previewPattern.empty()) top.fail("preview_range", "needs a \"preview\" pattern");
+    if (job.previewPattern.empty())
+      top.fail(top.keyPath("preview_range"), "needs a \"preview\" pattern");
     job.preview.depthRange = *range;
   }
   job.outputDirectory = job.writesExr ? resolve(baseDir, patternDirectory(job.outputPattern))
@@ -524,21 +530,34 @@ void checkOutputs(const Object& top, const std::string& baseDir, Job& job) {
                                                            : "outputs";
       auto [it, fresh] = used.emplace(out, &f);
       if (!fresh)
-        top.fail(key, cat("camera '", f.camera, "' frame ", f.frame, " and camera '",
-                          it->second->camera, "' frame ", it->second->frame, " both write '", out,
-                          "' (use {camera} and {frame}, or {image}, in the patterns)"));
+        top.fail(top.keyPath(key),
+                 cat("camera '", f.camera, "' frame ", f.frame, " and camera '", it->second->camera,
+                     "' frame ", it->second->frame, " both write '", out,
+                     "' (use {camera} and {frame}, or {image}, in the patterns)"));
     }
   }
 }
 
 }  // namespace
 
-Job parseJobText(const std::string& text, const std::string& name, const std::string& baseDir) {
-  const json root = parseJsonText(text, name);
-  const Object top(name, "", root,
-                   {"scene", "cameras", "aovs", "size", "spp", "output", "outputs", "depth_scale",
-                    "preview", "preview_range", "compression", "half", "performance", "preset",
-                    "camera_files", "normal_frame", "id_counts", "layers", "deep"});
+namespace {
+
+/// The keys of a job's top level (of a "scenes" entry too, which adds "name").
+const std::vector<std::string>& jobKeys() {
+  static const std::vector<std::string> keys = {
+      "scene",        "cameras",   "aovs",        "size",    "spp",
+      "output",       "outputs",   "depth_scale", "preview", "preview_range",
+      "compression",  "half",      "performance", "preset",  "camera_files",
+      "normal_frame", "id_counts", "layers",      "deep"};
+  return keys;
+}
+
+/// A job's top level, already parsed as JSON. `placed` names the keys that an entry of
+/// "scenes" gave, with the path each was written at.
+Job parseJobJson(const json& root, const std::string& name, const std::string& baseDir,
+                 const std::vector<std::pair<std::string, std::string>>& placed = {}) {
+  Object top(name, "", root, jobKeys());
+  for (const auto& [key, where] : placed) top.placeKey(key, where);
   Job job;
   job.path = name;
   const Preset* preset = readPreset(top, job);
@@ -564,6 +583,176 @@ Job parseJobText(const std::string& text, const std::string& name, const std::st
   readMeshDataKeys(top, job);
   checkOutputs(top, baseDir, job);
   return job;
+}
+
+constexpr size_t kMaxJobScenes = 100000;
+
+/// A scene's name goes into file names through {scene}: letters, digits, '_', '-' and '.',
+/// not starting with '.'.
+void checkSceneName(const Object& entry, const std::string& name) {
+  const bool safe =
+      !name.empty() && name.size() <= 200 && name.front() != '.' &&
+      std::all_of(name.begin(), name.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
+      });
+  if (!safe)
+    entry.fail(entry.keyPath("name"),
+               cat("'", name, "': a scene name is 1 to 200 letters, digits, '_', '-' or '.', ",
+                   "not starting with '.' (it names files through {scene})"));
+}
+
+/// Replaces {scene} in one output pattern of an entry's job; with several scenes the pattern
+/// must have it, or the scenes would write the same files.
+void expandScenePattern(json& pattern, const std::string& where, const std::string& file,
+                        const std::string& scene, size_t sceneCount) {
+  if (!pattern.is_string()) return;  // parseJobJson names the wrong type
+  std::string text = pattern.get<std::string>();
+  const std::string placeholder = "{scene}";
+  if (text.find(placeholder) == std::string::npos) {
+    if (sceneCount > 1)
+      throw Error(cat(file, ": ", where, ": '", text, "' has no {scene}: in a job of ", sceneCount,
+                      " scenes every output pattern needs {scene}, so that each scene writes ",
+                      "its own files (e.g. out/{scene}/{camera}.exr)"));
+    return;
+  }
+  for (size_t at = text.find(placeholder); at != std::string::npos;
+       at = text.find(placeholder, at + scene.size()))
+    text.replace(at, placeholder.size(), scene);
+  pattern = text;
+}
+
+/// The path a key of a merged entry was written at: in the entry, or at the top level.
+std::string writtenAt(const json& entry, const std::string& entryPath, const std::string& key) {
+  return entry.contains(key) ? entryPath + "." + key : key;
+}
+
+/// {scene} in "output", "preview" and every "outputs" path of one entry's merged job.
+void expandScenePatterns(json& merged, const json& entry, const std::string& entryPath,
+                         const std::string& file, const std::string& scene, size_t sceneCount) {
+  for (const char* key : {"output", "preview"})
+    if (merged.contains(key))
+      expandScenePattern(merged[key], writtenAt(entry, entryPath, key), file, scene, sceneCount);
+  if (!merged.contains("outputs") || !merged["outputs"].is_array()) return;
+  json& outputs = merged["outputs"];
+  for (size_t k = 0; k < outputs.size(); ++k)
+    if (outputs[k].is_object() && outputs[k].contains("path"))
+      expandScenePattern(outputs[k]["path"],
+                         indexPath(writtenAt(entry, entryPath, "outputs"), k) + ".path", file,
+                         scene, sceneCount);
+}
+
+/// The directory up to the first placeholder of the first scene's EXR pattern (or first
+/// "outputs" path), as written: where summary.json goes.
+std::string sharedOutputDirectory(const json& merged, const std::string& baseDir) {
+  std::string pattern;
+  if (merged.contains("output") && merged["output"].is_string())
+    pattern = merged["output"].get<std::string>();
+  else if (merged.contains("outputs") && merged["outputs"].is_array() &&
+           !merged["outputs"].empty() && merged["outputs"][0].is_object() &&
+           merged["outputs"][0].contains("path") && merged["outputs"][0]["path"].is_string())
+    pattern = merged["outputs"][0]["path"].get<std::string>();
+  return resolve(baseDir, patternDirectory(pattern));
+}
+
+/// No two images of different scenes write one file (a per-entry pattern could still).
+void checkScenesWriteApart(const std::string& file, const std::vector<Job>& scenes) {
+  std::map<std::string, size_t> writer;
+  for (size_t s = 0; s < scenes.size(); ++s)
+    for (const JobImage& image : scenes[s].images)
+      for (const std::string& out : image.files) {
+        auto [it, fresh] = writer.emplace(out, s);
+        if (!fresh && it->second != s)
+          throw Error(cat(file, ": scenes '", scenes[it->second].sceneName, "' and '",
+                          scenes[s].sceneName, "' both write '", out,
+                          "' (put {scene} in the output patterns)"));
+      }
+}
+
+/// A job with "scenes": each entry is merged over the other top-level keys (its own keys
+/// win) and read as a job of its own, so every check of a one-scene job applies.
+JobFile parseScenesJson(const json& root, const std::string& name, const std::string& baseDir) {
+  std::vector<std::string> topKeys = jobKeys();
+  topKeys.push_back("scenes");
+  const Object top(name, "", root, topKeys);
+  if (top.has("scene"))
+    top.fail("scene", "a job with \"scenes\" gives each scene in its entry, not at the top level");
+  const json& entries = top.array("scenes");
+  if (entries.empty()) top.fail("scenes", "needs at least one scene");
+  if (entries.size() > kMaxJobScenes)
+    top.fail("scenes", cat(entries.size(), " scenes; at most ", kMaxJobScenes));
+  std::vector<std::string> entryKeys = jobKeys();
+  entryKeys.push_back("name");
+  JobFile file;
+  file.path = name;
+  file.multiScene = true;
+  std::set<std::string> names;
+  size_t imageCount = 0;
+  for (size_t k = 0; k < entries.size(); ++k) {
+    const std::string entryPath = indexPath("scenes", k);
+    const Object entry(name, entryPath, entries[k], entryKeys);
+    const std::optional<std::string> sceneName = entry.string("name");
+    if (!sceneName) entry.fail(entry.keyPath("name"), "required key is missing");
+    checkSceneName(entry, *sceneName);
+    if (!names.insert(*sceneName).second)
+      entry.fail(entry.keyPath("name"),
+                 cat("'", *sceneName, "': a scene of that name already exists"));
+    if (!entry.has("scene")) entry.fail(entry.keyPath("scene"), "required key is missing");
+    json merged = root;
+    merged.erase("scenes");
+    std::vector<std::pair<std::string, std::string>> placed;
+    for (const auto& item : entries[k].items()) {
+      if (item.key() == "name") continue;
+      merged[item.key()] = item.value();
+      placed.emplace_back(item.key(), entryPath + "." + item.key());
+    }
+    if (k == 0) file.outputDirectory = sharedOutputDirectory(merged, baseDir);
+    expandScenePatterns(merged, entries[k], entryPath, name, *sceneName, entries.size());
+    Job job = parseJobJson(merged, name, baseDir, placed);
+    // One thread pool serves every scene (and the loads overlapping the renders).
+    if (k > 0 && job.threads != file.scenes.front().threads)
+      entry.fail(writtenAt(entries[k], entryPath, "performance") + ".threads",
+                 cat(job.threads, ": every scene must use the same threads as the first (",
+                     file.scenes.front().threads, "): one thread pool serves them all"));
+    job.sceneName = *sceneName;
+    for (JobImage& image : job.images) {
+      image.index += imageCount;
+      image.scene = k;
+    }
+    imageCount += job.images.size();
+    if (imageCount > kMaxJobImages)
+      entry.fail(entryPath, cat("the scenes so far have ", imageCount, " images; at most ",
+                                kMaxJobImages, " in a job"));
+    file.scenes.push_back(std::move(job));
+  }
+  checkScenesWriteApart(name, file.scenes);
+  return file;
+}
+
+}  // namespace
+
+Job parseJobText(const std::string& text, const std::string& name, const std::string& baseDir) {
+  const json root = parseJsonText(text, name);
+  if (root.is_object() && root.contains("scenes"))
+    throw Error(cat(name, ": scenes: a job of several scenes; read it with readJobFile (",
+                    "`aperture batch` does)"));
+  return parseJobJson(root, name, baseDir);
+}
+
+JobFile readJobFileText(const std::string& text, const std::string& name,
+                        const std::string& baseDir) {
+  const json root = parseJsonText(text, name);
+  if (root.is_object() && root.contains("scenes")) return parseScenesJson(root, name, baseDir);
+  JobFile file;
+  file.path = name;
+  file.scenes.push_back(parseJobJson(root, name, baseDir));
+  file.outputDirectory = file.scenes.front().outputDirectory;
+  return file;
+}
+
+size_t JobFile::imageCount() const {
+  size_t n = 0;
+  for (const Job& s : scenes) n += s.images.size();
+  return n;
 }
 
 Job cameraFileJob(const CameraFileBatch& b) {
@@ -600,7 +789,10 @@ Job cameraFileJob(const CameraFileBatch& b) {
   return parseJobText(job.dump(), "batch --cameras " + b.cameras, "");
 }
 
-Job parseJob(const std::string& path) {
+namespace {
+
+/// A job file's text, after checking it is a regular file of a sane size.
+std::string readJobText(const std::string& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw Error(cat(path, ": no such job file"));
   const std::uintmax_t bytes = fs::file_size(path, ec);
@@ -611,7 +803,17 @@ Job parseJob(const std::string& path) {
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw Error(cat(path, ": cannot read the job file"));
-  return parseJobText(text.str(), path, fs::path(path).parent_path().string());
+  return text.str();
+}
+
+}  // namespace
+
+Job parseJob(const std::string& path) {
+  return parseJobText(readJobText(path), path, fs::path(path).parent_path().string());
+}
+
+JobFile readJobFile(const std::string& path) {
+  return readJobFileText(readJobText(path), path, fs::path(path).parent_path().string());
 }
 
 }  // namespace aperture::app

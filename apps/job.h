@@ -1,5 +1,6 @@
 #pragma once
-// Batch job files: a JSON description of one scene and many camera views (docs/batch.md).
+// Batch job files: a JSON description of one scene and many camera views, or of several such
+// scenes sharing their settings ("scenes", docs/batch.md).
 #include <cstddef>
 #include <glm/glm.hpp>
 #include <optional>
@@ -22,7 +23,10 @@ namespace aperture::app {
 
 /// One image to render: a camera name, its frame number and everything the camera needs.
 struct JobImage {
-  size_t index = 0;     ///< position in job order over all cameras (what --shard selects on)
+  /// Position in job order over all cameras, and over all scenes in a job with "scenes"
+  /// (what --shard selects on and --resume reports).
+  size_t index = 0;
+  size_t scene = 0;     ///< its scene's position in JobFile::scenes (0 without "scenes")
   std::string camera;   ///< the camera's name
   int frame = 0;        ///< frame number within the camera (0 for a fixed camera)
   CameraParams params;  ///< complete parameters (size and spp included)
@@ -45,6 +49,7 @@ struct JobDatasetOutput {
 /// A parsed and fully validated job.
 struct Job {
   std::string path;                   ///< the job file
+  std::string sceneName;              ///< the entry's "name" in a job with "scenes", else ""
   std::vector<MeshPlacement> meshes;  ///< scene.meshes, paths resolved against the job
   std::vector<JobImage> images;       ///< in job order: cameras as listed, path frames ascending
   AovSet aovs;
@@ -89,8 +94,30 @@ struct Job {
 Job parseJob(const std::string& path);
 
 /// parseJob on text already read; `name` is used in messages and relative paths resolve
-/// against `baseDir`.
+/// against `baseDir`. Both refuse a job with "scenes" (readJobFile reads it).
 Job parseJobText(const std::string& text, const std::string& name, const std::string& baseDir);
+
+/// A job file as read: one Job per scene. A file with "scenes" lists several scenes (a
+/// dataset of scans): each entry, merged over the file's other top-level keys (the entry's
+/// own keys win), is read as a one-scene job, so every check applies; {scene} in the output
+/// patterns is the entry's "name" (required with more than one scene). A file without
+/// "scenes" is one scene. Image indices run over all scenes in order.
+struct JobFile {
+  std::string path;
+  std::vector<Job> scenes;
+  bool multiScene = false;  ///< the file has "scenes"
+  /// Where summary.json goes by default: the first scene's output pattern's directory up to
+  /// its first placeholder ({scene} included).
+  std::string outputDirectory;
+  size_t imageCount() const;
+};
+
+/// Reads a job file of one scene or of "scenes" (messages name the JSON path, e.g.
+/// "scenes[3].cameras[0].eye").
+JobFile readJobFile(const std::string& path);
+/// readJobFile on text already read (`name` in messages, paths relative to `baseDir`).
+JobFile readJobFileText(const std::string& text, const std::string& name,
+                        const std::string& baseDir);
 
 /// The one-line form `aperture batch --mesh MESH --cameras PATH --out DIR --aov LIST`: every
 /// image of a camera file (or those --image names) to DIR/<image name>.exr, subfolders kept.
@@ -117,7 +144,7 @@ Job cameraFileJob(const CameraFileBatch& b);
 
 /// Expands {camera}, {frame}, {frame:0Nd} (N in 1..20) and, for an image of a camera file,
 /// {image} (its name without the extension, subfolders kept) in `pattern`. Throws Error for
-/// any other brace.
+/// any other brace ({scene} is replaced before, by readJobFile).
 std::string expandOutputPattern(const std::string& pattern, const std::string& camera, int frame,
                                 const std::string& image = "");
 

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/error.h"
@@ -26,7 +27,14 @@ class Object {
     throw Error(cat(file_, ": ", where.empty() ? "(top level)" : where, ": ", what));
   }
   std::string keyPath(const std::string& key) const {
+    for (const auto& [placedKey, where] : placed_)
+      if (placedKey == key) return where;
     return path_.empty() ? key : path_ + "." + key;
+  }
+  /// For an object merged from several places (an entry of "scenes" over the job's shared
+  /// keys): messages name `key` at `where`, the path it was written at, instead of path.key.
+  void placeKey(const std::string& key, std::string where) {
+    placed_.emplace_back(key, std::move(where));
   }
   const std::string& path() const { return path_; }
   const std::string& file() const { return file_; }
@@ -124,6 +132,7 @@ class Object {
   const std::string& file_;
   std::string path_;
   const json& j_;
+  std::vector<std::pair<std::string, std::string>> placed_;
 };
 
 /// "path[k]".

@@ -100,13 +100,15 @@ std::map<size_t, json> bestEntries(const std::vector<SummaryFile>& files) {
 /// cannot be read or no longer has `count` images.
 std::vector<JobImage> jobImages(const std::string& jobPath, size_t count, bool quiet) {
   try {
-    Job job = parseJob(jobPath);
-    if (job.images.size() == count) return std::move(job.images);
+    std::vector<JobImage> images;
+    for (Job& scene : readJobFile(jobPath).scenes)
+      images.insert(images.end(), scene.images.begin(), scene.images.end());
+    if (images.size() == count) return images;
     if (!quiet)
       std::fprintf(stderr,
                    "aperture: merge: %s now has %zu images, the summaries %zu; naming images "
                    "by index\n",
-                   jobPath.c_str(), job.images.size(), count);
+                   jobPath.c_str(), images.size(), count);
   } catch (const Error& e) {
     if (!quiet) std::fprintf(stderr, "aperture: merge: naming images by index: %s\n", e.what());
   }
