@@ -5,7 +5,8 @@
 // AVX-512, v3: AVX2 + FMA, and the baseline) and pick one at load time through an ifunc, as
 // Embree dispatches its own kernels. Everything inlined into a kernel is compiled for the
 // kernel's level too: kernels are `flatten`ed, so every call they make that can be inlined
-// is, and runs at the kernel's level (a call left out of line would run the baseline code). GCC only: Clang builds (the fuzz targets) get the baseline code.
+// is, and runs at the kernel's level (a call left out of line would run the baseline code). GCC
+// only: Clang builds (the fuzz targets) get the baseline code.
 //
 // Rules for a kernel:
 //  - a free function (GCC cannot clone virtual functions): a camera's virtual generate() calls
