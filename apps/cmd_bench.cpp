@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "apps/bench_scaling.h"
 #include "apps/camera_flags.h"
 #include "apps/commands.h"
 #include "apps/presets.h"
@@ -32,6 +33,8 @@ struct BenchArgs {
   RenderOptions render;
   int frames = 10, warmup = 3, builds = 3;
   bool baseline = false, quiet = false;
+  bool scaling = false;  ///< --scaling: procedural sizes, each in a child bench (bench_scaling.h)
+  std::string scalingSizes = kDefaultScalingSizes;
   bool nullTrace = false;  ///< --null: the frame loop without Embree (RenderSettings::nullTrace)
   std::string sweep, json, preset;
   std::string layersMethod;  ///< hidden --layers-method filter|retrace (bench/layers_methods.sh)
@@ -199,14 +202,18 @@ void measureNullTrace(const Bench& b, nlohmann::json& j) {
   j["null_rays_per_frame"] = rays;
 }
 
-/// The frame loop, and with --baseline bare rtcIntersect16 on the same rays right after it,
-/// through the same scene, so both trace with the same BVH and the same (robust or not) mode.
+/// The frame loop's Mrays/s (or with --null its ns/ray of overhead).
 void measureRender(const Bench& b, nlohmann::json& j) {
   if (b.args.nullTrace) return measureNullTrace(b, j);
   const SampleSummary render = b.time(b.settings);
   printSummary("render:", render, b.args.frames);
   j["mrays_per_s"] = toJson(render);
   j["mrays_per_s_median"] = render.median;
+}
+
+/// With --baseline: bare rtcIntersect16 on the same rays right after the frame loop, through
+/// the same scene, so both trace with the same BVH and the same (robust or not) mode.
+void measureBaseline(const Bench& b, nlohmann::json& j) {
   if (!b.args.baseline) return;
   BaselineTracer base(*b.camera, b.params.width, b.params.height, b.settings.tileSize);
   const SampleSummary bare =
@@ -215,11 +222,12 @@ void measureRender(const Bench& b, nlohmann::json& j) {
   printSummary(
       robust ? "baseline (rtcIntersect16, robust):" : "baseline (rtcIntersect16, not robust):",
       bare, b.args.frames);
-  std::printf("render / baseline: %.3f\n", render.median / bare.median);
+  const double render = j.at("mrays_per_s_median").get<double>();
+  std::printf("render / baseline: %.3f\n", render / bare.median);
   j["baseline_mrays_per_s"] = toJson(bare);
   j["baseline_mrays_per_s_median"] = bare.median;
   j["baseline_robust"] = robust;
-  j["render_over_baseline"] = render.median / bare.median;
+  j["render_over_baseline"] = render / bare.median;
 }
 
 nlohmann::json sweepPacketWidths(const Bench& b) {
@@ -340,11 +348,16 @@ int runBench(const BenchArgs& a) {
   validateBenchArgs(a);
   checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs);
 
+  const MemoryEstimate estimate =
+      benchMemoryEstimate(sceneOptions, unframed.width, unframed.height, aovs);
+
   ThreadLimit threads(a.render.threads);
   Device device;
   CameraParams params;
   LoadedScene loaded =
       loadSceneForCamera(device, sceneOptions, given, a.camera.defaults(), a.quiet, params);
+  MemoryPeaks peaks;
+  peaks.afterBuild = peakResidentBytes();
   auto camera = makeCamera(params, loaded.scene->renderOrigin());
   const Bench bench{
       a,      threads,          device, loaded, aovs, settings, sceneOptions.buildOptions(),
@@ -354,7 +367,11 @@ int runBench(const BenchArgs& a) {
   reportConfig(bench, j);
   measureLoadAndBuild(bench, j);
   measureRender(bench, j);
+  peaks.beforeBaseline = peakResidentBytes();
+  measureBaseline(bench, j);
   runSweep(bench, j);
+  peaks.atEnd = peakResidentBytes();
+  j["memory"] = benchMemoryReport(loaded, estimate, peaks);
   if (!a.json.empty()) writeTextAtomically(a.json, j.dump(2) + "\n");
   return 0;
 }
@@ -386,9 +403,22 @@ Command addBenchCommand(CLI::App& app) {
   // Hidden (no group): picks the layered-hit method to measure, as APERTURE_LAYERS_METHOD.
   sub->add_option("--layers-method", args->layersMethod)->group("");
   sub->add_flag("--quiet", args->quiet, "No log lines on stderr");
+  CLI::Option* scaling = sub->add_flag(
+      "--scaling", args->scaling,
+      "Measure procedural:spheres at each --scaling-sizes, each in a fresh child bench (with "
+      "--baseline, one build): load s, build s, peak RSS, Embree bytes, Mrays/s against the "
+      "baseline and the --max-memory estimate; a Markdown table on stdout, --json FILE and "
+      "FILE.md. With --compact, a second row set with the compact BVH");
+  scaling->excludes("--mesh")->excludes("--sweep")->excludes("--null");
+  sub->add_option("--scaling-sizes", args->scalingSizes,
+                  "Triangle counts for --scaling, comma-separated (1e5 or 100000)")
+      ->capture_default_str()
+      ->needs(scaling);
   addPresetOption(*sub, args->preset);
   return [args, sub] {
     applyPreset(args->preset, *sub, args->scene, args->camera, nullptr, nullptr);
+    if (args->scaling)
+      return runScaling({parseScalingSizes(args->scalingSizes), args->scene.compact, args->json});
     return runBench(*args);
   };
 }
