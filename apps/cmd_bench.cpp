@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "apps/bench_scaling.h"
 #include "apps/camera_flags.h"
 #include "apps/commands.h"
 #include "apps/presets.h"
@@ -35,6 +36,8 @@ struct BenchArgs {
   RenderOptions render;
   int frames = 10, warmup = 3, builds = 3;
   bool baseline = false, quiet = false;
+  bool scaling = false;  ///< --scaling: procedural sizes, each in a child bench (bench_scaling.h)
+  std::string scalingSizes = kDefaultScalingSizes;
   bool nullTrace = false;  ///< --null: the frame loop without Embree (RenderSettings::nullTrace)
   std::string sweep, json, preset;
   std::string layersMethod;  ///< hidden --layers-method filter|retrace (bench/layers_methods.sh)
@@ -388,11 +391,16 @@ int runBench(const BenchArgs& a) {
   validateBenchArgs(a);
   checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs);
 
+  const MemoryEstimate estimate =
+      benchMemoryEstimate(sceneOptions, unframed.width, unframed.height, aovs);
+
   ThreadLimit threads(a.render.threads);
   Device device;
   CameraParams params;
   LoadedScene loaded =
       loadSceneForCamera(device, sceneOptions, given, a.camera.defaults(), a.quiet, params);
+  MemoryPeaks peaks;
+  peaks.afterBuild = peakResidentBytes();
   auto camera = makeCamera(params, loaded.scene->renderOrigin());
   const Bench bench{
       a,      threads,          device, loaded, aovs, settings, sceneOptions.buildOptions(),
@@ -402,7 +410,10 @@ int runBench(const BenchArgs& a) {
   reportConfig(bench, j);
   measureLoadAndBuild(bench, j);
   measureRender(bench, j);
+  peaks.beforeBaseline = peakResidentBytes();
   runSweep(bench, j);
+  peaks.atEnd = peakResidentBytes();
+  j["memory"] = benchMemoryReport(loaded, estimate, peaks);
   if (!a.json.empty()) writeTextAtomically(a.json, j.dump(2) + "\n");
   return 0;
 }
@@ -438,9 +449,22 @@ Command addBenchCommand(CLI::App& app) {
   // Hidden (no group): picks the layered-hit method to measure, as APERTURE_LAYERS_METHOD.
   sub->add_option("--layers-method", args->layersMethod)->group("");
   sub->add_flag("--quiet", args->quiet, "No log lines on stderr");
+  CLI::Option* scaling = sub->add_flag(
+      "--scaling", args->scaling,
+      "Measure procedural:spheres at each --scaling-sizes, each in a fresh child bench (with "
+      "--baseline, one build): load s, build s, peak RSS, Embree bytes, Mrays/s against the "
+      "baseline and the --max-memory estimate; a Markdown table on stdout, --json FILE and "
+      "FILE.md. With --compact, a second row set with the compact BVH");
+  scaling->excludes("--mesh")->excludes("--sweep")->excludes("--null");
+  sub->add_option("--scaling-sizes", args->scalingSizes,
+                  "Triangle counts for --scaling, comma-separated (1e5 or 100000)")
+      ->capture_default_str()
+      ->needs(scaling);
   addPresetOption(*sub, args->preset);
   return [args, sub] {
     applyPreset(args->preset, *sub, args->scene, args->camera, nullptr, nullptr);
+    if (args->scaling)
+      return runScaling({parseScalingSizes(args->scalingSizes), args->scene.compact, args->json});
     return runBench(*args);
   };
 }

@@ -18,8 +18,8 @@ void checkMemoryBudget(const SceneOptions& o, glm::ivec2 size, const AovSet& aov
   if (limit == 0) return;
   std::vector<std::string> specs = o.meshes;
   if (specs.empty()) specs.push_back("procedural:default");
-  const MemoryEstimate e =
-      estimateMemory(specs, uint64_t(size.x), uint64_t(size.y), aovs, extraBytesPerPixel);
+  const MemoryEstimate e = estimateMemory(specs, uint64_t(size.x), uint64_t(size.y), aovs,
+                                          extraBytesPerPixel, o.compact);
   checkMemoryLimit(e, limit, "--max-memory", o.maxMemory);
 }
 

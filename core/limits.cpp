@@ -22,6 +22,12 @@ namespace {
 
 constexpr size_t kSampleBytes = size_t(1) << 20;
 
+/// What finishMesh leaves for Embree (meshBufferBytes): 3 floats a vertex and the padding,
+/// 3 indices a triangle.
+uint64_t keptMeshBytes(uint64_t vertices, uint64_t triangles) {
+  return (3 * vertices + kVertexPaddingFloats) * sizeof(float) + 3 * triangles * sizeof(uint32_t);
+}
+
 /// The first min(size, kSampleBytes) bytes of a regular file; false for anything unreadable
 /// (the loader reports that with its own message).
 bool readHead(const std::string& path, std::string& head, uint64_t& fileBytes) {
@@ -153,6 +159,7 @@ void estimatePly(const std::string& path, const std::string& head, uint64_t file
     }
   }
   m.loaderBytes = m.vertices * (doubles ? 37 : 13) + m.triangles * 12;
+  m.meshBytes = keptMeshBytes(m.vertices, m.triangles);
   m.how = "PLY header";
 }
 
@@ -203,6 +210,7 @@ void estimateObj(const std::string& head, uint64_t fileBytes, MeshSizeEstimate& 
   m.triangles = uint64_t(std::ceil(double(triangles) * scale));
   // Vectors grown by push_back: up to twice their size; doubles first, then floats.
   m.loaderBytes = m.vertices * 61 + m.triangles * 24;
+  m.meshBytes = keptMeshBytes(m.vertices, m.triangles);
   m.how = cat("OBJ sample of ", head.size(), " bytes");
 }
 
@@ -217,7 +225,10 @@ void estimateProcedural(const std::string& spec, MeshSizeEstimate& m) {
   }
   m.vertices = counts.vertices;
   m.triangles = counts.triangles;
-  m.loaderBytes = m.vertices * 37 + m.triangles * 12;
+  // The generator writes double positions (24 bytes a vertex) and the indices; finishMesh adds
+  // the padded float positions and a flag byte per vertex before it frees the doubles.
+  m.meshBytes = keptMeshBytes(m.vertices, m.triangles);
+  m.loaderBytes = m.meshBytes + m.vertices * (24 + 1);
   m.how = "procedural spec";
 }
 
@@ -244,6 +255,7 @@ MeshSizeEstimate estimateMeshSize(const std::string& spec) {
   if (m.how.empty()) {
     // Unknown or unparseable: assume the loader's buffers are as large as the file.
     m.how = "file size";
+    m.meshBytes = m.fileBytes;
   }
   return m;
 }
@@ -280,21 +292,33 @@ std::string formatBytes(uint64_t bytes) {
   return buf;
 }
 
+uint64_t MemoryEstimate::total() const {
+  return runtimeBytes + std::max({loadPeakBytes, buildPhaseBytes(), renderPhaseBytes()});
+}
+
 std::string MemoryEstimate::describe() const {
   return cat(formatBytes(total()), " (meshes ", formatBytes(meshBytes), " for ", triangles,
-             " triangles, BVH ", formatBytes(bvhBytes), ", framebuffers ",
-             formatBytes(framebufferBytes), ", runtime ", formatBytes(runtimeBytes), ")");
+             " triangles, loading peak ", formatBytes(loadPeakBytes), ", BVH ",
+             formatBytes(bvhBytes), " (", formatBytes(bvhBuildBytes),
+             " while building), framebuffers ", formatBytes(framebufferBytes), ", runtime ",
+             formatBytes(runtimeBytes),
+             "; the peak is the runtime and the largest of loading, building and rendering)");
 }
 
 MemoryEstimate estimateMemory(const std::vector<std::string>& meshSpecs, uint64_t width,
-                              uint64_t height, const AovSet& aovs, uint64_t extraBytesPerPixel) {
+                              uint64_t height, const AovSet& aovs, uint64_t extraBytesPerPixel,
+                              bool compactBvh) {
   MemoryEstimate e;
   for (const std::string& spec : meshSpecs) {
     const MeshSizeEstimate m = estimateMeshSize(spec);
-    e.meshBytes += m.loaderBytes;
+    // Meshes load one after the other: the ones before are kept while this one loads.
+    e.loadPeakBytes = std::max(e.loadPeakBytes, e.meshBytes + m.loaderBytes);
+    e.meshBytes += m.meshBytes;
     e.triangles += m.triangles;
   }
-  e.bvhBytes = e.triangles * kBvhBytesPerTriangle;
+  e.bvhBytes = e.triangles * (compactBvh ? kCompactBvhBytesPerTriangle : kBvhBytesPerTriangle);
+  e.bvhBuildBytes =
+      e.triangles * (compactBvh ? kCompactBvhBuildBytesPerTriangle : kBvhBuildBytesPerTriangle);
   e.runtimeBytes = kRuntimeBytes;
   // Sizes are validated before this is called, so the product does not overflow.
   e.framebufferBytes = width * height * (framebufferBytesPerPixel(aovs) + extraBytesPerPixel);

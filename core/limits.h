@@ -13,8 +13,12 @@ struct MeshSizeEstimate {
   uint64_t vertices = 0;
   uint64_t triangles = 0;
   uint64_t fileBytes = 0;
-  uint64_t loaderBytes = 0;  ///< peak bytes of the loader's buffers (positions, indices)
-  std::string how;           ///< "PLY header", "OBJ sample of N bytes", "procedural spec"
+  /// Peak bytes while the loader runs: its buffers and temporaries (double positions, the
+  /// finite-vertex flags, vectors grown by push_back) and the mapped file's pages.
+  uint64_t loaderBytes = 0;
+  /// Bytes kept once loaded, shared with Embree: float positions (padded) and indices.
+  uint64_t meshBytes = 0;
+  std::string how;  ///< "PLY header", "OBJ sample of N bytes", "procedural spec"
 };
 
 /// Estimates `spec` (a .ply or .obj path or a procedural spec): a PLY's counts from its header
@@ -28,30 +32,60 @@ MeshSizeEstimate estimateMeshSize(const std::string& spec);
 /// Bytes per pixel of the requested AOVs' framebuffers.
 uint64_t framebufferBytesPerPixel(const AovSet& aovs);
 
-/// Bytes of Embree BVH per triangle assumed by the estimate (a high-quality build with
-/// triangle4 leaves measures 70-80 bytes; low and medium builds use less).
-inline constexpr uint64_t kBvhBytesPerTriangle = 80;
+// The memory model (calibrated with `aperture bench --scaling` on procedural:spheres from 1e5
+// to 1e7 triangles, Embree 3.13.5, robust high-quality BVH; each figure is a child process's
+// VmHWM). A job's resident memory goes through three phases, one after the other, and its
+// peak is the largest of them on top of the runtime:
+//   loading    the loaders' peak (MeshSizeEstimate::loaderBytes; meshes load one at a time,
+//              the ones loaded before are kept);
+//   building   the kept mesh buffers (Embree reads them: they are shared, not copied) plus
+//              Embree's build peak: the finished BVH and, until the build ends, its array of
+//              32-byte primitive references, one per triangle;
+//   rendering  the mesh buffers, the BVH and the framebuffers (allocated after the build, in
+//              the pages the primitive references gave back).
+// Measured at 1e7 triangles: mesh 18.0 B/tri (12 B per vertex, 12 per triangle, 0.5 vertices
+// per triangle), build peak 97.5 B/tri above the mesh (BVH 65.2 + references 32.3), BVH after
+// the build 65-69 B/tri. The compact BVH (RTC_SCENE_FLAG_COMPACT: triangles kept as indices
+// into the shared buffers): build peak 39.3 B/tri above the mesh, BVH 36 B/tri resident.
+// Low and medium quality and non-robust builds were not calibrated: the robust high figures
+// are used for them (a non-robust high build measured 7% above them at 1e7).
 
-/// Resident bytes of the process before any job: code of the libraries (Embree, TBB, OpenEXR,
-/// OpenImageIO), thread stacks and arenas; measured at about 135 MB.
+/// Embree's resident bytes per triangle after a (robust, high-quality) build.
+inline constexpr uint64_t kBvhBytesPerTriangle = 66;
+/// Embree's peak bytes per triangle during that build: the BVH and the primitive references.
+inline constexpr uint64_t kBvhBuildBytesPerTriangle = 98;
+/// The same with the compact BVH.
+inline constexpr uint64_t kCompactBvhBytesPerTriangle = 36;
+inline constexpr uint64_t kCompactBvhBuildBytesPerTriangle = 40;
+
+/// Resident bytes of the process before any job: mostly the shared libraries' pages (Embree,
+/// TBB, OpenEXR, OpenImageIO), thread stacks and arenas; `aperture --version` peaks at 136 MB,
+/// bench --scaling at 1e5 triangles leaves 134 MB beside its mesh, BVH and framebuffers.
 inline constexpr uint64_t kRuntimeBytes = 128ull << 20;
 
-/// A job's memory, by part.
+/// A job's memory, by part (see the model above).
 struct MemoryEstimate {
-  uint64_t meshBytes = 0;         ///< loader buffers of every mesh, and the mapped files
-  uint64_t bvhBytes = 0;          ///< kBvhBytesPerTriangle per triangle
+  uint64_t loadPeakBytes = 0;     ///< the largest loading peak (meshes loaded before included)
+  uint64_t meshBytes = 0;         ///< mesh buffers kept for Embree, every mesh
+  uint64_t bvhBuildBytes = 0;     ///< Embree's peak during the build
+  uint64_t bvhBytes = 0;          ///< Embree's BVH after the build
   uint64_t framebufferBytes = 0;  ///< AOV buffers plus per-pixel extras (preview, half copy)
   uint64_t runtimeBytes = 0;      ///< kRuntimeBytes
   uint64_t triangles = 0;
-  uint64_t total() const { return meshBytes + bvhBytes + framebufferBytes + runtimeBytes; }
+  uint64_t buildPhaseBytes() const { return meshBytes + bvhBuildBytes; }
+  uint64_t renderPhaseBytes() const { return meshBytes + bvhBytes + framebufferBytes; }
+  /// The runtime plus the largest of the three phases.
+  uint64_t total() const;
   /// "1.2 GB (meshes 400 MB for 5000000 triangles, BVH 400 MB, framebuffers 400 MB)".
   std::string describe() const;
 };
 
 /// Estimates the memory of rendering `meshSpecs` at width x height with `aovs`;
-/// `extraBytesPerPixel` covers outputs made beside the framebuffer (a PNG preview: 4).
+/// `extraBytesPerPixel` covers outputs made beside the framebuffer (a PNG preview: 4);
+/// `compactBvh` for RTC_SCENE_FLAG_COMPACT (--compact).
 MemoryEstimate estimateMemory(const std::vector<std::string>& meshSpecs, uint64_t width,
-                              uint64_t height, const AovSet& aovs, uint64_t extraBytesPerPixel = 0);
+                              uint64_t height, const AovSet& aovs, uint64_t extraBytesPerPixel = 0,
+                              bool compactBvh = false);
 
 /// MemAvailable from /proc/meminfo, in bytes. Throws Error if it cannot be read.
 uint64_t availableMemoryBytes();

@@ -36,6 +36,15 @@ void Mesh::bounds(glm::vec3& lo, glm::vec3& hi) const {
   }
 }
 
+size_t meshBufferBytes(const Mesh& mesh) {
+  size_t bytes = mesh.positions.capacity() * sizeof(float) +
+                 mesh.indices.capacity() * sizeof(uint32_t) +
+                 mesh.positionsDouble.capacity() * sizeof(double) +
+                 mesh.vertexNormals.capacity() * sizeof(float);
+  for (const MeshProperty& p : mesh.properties) bytes += p.values.capacity() * sizeof(uint32_t);
+  return bytes;
+}
+
 Mesh loadMesh(const std::string& spec, const LoadOptions& options) {
   auto start = std::chrono::steady_clock::now();
   Mesh mesh;
@@ -294,6 +303,10 @@ void finishMesh(Mesh& mesh, const LoadOptions& options) {
   transformVertexNormals(mesh, options);
   mesh.positionsDouble.clear();
   mesh.positionsDouble.shrink_to_fit();
+  // Embree shares these buffers for the scene's life: keep exactly what it reads (loaders that
+  // grew them by push_back leave up to half of them unused).
+  mesh.positions.shrink_to_fit();
+  mesh.indices.shrink_to_fit();
 }
 
 }  // namespace aperture

@@ -66,6 +66,10 @@ struct Mesh {
   void bounds(glm::vec3& lo, glm::vec3& hi) const;
 };
 
+/// Bytes the mesh's buffers hold (capacities: what is allocated, not only what is used):
+/// positions, indices, vertex normals, properties and any loader-only double positions.
+size_t meshBufferBytes(const Mesh& mesh);
+
 /// How coordinates are stored.
 enum class Placement {
   CameraRelative,  ///< anchor = bounding-box centre (computed in double); default

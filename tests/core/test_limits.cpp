@@ -102,6 +102,51 @@ TEST(LimitsEstimate, ProceduralCountsEqualTheGenerators) {
     expectEstimateCountsTheLoadedMesh(spec);
 }
 
+// The estimate's mesh term is what the loader leaves for Embree, to the byte: 3 floats a vertex
+// and the padding Embree reads past the last one, 3 indices a triangle, nothing more.
+TEST(LimitsEstimate, MeshTermEqualsTheLoadedBuffers) {
+  for (const char* spec : {"procedural:spheres?tris=20000", "procedural:sphere", "procedural:city",
+                           "procedural:cube"}) {
+    const MeshSizeEstimate e = estimateMeshSize(spec);
+    const Mesh m = loadMesh(spec);
+    const uint64_t closedForm =
+        12 * m.vertexCount + 4 * kVertexPaddingFloats + 12 * m.triangleCount();
+    EXPECT_EQ(meshBufferBytes(m), closedForm) << spec << ": the loader keeps slack or a copy";
+    EXPECT_EQ(e.meshBytes, closedForm) << spec;
+    // Loading needs the double positions too (24 bytes a vertex) beside what is kept.
+    EXPECT_GE(e.loaderBytes, e.meshBytes + 24 * m.vertexCount) << spec;
+  }
+}
+
+// Loading, building and rendering come one after the other: the peak is the runtime and the
+// largest of them, not their sum.
+TEST(LimitsEstimate, ThePeakIsTheLargestPhase) {
+  const MeshCounts big = proceduralMeshCounts("procedural:spheres?tris=100000000");
+  const MemoryEstimate build =
+      estimateMemory({"procedural:spheres?tris=100000000"}, 64, 64, kAovDepth);
+  const uint64_t mesh = 12 * big.vertices + 4 * kVertexPaddingFloats + 12 * big.triangles;
+  EXPECT_EQ(build.meshBytes, mesh);
+  EXPECT_EQ(build.total(), kRuntimeBytes + mesh + kBvhBuildBytesPerTriangle * big.triangles)
+      << "100M triangles: the build (mesh, BVH and its primitive references) is the peak";
+  const MemoryEstimate compact =
+      estimateMemory({"procedural:spheres?tris=100000000"}, 64, 64, kAovDepth, 0, true);
+  EXPECT_EQ(compact.total(),
+            kRuntimeBytes + mesh + kCompactBvhBuildBytesPerTriangle * big.triangles);
+  EXPECT_LT(compact.total(), build.total());
+  // 65536 x 4096 x all AOVs: rendering is the peak (the BVH of 2 triangles is nothing).
+  const MemoryEstimate frame =
+      estimateMemory({"procedural:quad"}, 65536, 4096, parseAovList("all"));
+  EXPECT_EQ(frame.total(), kRuntimeBytes + frame.meshBytes + 2 * kBvhBytesPerTriangle +
+                               65536ull * 4096 * framebufferBytesPerPixel(parseAovList("all")));
+  // Two meshes: the second loads beside the first's kept buffers.
+  const MeshSizeEstimate a = estimateMeshSize("procedural:spheres?tris=2000000");
+  const MeshSizeEstimate b = estimateMeshSize("procedural:spheres?tris=1000000");
+  const MemoryEstimate two = estimateMemory(
+      {"procedural:spheres?tris=2000000", "procedural:spheres?tris=1000000"}, 1, 1, kAovDepth);
+  EXPECT_EQ(two.loadPeakBytes, std::max(a.loaderBytes, a.meshBytes + b.loaderBytes));
+  EXPECT_EQ(two.meshBytes, a.meshBytes + b.meshBytes);
+}
+
 TEST(LimitsEstimate, SharedPlyCountsEqualTheLoaders) {
   APERTURE_REQUIRE_SHARED_MESH(bunny, "stanford/bun_zipper.ply");
   // Triangles (ASCII and binary, extra vertex properties) and quads among triangles (binary).
