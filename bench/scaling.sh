@@ -7,7 +7,8 @@
 # plot (bench/plot.py --scaling). Needs ~12 GB free at 1e8 (the estimate says how much before
 # each size runs; the 4e7 and 1e8 sizes take minutes). Run it on an idle machine.
 #   bash bench/scaling.sh   (SIZES=1e5,1e6,1e7,4e7,1e8 THREADS=0 (all cores) FRAMES=10
-#                            WARMUP=3 OUT=bench/results/scaling.json)
+#                            WARMUP=3 OUT=bench/results/scaling.json PYTHON=python3: one with matplotlib,
+#                            e.g. the peers venv of bench/install-peers.sh)
 set -euo pipefail
 BIN=${BIN:-build/apps/aperture}
 OUT=${OUT:-bench/results/scaling.json}
@@ -17,4 +18,4 @@ mkdir -p "$(dirname "$OUT")"
 echo "command: ${cmd[*]}"
 echo "date: $(date -u +%Y-%m-%dT%H:%MZ); CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2-)"
 "${cmd[@]}"
-python3 bench/plot.py --scaling "$OUT" -o "${PLOT:-bench/plots/scaling.png}"
+"${PYTHON:-python3}" bench/plot.py --scaling "$OUT" -o "${PLOT:-bench/plots/scaling.png}"
