@@ -15,45 +15,18 @@ Camera: `perspective` sensor, fov + fov_axis as given, to_world = look_at(eye, a
 --dir, at = eye + dir). Verified against aperture by bench/peers_check.py: identical coverage and
 eye-light equal to ~1e-7 on the dragon, so there is no mirroring between the two.
 """
-import argparse
 import json
+import os
 import statistics
 import sys
 import time
 
-
-def vec3(s):
-    v = [float(x) for x in s.split(",")]
-    if len(v) != 3:
-        raise argparse.ArgumentTypeError(f"expected X,Y,Z, got {s!r}")
-    return v
-
-
-def size2(s):
-    v = [int(x) for x in s.split(",")]
-    if len(v) != 2 or min(v) <= 0:
-        raise argparse.ArgumentTypeError(f"expected W,H, got {s!r}")
-    return v
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from peer_cli import peer_arguments  # noqa: E402
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("mode", choices=["time", "image"])
-    ap.add_argument("--mesh", required=True, help="PLY file (Mitsuba's ply plugin)")
-    ap.add_argument("--eye", type=vec3, required=True)
-    g = ap.add_mutually_exclusive_group(required=True)
-    g.add_argument("--at", type=vec3)
-    g.add_argument("--dir", type=vec3)
-    ap.add_argument("--up", type=vec3, default=[0.0, 1.0, 0.0])
-    ap.add_argument("--fov", type=float, required=True, help="degrees")
-    ap.add_argument("--fov-axis", choices=["x", "y"], default="y")
-    ap.add_argument("--size", type=size2, required=True, help="W,H")
-    ap.add_argument("--frames", type=int, default=10)
-    ap.add_argument("--warmup", type=int, default=2)
-    ap.add_argument("--threads", type=int, default=0, help="Dr.Jit worker threads (0 = all cores)")
-    ap.add_argument("--json", help="time: write the figures here")
-    ap.add_argument("--out", help="image: .npy to write")
-    args = ap.parse_args()
+    args = peer_arguments(__doc__, "PLY file (Mitsuba's ply plugin)", "Dr.Jit worker threads (0 = all cores)", "image: .npy to write")
 
     import drjit as dr
     import mitsuba as mi

@@ -14,7 +14,6 @@
   image: casts once and writes the four AOVs to a .npz (t_hit, normal, primid, geomid) for
          bench/peers_check.py --open3d.
 """
-import argparse
 import json
 import os
 import statistics
@@ -24,21 +23,8 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from peer_cli import peer_arguments  # noqa: E402
 from peer_rays import pinhole_rays  # noqa: E402
-
-
-def vec3(s):
-    v = [float(x) for x in s.split(",")]
-    if len(v) != 3:
-        raise argparse.ArgumentTypeError(f"expected X,Y,Z, got {s!r}")
-    return v
-
-
-def size2(s):
-    v = [int(x) for x in s.split(",")]
-    if len(v) != 2 or min(v) <= 0:
-        raise argparse.ArgumentTypeError(f"expected W,H, got {s!r}")
-    return v
 
 
 def read_mesh(o3d, path):
@@ -61,23 +47,7 @@ def load_scene(o3d, path, threads):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("mode", choices=["time", "image"])
-    ap.add_argument("--mesh", required=True, help="PLY or OBJ file (Open3D's reader)")
-    ap.add_argument("--eye", type=vec3, required=True)
-    g = ap.add_mutually_exclusive_group(required=True)
-    g.add_argument("--at", type=vec3)
-    g.add_argument("--dir", type=vec3)
-    ap.add_argument("--up", type=vec3, default=[0.0, 1.0, 0.0])
-    ap.add_argument("--fov", type=float, required=True, help="degrees")
-    ap.add_argument("--fov-axis", choices=["x", "y"], default="y")
-    ap.add_argument("--size", type=size2, required=True, help="W,H")
-    ap.add_argument("--frames", type=int, default=10)
-    ap.add_argument("--warmup", type=int, default=2)
-    ap.add_argument("--threads", type=int, default=0, help="Open3D nthreads (0 = automatic)")
-    ap.add_argument("--json", help="time: write the figures here")
-    ap.add_argument("--out", help="image: .npz to write")
-    args = ap.parse_args()
+    args = peer_arguments(__doc__, "PLY or OBJ file (Open3D's reader)", "Open3D nthreads (0 = automatic)", "image: .npz to write")
 
     import open3d as o3d
 

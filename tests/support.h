@@ -22,6 +22,9 @@ std::string apertureBinary();
 /// Runs a shell command, returns its exit code (-1 if killed by a signal); stdout+stderr
 /// go to *output when given.
 int runCommand(const std::string& command, std::string* output = nullptr);
+/// `s` in single quotes, as one shell word for runCommand (paths and specs of the tests hold no
+/// single quote).
+inline std::string quote(const std::string& s) { return "'" + s + "'"; }
 /// What runMeasured saw of a child process.
 struct Measured {
   int exitCode = -1;  ///< exit status, or -1 when a signal ended it

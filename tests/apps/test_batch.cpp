@@ -31,6 +31,7 @@ using namespace aperture;
 using aperture::app::Job;
 using aperture::app::parseJobText;
 using aperture::test::apertureBinary;
+using aperture::test::quote;
 using aperture::test::runCommand;
 using aperture::test::scratchDir;
 using aperture::test::writeFile;
@@ -38,8 +39,6 @@ using nlohmann::json;
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string quote(const std::string& s) { return "'" + s + "'"; }
 
 /// A valid job to start from: one fixed camera on a procedural sphere.
 json baseJob() {

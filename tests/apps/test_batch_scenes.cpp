@@ -25,6 +25,7 @@
 
 using namespace aperture;
 using aperture::test::apertureBinary;
+using aperture::test::quote;
 using aperture::test::runCommand;
 using aperture::test::scratchDir;
 using aperture::test::writeFile;
@@ -32,8 +33,6 @@ using nlohmann::json;
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string quote(const std::string& s) { return "'" + s + "'"; }
 
 /// Three scenes of different procedural meshes: the first two use the shared cameras, the
 /// third its own cameras and its own size (an entry's keys win over the shared ones).

@@ -21,12 +21,11 @@
 
 using namespace aperture;
 using aperture::test::apertureBinary;
+using aperture::test::quote;
 using aperture::test::runCommand;
 using aperture::test::scratchDir;
 
 namespace {
-
-std::string quote(const std::string& s) { return "'" + s + "'"; }
 
 const char* kBunnyView = " --eye -0.02,0.11,0.35 --at -0.017,0.11,0 --up 0,1,0 --fov 30";
 

@@ -24,19 +24,18 @@ std::string twoQuads() {
          "4 0 1 4 3 4\n4 1 2 5 4 9\n";
 }
 
-std::string quote(const std::string& s) { return "'" + s + "'"; }
-
 TEST(MeshAovsCli, RenderWritesThePropertyAsAUintChannel) {
   const std::string dir = test::scratchDir();
   const std::string mesh = dir + "/quads.ply", out = dir + "/ids.exr";
   test::writeFile(mesh, twoQuads());
   std::string log;
-  ASSERT_EQ(test::runCommand(test::apertureBinary() + " render --quiet --mesh " + quote(mesh) +
-                                 " --eye 0,0,3 --at 0,0,0 --size 40,20 --fov 60 --aov "
-                                 "face.object_id,position,normal --normal-frame opencv --out " +
-                                 quote(out),
-                             &log),
-            0)
+  ASSERT_EQ(
+      test::runCommand(test::apertureBinary() + " render --quiet --mesh " + test::quote(mesh) +
+                           " --eye 0,0,3 --at 0,0,0 --size 40,20 --fov 60 --aov "
+                           "face.object_id,position,normal --normal-frame opencv --out " +
+                           test::quote(out),
+                       &log),
+      0)
       << log;
   ExrMetadata meta;
   const Framebuffer fb = readExr(out, &meta);
@@ -86,7 +85,8 @@ TEST(MeshAovsCli, BatchIdCountsSumToTheHitPixels) {
   const std::string jobPath = dir + "/job.json";
   test::writeFile(jobPath, job.dump());
   std::string log;
-  ASSERT_EQ(test::runCommand(test::apertureBinary() + " batch --quiet " + quote(jobPath), &log), 0)
+  ASSERT_EQ(
+      test::runCommand(test::apertureBinary() + " batch --quiet " + test::quote(jobPath), &log), 0)
       << log;
   const nlohmann::json summary = nlohmann::json::parse(test::readFile(dir + "/out/summary.json"));
   ASSERT_EQ(summary["images"].size(), 2u);
@@ -121,9 +121,9 @@ TEST(MeshAovsCli, UnknownNormalFrameInAJobNamesTheKey) {
                               {"output", dir + "/{camera}.exr"}};
   test::writeFile(dir + "/job.json", job.dump());
   std::string log;
-  EXPECT_NE(
-      test::runCommand(test::apertureBinary() + " batch --quiet " + quote(dir + "/job.json"), &log),
-      0);
+  EXPECT_NE(test::runCommand(
+                test::apertureBinary() + " batch --quiet " + test::quote(dir + "/job.json"), &log),
+            0);
   EXPECT_NE(log.find("normal_frame"), std::string::npos) << log;
   EXPECT_NE(log.find("did you mean 'opencv'"), std::string::npos) << log;
 }
