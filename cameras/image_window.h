@@ -4,7 +4,9 @@
 //   u = (x / W − ½ + sx)·vw,   v = (−(y / H − ½) + sy)·vh
 // for raster position (x, y) (pixel (i, j) centre at (j + ½, i + ½)); the plane's origin, the
 // point on the view axis (the principal point), is at raster ((½ − sx)·W, (½ + sy)·H).
+#include <cstddef>
 #include <glm/glm.hpp>
+#include <vector>
 
 namespace aperture {
 
@@ -32,6 +34,23 @@ struct ImageWindow {
   /// The shift that puts the principal point at raster position (px, py).
   static glm::dvec2 shiftForPrincipalPoint(double px, double py, int width, int height) {
     return {0.5 - px / width, py / height - 0.5};
+  }
+};
+
+/// The image-plane coordinates of every pixel centre, computed once per camera: u of column
+/// j's centre (window.u(j + ½)) and v of row i's (window.v(i + ½)). The raster centres are
+/// exact in double, so the entries are the per-ray values bit for bit, and the pixel-centre
+/// kernels need no per-ray divide for them. 16 entries past the right and bottom edges serve
+/// the lanes of a block that crosses them (finite rays, never traced).
+struct PixelCentreTable {
+  static constexpr size_t kPastEdge = 16;
+  std::vector<double> u, v;
+
+  PixelCentreTable() = default;
+  explicit PixelCentreTable(const ImageWindow& w)
+      : u(size_t(w.width) + kPastEdge), v(size_t(w.height) + kPastEdge) {
+    for (size_t j = 0; j < u.size(); ++j) u[j] = w.u(double(j) + 0.5);
+    for (size_t i = 0; i < v.size(); ++i) v[i] = w.v(double(i) + 0.5);
   }
 };
 

@@ -11,21 +11,20 @@ namespace {
 
 /// What the parallel projections' pixel-centre kernel needs of the camera.
 struct ParallelCentres {
-  ImageWindow window;    ///< also the image size, for the lanes past its edges
+  const PixelCentreTable& centres;  ///< u, v of the pixel centres
+  int width, height;
   glm::dvec3 eye, u, v;  ///< render-space eye, the frame's U and V
   glm::vec3 dir;         ///< the common direction, rounded once
 };
 
 /// A kBW x kBH block of rays through pixel centres, rayAt() term by term: origin
-/// (e + u·U) + v·V. u depends on the column only and v on the row only, so each is computed
-/// once per column and row of the block (kBW + kBH divides rather than one per ray).
+/// (e + u·U) + v·V, u and v from the camera's pixel-centre table.
 template <int kBW, int kBH>
 APERTURE_VECTOR_KERNEL void parallelCentres(const ParallelCentres& c, int x0, int y0, RayLanes& out,
                                             int* valid) {
   constexpr int kLanes = kBW * kBH;
-  double us[kBW], vs[kBH];
-  for (int col = 0; col < kBW; ++col) us[col] = c.window.u((double(x0) + double(col)) + 0.5);
-  for (int row = 0; row < kBH; ++row) vs[row] = c.window.v((double(y0) + double(row)) + 0.5);
+  const double* __restrict us = c.centres.u.data() + x0;
+  const double* __restrict vs = c.centres.v.data() + y0;
   alignas(64) float ox[kLanes], oy[kLanes], oz[kLanes], dx[kLanes], dy[kLanes], dz[kLanes];
   // Block rows of kBW lanes (lanePixel's order), so the inner loop reads us[] in order.
   for (int row = 0; row < kBH; ++row)
@@ -40,7 +39,7 @@ APERTURE_VECTOR_KERNEL void parallelCentres(const ParallelCentres& c, int x0, in
       dz[k] = c.dir.z;
     }
   writeBlockLanesWithOrigins<kLanes>(out, ox, oy, oz, dx, dy, dz);
-  writeBlockInImage<kBW, kBH>(x0, y0, c.window.width, c.window.height, valid);
+  writeBlockInImage<kBW, kBH>(x0, y0, c.width, c.height, valid);
 }
 
 }  // namespace
@@ -56,11 +55,13 @@ ParallelCamera::ParallelCamera(const CameraParams& p, const glm::dvec3& renderOr
   const double forward = -glm::dot(dir_, frame_.w);
   shearU_ = glm::dot(dir_, frame_.u) / forward;
   shearV_ = glm::dot(dir_, frame_.v) / forward;
+  centres_ = PixelCentreTable(window());
 }
 
 void ParallelCamera::generate(const PacketRequest& req, RayLanes& out, int* valid) const {
   if (spp_ == 1 || req.centreRay()) {
-    const ParallelCentres c{window(), renderEyeD_, frame_.u, frame_.v, glm::vec3(dir_)};
+    const ParallelCentres c{centres_, width_,   height_,        renderEyeD_,
+                            frame_.u, frame_.v, glm::vec3(dir_)};
     const bool done = withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
       constexpr int kBW = decltype(bw)::value, kBH = decltype(bh)::value;
       parallelCentres<kBW, kBH>(c, req.x0, req.y0, out, valid);

@@ -39,6 +39,7 @@ class ParallelCamera final : public PacketCamera<ParallelCamera> {
  private:
   glm::dvec3 dir_;
   double shearU_ = 0, shearV_ = 0;  ///< U and V movement per unit of depth along −W
+  PixelCentreTable centres_;        ///< u, v of the pixel centres: the centre-ray kernel's
 };
 
 }  // namespace aperture

@@ -21,14 +21,7 @@ PerspectiveCamera::PerspectiveCamera(const CameraParams& p, const glm::dvec3& re
       focusOverD_(focusDistance / d_),
       clip_(p.clip) {
   pinholeCentres_ = spp_ == 1 && lensRadius_ == 0;
-  // rasterToPlane of the pixel centres j + ½ and i + ½ (exact in double), so the table
-  // entries are the per-ray values bit for bit; 16 entries past the edge for the lanes of a
-  // block that crosses it (finite rays, never traced).
-  const ImageWindow win = window();
-  centreU_.resize(size_t(width_) + 16);
-  centreV_.resize(size_t(height_) + 16);
-  for (size_t j = 0; j < centreU_.size(); ++j) centreU_[j] = win.u(double(j) + 0.5);
-  for (size_t i = 0; i < centreV_.size(); ++i) centreV_[i] = win.v(double(i) + 0.5);
+  centres_ = PixelCentreTable(window());
   if (clip_ && !(clip_->x >= 0 && clip_->x < clip_->y && std::isfinite(clip_->y)))
     throw Error(cat("camera: clip ", clip_->x, ",", clip_->y,
                     ": needs 0 <= near < far, both finite (planar depths, scene units)"));
@@ -83,8 +76,8 @@ void PerspectiveCamera::generateUnclipped(const PacketRequest& req, RayLanes& ou
                                           int* valid) const {
   // Pinhole rays through pixel centres: every sample at spp 1, the centre ray at any spp.
   if (pinholeCentres_ || (req.centreRay() && lensRadius_ == 0)) {
-    const PinholeKernelInput in{centreU_.data(), centreV_.data(), frame_.u, frame_.v,
-                                d_ * frame_.w,   renderEyeD_,     width_,   height_};
+    const PinholeKernelInput in{centres_.u.data(), centres_.v.data(), frame_.u, frame_.v,
+                                d_ * frame_.w,     renderEyeD_,       width_,   height_};
     const bool done = withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
       pinholeCentreRays<decltype(bw)::value, decltype(bh)::value>(in, req.x0, req.y0, out, valid);
     });
@@ -94,8 +87,8 @@ void PerspectiveCamera::generateUnclipped(const PacketRequest& req, RayLanes& ou
   if (lensRadius_ > 0 && (spp_ == 1 || req.centreRay())) {
     const glm::dvec3 lens = lensRadius_ * (0.0 * frame_.u + 0.0 * frame_.v);  // rayAt's L
     const ThinLensCentres c{
-        centreU_.data(), centreV_.data(), width_,      height_, frame_.u,
-        frame_.v,        d_ * frame_.w,   focusOverD_, lens,    renderEyeD_ + lens};
+        centres_.u.data(), centres_.v.data(), width_,      height_, frame_.u,
+        frame_.v,          d_ * frame_.w,     focusOverD_, lens,    renderEyeD_ + lens};
     if (generateThinLensCentres(c, req, out, valid)) return;
   }
   PacketCamera::generate(req, out, valid);

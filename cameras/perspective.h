@@ -1,8 +1,6 @@
 #pragma once
 // The perspective camera of the lecture, with shift, the architectural mode and an optional
 // thin lens (the thin-lens camera is this class with a lens radius; see thinlens.cpp).
-#include <vector>
-
 #include "cameras/base.h"
 #include "cameras/thinlens.h"
 
@@ -67,9 +65,7 @@ class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
   std::optional<glm::dvec2> clip_;  ///< near, far planar depth (CameraParams::clip)
   /// 1 spp without a lens: rays through pixel centres, the vectorised path.
   bool pinholeCentres_ = false;
-  /// u of every column's centre and v of every row's centre (ImageWindow, in double): the
-  /// pinhole and thin-lens kernels' per-ray divides, done once per camera.
-  std::vector<double> centreU_, centreV_;
+  PixelCentreTable centres_;  ///< u, v of the pixel centres: the pinhole and thin-lens kernels'
 };
 
 }  // namespace aperture
