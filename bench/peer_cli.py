@@ -1,7 +1,8 @@
-"""The command line every peer worker script (peers_open3d.py, peers_mitsuba.py) takes from
+"""What every peer worker script (peers_open3d.py, peers_mitsuba.py) takes from
 bench/peers.py: a mode, the mesh, the reference camera (eye, at or dir, up, fov), the image
-size, frames and threads, and where to write."""
+size, frames and threads, and where to write; and the timing summary each reports."""
 import argparse
+import statistics
 
 
 def vec3(s):
@@ -38,3 +39,15 @@ def peer_arguments(doc, mesh_help, threads_help, out_help):
     ap.add_argument("--json", help="time: write the figures here")
     ap.add_argument("--out", help=out_help)
     return ap.parse_args()
+
+
+def timing_summary(seconds, width, height):
+    """Mrays/s of every timed frame of width x height primary rays: the median, min, max and
+    coefficient of variation, as the JSON keys bench/peers.py reads."""
+    mrays = [width * height / s / 1e6 for s in seconds]
+    return {
+        "mrays_per_s_median": statistics.median(mrays),
+        "mrays_per_s_min": min(mrays),
+        "mrays_per_s_max": max(mrays),
+        "mrays_per_s_cv": statistics.pstdev(mrays) / statistics.mean(mrays),
+    }

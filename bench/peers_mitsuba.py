@@ -17,12 +17,11 @@ eye-light equal to ~1e-7 on the dragon, so there is no mirroring between the two
 """
 import json
 import os
-import statistics
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from peer_cli import peer_arguments  # noqa: E402
+from peer_cli import peer_arguments, timing_summary  # noqa: E402
 
 
 def main():
@@ -81,14 +80,11 @@ def main():
         t = time.perf_counter()
         render()
         secs.append(time.perf_counter() - t)
-    mrays = [w * h / s / 1e6 for s in secs]
-    med = statistics.median(mrays)
-    cv = statistics.pstdev(mrays) / statistics.mean(mrays)
+    timing = timing_summary(secs, w, h)
+    med, lo, hi = (timing[f"mrays_per_s_{k}"] for k in ("median", "min", "max"))
+    cv = timing["mrays_per_s_cv"]
     res = {
-        "mrays_per_s_median": med,
-        "mrays_per_s_min": min(mrays),
-        "mrays_per_s_max": max(mrays),
-        "mrays_per_s_cv": cv,
+        **timing,
         "frames": args.frames,
         "warmup": args.warmup,
         "load_and_build_seconds": load_s,
@@ -97,7 +93,7 @@ def main():
                    "width": w, "height": h, "spp": 1, "mitsuba": mi.__version__,
                    "threads": dr.thread_count()},
     }
-    print(f"mitsuba: median {med:.2f} Mrays/s (min {min(mrays):.2f}, max {max(mrays):.2f}, "
+    print(f"mitsuba: median {med:.2f} Mrays/s (min {lo:.2f}, max {hi:.2f}, "
           f"cv {100 * cv:.1f}%, {args.frames} renders)", file=sys.stderr)
     if args.json:
         with open(args.json, "w") as f:
