@@ -31,7 +31,8 @@ APERTURE_VECTOR_KERNEL void pinholeBlock(const glm::vec3& eye, const glm::vec3& 
                                          const glm::vec3& du, const glm::vec3& dv, int x0, int y0,
                                          int width, int height, RTCRay16& r, int* valid) {
   for (int k = 0; k < 16; ++k) {
-    const float j = float(x0 + (k & 3)), i = float(y0 + (k >> 2));
+    const LanePixel px = lanePixel(x0, y0, 4, k);
+    const float j = float(px.column), i = float(px.row);
     const float x = corner.x + j * du.x + i * dv.x;
     const float y = corner.y + j * du.y + i * dv.y;
     const float z = corner.z + j * du.z + i * dv.z;
@@ -40,7 +41,7 @@ APERTURE_VECTOR_KERNEL void pinholeBlock(const glm::vec3& eye, const glm::vec3& 
     r.dir_x[k] = x * inv, r.dir_y[k] = y * inv, r.dir_z[k] = z * inv;
     r.tnear[k] = 0.0f, r.tfar[k] = INFINITY, r.time[k] = 0.0f;
     r.mask[k] = 0xFFFFFFFFu, r.id[k] = unsigned(k), r.flags[k] = 0;
-    valid[k] = (x0 + (k & 3) < width) & (y0 + (k >> 2) < height) ? -1 : 0;
+    valid[k] = px.inImage(width, height) ? -1 : 0;
   }
 }
 
