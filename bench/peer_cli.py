@@ -2,7 +2,9 @@
 bench/peers.py: a mode, the mesh, the reference camera (eye, at or dir, up, fov), the image
 size, frames and threads, and where to write; and the timing summary each reports."""
 import argparse
+import json
 import statistics
+import sys
 
 
 def vec3(s):
@@ -51,3 +53,13 @@ def timing_summary(seconds, width, height):
         "mrays_per_s_max": max(mrays),
         "mrays_per_s_cv": statistics.pstdev(mrays) / statistics.mean(mrays),
     }
+
+
+def report_timing(peer, what, res, frames, json_path):
+    """Prints the peer's timing line on stderr and writes `res` as JSON when asked."""
+    print(f"{peer}: median {res['mrays_per_s_median']:.2f} Mrays/s (min {res['mrays_per_s_min']:.2f}, "
+          f"max {res['mrays_per_s_max']:.2f}, cv {100 * res['mrays_per_s_cv']:.1f}%, {frames} {what})",
+          file=sys.stderr)
+    if json_path:
+        with open(json_path, "w") as f:
+            json.dump(res, f, indent=2)

@@ -15,13 +15,12 @@ Camera: `perspective` sensor, fov + fov_axis as given, to_world = look_at(eye, a
 --dir, at = eye + dir). Verified against aperture by bench/peers_check.py: identical coverage and
 eye-light equal to ~1e-7 on the dragon, so there is no mirroring between the two.
 """
-import json
 import os
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from peer_cli import peer_arguments, timing_summary  # noqa: E402
+from peer_cli import peer_arguments, report_timing, timing_summary  # noqa: E402
 
 
 def main():
@@ -81,8 +80,6 @@ def main():
         render()
         secs.append(time.perf_counter() - t)
     timing = timing_summary(secs, w, h)
-    med, lo, hi = (timing[f"mrays_per_s_{k}"] for k in ("median", "min", "max"))
-    cv = timing["mrays_per_s_cv"]
     res = {
         **timing,
         "frames": args.frames,
@@ -93,11 +90,7 @@ def main():
                    "width": w, "height": h, "spp": 1, "mitsuba": mi.__version__,
                    "threads": dr.thread_count()},
     }
-    print(f"mitsuba: median {med:.2f} Mrays/s (min {lo:.2f}, max {hi:.2f}, "
-          f"cv {100 * cv:.1f}%, {args.frames} renders)", file=sys.stderr)
-    if args.json:
-        with open(args.json, "w") as f:
-            json.dump(res, f, indent=2)
+    report_timing("mitsuba", "renders", res, args.frames, args.json)
     return 0
 
 

@@ -14,7 +14,6 @@
   image: casts once and writes the four AOVs to a .npz (t_hit, normal, primid, geomid) for
          bench/peers_check.py --open3d.
 """
-import json
 import os
 import sys
 import time
@@ -22,7 +21,7 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from peer_cli import peer_arguments, timing_summary  # noqa: E402
+from peer_cli import peer_arguments, report_timing, timing_summary  # noqa: E402
 from peer_rays import pinhole_rays  # noqa: E402
 
 
@@ -72,8 +71,6 @@ def main():
         secs.append(time.perf_counter() - t)
         del r  # freed outside the clock
     timing = timing_summary(secs, w, h)
-    med, lo, hi = (timing[f"mrays_per_s_{k}"] for k in ("median", "min", "max"))
-    cv = timing["mrays_per_s_cv"]
     res = {
         **timing,
         "frames": args.frames,
@@ -85,11 +82,7 @@ def main():
                    "width": w, "height": h, "spp": 1, "open3d": o3d.__version__,
                    "nthreads": args.threads},
     }
-    print(f"open3d: median {med:.2f} Mrays/s (min {lo:.2f}, max {hi:.2f}, "
-          f"cv {100 * cv:.1f}%, {args.frames} casts)", file=sys.stderr)
-    if args.json:
-        with open(args.json, "w") as f:
-            json.dump(res, f, indent=2)
+    report_timing("open3d", "casts", res, args.frames, args.json)
     return 0
 
 
