@@ -48,7 +48,11 @@ class CameraBase : public Camera {
   /// point has no image position (behind a pinhole, behind a parallel camera's image plane,
   /// outside a fisheye's field). The position may lie outside [0, W] x [0, H]. Thin lens:
   /// the centre of the circle of confusion (the pinhole projection).
-  virtual std::optional<glm::dvec2> project(const glm::dvec3& worldPoint) const = 0;
+  std::optional<glm::dvec2> project(const glm::dvec3& worldPoint) const override = 0;
+  /// ray() at the lens centre (½, ½): the centre ray of PacketRequest::kCentreRay.
+  bool centreRayAt(double x, double y, glm::dvec3& renderOrg, glm::dvec3& dir) const override {
+    return ray(x, y, 0.5, 0.5, renderOrg, dir);
+  }
 
   /// The view volume between nearDist and farDist (see view_volume.h for their meaning).
   virtual ViewVolume viewVolume(double nearDist, double farDist) const = 0;

@@ -33,6 +33,9 @@ struct CameraFile {
   CameraFileFormat format = CameraFileFormat::ColmapText;
   std::vector<CalibratedSensor> sensors;
   std::vector<std::string> sensorIds;  ///< the file's id of each sensor (COLMAP CAMERA_ID)
+  /// The file's id of each image (COLMAP IMAGE_ID), parallel to `images`; empty when the
+  /// format has none. COLMAP tracks (cameras/points_file.h) refer to images by it.
+  std::vector<std::string> imageIds;
   std::vector<CalibratedImage> images;
 };
 

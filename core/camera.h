@@ -174,6 +174,16 @@ class Camera {
   /// True when generate() uses random numbers (spp > 1 or a lens); the frame loop skips
   /// sample bookkeeping otherwise.
   virtual bool stochastic() const = 0;
+  /// Raster position (x, y) of a world point through the model's full forward map (pixel
+  /// (i, j) centre at (j + ½, i + ½)), or nothing where the point has no image: behind a
+  /// pinhole or a parallel camera's image plane, outside a fisheye's field, outside the region
+  /// where a lens's inverse returns the point's direction. The position may lie outside
+  /// [0, W] x [0, H]. Thin lens: the centre of the circle of confusion.
+  virtual std::optional<glm::dvec2> project(const glm::dvec3& worldPoint) const = 0;
+  /// The centre ray (lens centre, as PacketRequest::kCentreRay) through raster position
+  /// (x, y), continuous: origin in render space and unit direction, in double, before any
+  /// rounding. False where the position has no ray (outputs still finite).
+  virtual bool centreRayAt(double x, double y, glm::dvec3& renderOrg, glm::dvec3& dir) const = 0;
 };
 
 }  // namespace aperture

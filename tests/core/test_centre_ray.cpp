@@ -88,6 +88,12 @@ class SampleZeroAsCentre final : public Camera {
   glm::vec3 viewAxis() const override { return inner_.viewAxis(); }
   CameraDescription describe() const override { return inner_.describe(); }
   bool stochastic() const override { return inner_.stochastic(); }
+  std::optional<glm::dvec2> project(const glm::dvec3& p) const override {
+    return inner_.project(p);
+  }
+  bool centreRayAt(double x, double y, glm::dvec3& o, glm::dvec3& d) const override {
+    return inner_.centreRayAt(x, y, o, d);
+  }
 
  private:
   const Camera& inner_;
