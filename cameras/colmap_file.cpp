@@ -33,6 +33,7 @@
 #include <sstream>
 
 #include "cameras/camera_file_formats.h"
+#include "cameras/colmap_reading.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/mapped_file.h"
@@ -60,14 +61,6 @@ struct ColmapImage {
   std::string name;
   std::string context;  ///< "images.txt line 7 (image 3)"
 };
-
-std::string readWholeFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(cat(path, ": cannot open the file"));
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 // ---- rotations ----
 
@@ -163,6 +156,7 @@ CameraFile assemble(const std::string& dir, CameraFileFormat format,
     pose[3] = glm::dvec4(im.t, 1.0);
     file.images.push_back({im.name, sensor->second,
                            worldToCameraOpenCV(pose, AxisConvention::OpenCV, false, im.context)});
+    file.imageIds.push_back(std::to_string(im.id));
   }
   return file;
 }
@@ -180,52 +174,6 @@ CalibratedSensor colmapSensor(LensModelId model, long long width, long long heig
 
 // ---- text ----
 
-// The file's lines, each with its number (1-based), trimmed of spaces, tabs and '\r'.
-std::vector<std::pair<int, std::string>> textLines(const std::string& text) {
-  std::vector<std::pair<int, std::string>> lines;
-  std::istringstream in(text);
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    const size_t b = line.find_first_not_of(" \t\r");
-    const size_t e = line.find_last_not_of(" \t\r");
-    lines.emplace_back(number, b == std::string::npos ? "" : line.substr(b, e - b + 1));
-  }
-  return lines;
-}
-
-std::vector<std::string> tokensOf(const std::string& line) {
-  std::vector<std::string> tokens;
-  std::istringstream in(line);
-  std::string t;
-  while (in >> t) tokens.push_back(t);
-  return tokens;
-}
-
-bool isDataLine(const std::string& line) { return !line.empty() && line[0] != '#'; }
-
-double numberToken(const std::string& token, const std::string& context, const char* what) {
-  double v = 0;
-  if (!parseDoubleToken(token.data(), token.data() + token.size(), v))
-    throw Error(cat(context, ": ", what, " '",
-                    printableToken(token.data(), token.data() + token.size()),
-                    "' is not a number"));
-  return v;
-}
-
-long long integerToken(const std::string& token, const std::string& context, const char* what,
-                       long long lo, long long hi) {
-  int64_t v = 0;
-  if (!parseIntToken(token.data(), token.data() + token.size(), v) || v < lo || v > hi)
-    throw Error(cat(context, ": ", what, " '",
-                    printableToken(token.data(), token.data() + token.size()),
-                    "' is not an integer in [", lo, ", ", hi, "]"));
-  return v;
-}
-
-constexpr long long kMaxId = 0xffffffffll;  // COLMAP's ids are uint32
-
 std::vector<ColmapCamera> readCamerasText(const std::string& path) {
   std::vector<ColmapCamera> cameras;
   for (const auto& [number, line] : textLines(readWholeFile(path))) {
@@ -236,7 +184,7 @@ std::vector<ColmapCamera> readCamerasText(const std::string& path) {
       throw Error(
           cat(context, ": expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS[], got '", line, "'"));
     ColmapCamera c;
-    c.id = uint32_t(integerToken(tok[0], context, "CAMERA_ID", 0, kMaxId));
+    c.id = uint32_t(integerToken(tok[0], context, "CAMERA_ID", 0, kMaxColmapId));
     context += cat(" (camera ", c.id, ")");
     const LensModelInfo& model =
         withContext(context, [&]() -> const LensModelInfo& { return findLensModel(tok[1]); });
@@ -264,12 +212,12 @@ std::vector<ColmapImage> readImagesText(const std::string& path) {
       throw Error(cat(context, ": expected IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME, got '",
                       line, "'"));
     ColmapImage im;
-    im.id = uint32_t(integerToken(tok[0], context, "IMAGE_ID", 0, kMaxId));
+    im.id = uint32_t(integerToken(tok[0], context, "IMAGE_ID", 0, kMaxColmapId));
     context += cat(" (image ", im.id, ")");
     const char* names[] = {"QW", "QX", "QY", "QZ", "TX", "TY", "TZ"};
     for (int i = 0; i < 4; ++i) im.q[i] = numberToken(tok[1 + i], context, names[i]);
     for (int i = 0; i < 3; ++i) im.t[i] = numberToken(tok[5 + i], context, names[4 + i]);
-    im.cameraId = uint32_t(integerToken(tok[8], context, "CAMERA_ID", 0, kMaxId));
+    im.cameraId = uint32_t(integerToken(tok[8], context, "CAMERA_ID", 0, kMaxColmapId));
     // The name is the rest of the line (COLMAP's names hold no spaces; ours may).
     size_t pos = 0;
     for (int skip = 0; skip < 9; ++skip) {
@@ -285,70 +233,6 @@ std::vector<ColmapImage> readImagesText(const std::string& path) {
 }
 
 // ---- binary ----
-
-// Reads little-endian values from a whole file, checking every read against its end.
-class BinaryReader {
- public:
-  BinaryReader(std::string path) : path_(std::move(path)), bytes_(readWholeFile(path_)) {}
-
-  size_t remaining() const { return bytes_.size() - pos_; }
-  const std::string& path() const { return path_; }
-
-  template <typename T>
-  T read(const std::string& what) {
-    need(sizeof(T), what);
-    uint64_t bits = 0;
-    for (size_t k = 0; k < sizeof(T); ++k)
-      bits |= uint64_t(static_cast<unsigned char>(bytes_[pos_ + k])) << (8 * k);
-    pos_ += sizeof(T);
-    T value;
-    if constexpr (sizeof(T) == 8) {
-      std::memcpy(&value, &bits, 8);
-    } else {
-      const auto narrow = static_cast<uint32_t>(bits);
-      std::memcpy(&value, &narrow, sizeof(T));
-    }
-    return value;
-  }
-
-  std::string readName(const std::string& what) {
-    const size_t end = bytes_.find('\0', pos_);
-    if (end == std::string::npos)
-      throw Error(cat(path_, ": truncated: ", what,
-                      " has no terminating NUL before the end of "
-                      "the file (",
-                      bytes_.size(), " bytes)"));
-    std::string name = bytes_.substr(pos_, end - pos_);
-    pos_ = end + 1;
-    return name;
-  }
-
-  void skip(size_t n, const std::string& what) {
-    need(n, what);
-    pos_ += n;
-  }
-
-  // A count read from the file, checked against what the rest of the file could hold at
-  // `minBytesEach` per entry, before anything is allocated from it.
-  uint64_t readCount(size_t minBytesEach, const std::string& what) {
-    const uint64_t n = read<uint64_t>(what);
-    if (n > remaining() / minBytesEach)
-      throw Error(cat(path_, ": ", what, " is ", n, ", more than the remaining ", remaining(),
-                      " bytes could hold (at least ", minBytesEach, " bytes each)"));
-    return n;
-  }
-
- private:
-  void need(size_t n, const std::string& what) {
-    if (n > remaining())
-      throw Error(cat(path_, ": truncated: ", what, " needs ", n, " bytes at offset ", pos_,
-                      ", the file has ", bytes_.size()));
-  }
-
-  std::string path_;
-  std::string bytes_;
-  size_t pos_ = 0;
-};
 
 std::vector<ColmapCamera> readCamerasBinary(const std::string& path) {
   BinaryReader in(path);
@@ -412,7 +296,7 @@ std::vector<uint32_t> colmapCameraIds(const CameraFile& file) {
   if (file.sensorIds.size() == file.sensors.size()) {
     for (const std::string& s : file.sensorIds) {
       int64_t v = 0;
-      if (!parseIntToken(s.data(), s.data() + s.size(), v) || v < 0 || v > kMaxId ||
+      if (!parseIntToken(s.data(), s.data() + s.size(), v) || v < 0 || v > kMaxColmapId ||
           !seen.insert(uint32_t(v)).second)
         break;
       ids.push_back(uint32_t(v));

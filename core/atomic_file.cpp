@@ -142,20 +142,26 @@ void writeTextAtomically(const std::string& finalPath, const std::string& text) 
 }
 
 void writeBytesAtomically(const std::string& finalPath, const void* data, size_t size) {
-  const char* bytes = static_cast<const char*>(data);
+  writePiecesAtomically(finalPath, {{data, size}});
+}
+
+void writePiecesAtomically(const std::string& finalPath, const std::vector<BytePiece>& pieces) {
   writeAtomically(finalPath, [&](const std::string& tmp) {
     const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
     if (fd < 0) throw Error(cat("create ", tmp, ": ", errnoText(errno)));
-    size_t done = 0;
-    while (done < size) {
-      const ssize_t n = ::write(fd, bytes + done, size - done);
-      if (n < 0) {
-        if (errno == EINTR) continue;
-        const int err = errno;
-        ::close(fd);
-        throw Error(errnoText(err));
+    for (const BytePiece& piece : pieces) {
+      const char* bytes = static_cast<const char*>(piece.data);
+      size_t done = 0;
+      while (done < piece.size) {
+        const ssize_t n = ::write(fd, bytes + done, piece.size - done);
+        if (n < 0) {
+          if (errno == EINTR) continue;
+          const int err = errno;
+          ::close(fd);
+          throw Error(errnoText(err));
+        }
+        done += size_t(n);
       }
-      done += size_t(n);
     }
     if (::close(fd) != 0) throw Error(errnoText(errno));
   });

@@ -4,6 +4,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace aperture {
 
@@ -40,5 +41,15 @@ void writeTextAtomically(const std::string& finalPath, const std::string& text);
 /// Writes `size` bytes at `data` to `finalPath` atomically, checking every write (a full disk
 /// is an Error, never a short file).
 void writeBytesAtomically(const std::string& finalPath, const void* data, size_t size);
+
+/// `size` bytes at `data`: one piece of a file written by writePiecesAtomically.
+struct BytePiece {
+  const void* data = nullptr;
+  size_t size = 0;
+};
+
+/// Writes the pieces one after the other to `finalPath` atomically, each write checked, without
+/// joining them in memory first (large arrays go to the file from where they are).
+void writePiecesAtomically(const std::string& finalPath, const std::vector<BytePiece>& pieces);
 
 }  // namespace aperture

@@ -11,11 +11,11 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
-#include <sstream>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/mesh.h"
+#include "core/npy.h"
 
 namespace aperture {
 
@@ -95,23 +95,11 @@ std::string encodePfm(const ImageView& image) {
   return out;
 }
 
-/// NPY format 1.0: magic "\x93NUMPY", version 1 0, a little-endian uint16 header length, and
-/// a Python dict literal padded with spaces and ended by '\n' so that the data starts at a
-/// multiple of 64 bytes; then the array in C order.
+/// NPY (the header of core/npy.h), then the array in C order.
 std::string encodeNpy(const ImageView& image) {
-  const std::string shape =
-      image.channels == 1 ? cat("(", image.height, ", ", image.width, ")")
-                          : cat("(", image.height, ", ", image.width, ", ", image.channels, ")");
-  std::string dict = cat("{'descr': '", image.u32 ? "<u4" : "<f4",
-                         "', 'fortran_order': False, 'shape': ", shape, ", }");
-  const size_t preamble = 6 + 2 + 2;  // magic, version, header length
-  const size_t unpadded = preamble + dict.size() + 1;
-  dict.append((64 - unpadded % 64) % 64, ' ');
-  dict.push_back('\n');
-  std::string out("\x93NUMPY\x01\x00", 8);
-  out.push_back(char(dict.size() & 0xffu));
-  out.push_back(char((dict.size() >> 8) & 0xffu));
-  out += dict;
+  std::vector<uint64_t> shape = {uint64_t(image.height), uint64_t(image.width)};
+  if (image.channels != 1) shape.push_back(uint64_t(image.channels));
+  std::string out = npyHeader(image.u32 ? "<u4" : "<f4", shape);
   for (int row = 0; row < image.height; ++row) appendRow(out, image, row);
   return out;
 }
@@ -249,53 +237,29 @@ DatasetImage readPfm(const std::string& path, const std::string& bytes) {
   return image;
 }
 
-/// The text after `'key': ` in a NPY header dict, up to (not including) `stop`.
-std::string dictValue(const std::string& dict, const std::string& key, char stop,
-                      const std::string& path) {
-  const std::string needle = "'" + key + "':";
-  const size_t at = dict.find(needle);
-  if (at == std::string::npos) throw Error(cat("'", path, "': NPY header lacks '", key, "'"));
-  size_t start = at + needle.size();
-  while (start < dict.size() && dict[start] == ' ') ++start;
-  const size_t end = dict.find(stop, start);
-  if (end == std::string::npos) throw Error(cat("'", path, "': bad NPY header '", dict, "'"));
-  return dict.substr(start, end - start);
-}
-
 DatasetImage readNpy(const std::string& path, const std::string& bytes) {
-  if (bytes.size() < 10 || bytes.compare(0, 6, "\x93NUMPY") != 0)
-    throw Error(cat("'", path, "': not a NumPy .npy file"));
-  if (bytes[6] != 1 || bytes[7] != 0)
-    throw Error(cat("'", path, "': NPY version ", int(bytes[6]), ".", int(bytes[7]),
-                    " (only 1.0 is read)"));
-  const size_t headerSize = size_t(static_cast<unsigned char>(bytes[8])) |
-                            size_t(static_cast<unsigned char>(bytes[9])) << 8;
-  if (bytes.size() < 10 + headerSize) throw Error(cat("'", path, "': truncated NPY header"));
-  const std::string dict = bytes.substr(10, headerSize);
-  const std::string descr = dictValue(dict, "descr", ',', path);
-  if (descr != "'<f4'" && descr != "'<u4'")
-    throw Error(cat("'", path, "': NPY dtype ", descr, " (only '<f4' and '<u4' are read)"));
-  if (dictValue(dict, "fortran_order", ',', path) != "False")
+  const NpyHeader header =
+      parseNpyHeader(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), path);
+  if (header.descr != "<f4" && header.descr != "<u4")
+    throw Error(
+        cat("'", path, "': NPY dtype '", header.descr, "' (only '<f4' and '<u4' are read)"));
+  if (header.fortranOrder)
     throw Error(cat("'", path, "': NPY array in Fortran order (only C order is read)"));
-  std::string shape = dictValue(dict, "shape", ')', path);
-  if (shape.empty() || shape[0] != '(') throw Error(cat("'", path, "': bad NPY shape"));
-  std::vector<int> dims;
-  std::stringstream parts(shape.substr(1));
-  for (std::string part; std::getline(parts, part, ',');) {
-    part.erase(std::remove(part.begin(), part.end(), ' '), part.end());
-    if (!part.empty()) dims.push_back(positiveInt(part, "NPY dimension", path));
-  }
+  const std::vector<uint64_t>& dims = header.shape;
   if (dims.size() != 2 && dims.size() != 3)
-    throw Error(cat("'", path, "': NPY shape (", shape.substr(1), ") is not (H, W) or (H, W, C)"));
+    throw Error(cat("'", path, "': NPY shape (",
+                    join(dims, ", ", [](uint64_t d) { return std::to_string(d); }),
+                    ") is not (H, W) or (H, W, C)"));
+  for (uint64_t d : dims) positiveInt(std::to_string(d), "NPY dimension", path);
   DatasetImage image;
-  image.height = dims[0];
-  image.width = dims[1];
-  image.channels = dims.size() == 3 ? dims[2] : 1;
+  image.height = int(dims[0]);
+  image.width = int(dims[1]);
+  image.channels = dims.size() == 3 ? int(dims[2]) : 1;
   const size_t count = size_t(image.width) * size_t(image.height) * size_t(image.channels);
-  checkDataSize(bytes, 10 + headerSize, count, path);
+  checkDataSize(bytes, header.dataOffset, count, path);
   std::vector<uint32_t> values(count);
-  readValues(bytes, 10 + headerSize, count, true, values.data());
-  if (descr == "'<u4'") {
+  readValues(bytes, header.dataOffset, count, true, values.data());
+  if (header.descr == "<u4") {
     image.u32 = std::move(values);
   } else {
     image.f32.resize(count);

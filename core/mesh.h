@@ -90,6 +90,10 @@ struct LoadOptions {
   std::vector<PropertyAov> properties;
   /// Keep per-vertex normals when the file has them (the shading-normal AOV asks for them).
   bool vertexNormals = false;
+  /// PLY only: read the vertex element alone, as a point set (`--points P.ply`): a file
+  /// without faces is accepted and face or tristrips elements are skipped, so the mesh may
+  /// have no triangles.
+  bool verticesOnly = false;
 };
 
 /// Loads `spec`: a path ending in .ply or .obj (case-insensitive), or "procedural:NAME?k=v&k=v"

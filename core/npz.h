@@ -25,10 +25,18 @@ struct NpzArray {
 NpzArray npzStringArray(const std::string& name, const std::vector<std::string>& strings,
                         std::vector<uint8_t>& storage);
 
+/// How writeNpz lays out the archive.
+struct NpzOptions {
+  /// Zip64 records for every member and the end of the archive even where the sizes and
+  /// offsets fit 32 bits (tests: the zip64 layout without writing 4 GiB).
+  bool forceZip64 = false;
+};
+
 /// Writes `arrays` to `path` as an .npz (atomically: a failure leaves no file). Throws Error
 /// naming the file for a duplicate or empty name, bytes that do not match shape and dtype,
 /// or an I/O failure.
-void writeNpz(const std::string& path, const std::vector<NpzArray>& arrays);
+void writeNpz(const std::string& path, const std::vector<NpzArray>& arrays,
+              const NpzOptions& options = {});
 
 /// One member read back by readNpz: its dtype string, shape and raw little-endian bytes.
 struct NpzMember {

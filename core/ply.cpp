@@ -950,7 +950,9 @@ Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& path,
     if (e.name == "face" || e.name == "tristrips") haveFaces = true;
   }
   if (!vertexElem) throw Error(cat(path, ": no 'vertex' element in the header"));
-  if (!haveFaces) throw Error(cat(path, ": no face or tristrips element in the header"));
+  const bool readsFaces = !options.verticesOnly;
+  if (!haveFaces && readsFaces)
+    throw Error(cat(path, ": no face or tristrips element in the header"));
   for (const PropertyAov& p : options.properties) mesh.properties.push_back({p.domain, p.name, {}});
   auto requestFor = [&](const PlyElement& e) {
     return requestOf(path, e, e.name == "vertex" ? PropertyDomain::Vertex : PropertyDomain::Face,
@@ -964,7 +966,7 @@ Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& path,
     for (const PlyElement& e : h.elements) {
       if (e.name == "vertex")
         readVertices(path, e, r, mesh, requestFor(e));
-      else if (e.name == "face" || e.name == "tristrips")
+      else if (readsFaces && (e.name == "face" || e.name == "tristrips"))
         readFaces(path, e, r, mesh, e.name == "tristrips", requestFor(e));
       else
         skipElement(e, r);
@@ -981,11 +983,11 @@ Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& path,
         const ElementRequest req = requestFor(e);
         if (!(parallel && readVerticesParallel(e, r, mesh, req)) && !readVerticesFast(e, r, mesh))
           readVertices(path, e, r, mesh, req);
-      } else if (e.name == "face") {
+      } else if (readsFaces && e.name == "face") {
         const ElementRequest req = requestFor(e);
         if (!(parallel && readFacesParallel(e, r, mesh)) && !readFacesFast(path, e, r, mesh))
           readFaces(path, e, r, mesh, false, req);
-      } else if (e.name == "tristrips") {
+      } else if (readsFaces && e.name == "tristrips") {
         readFaces(path, e, r, mesh, true, requestFor(e));
       } else if (fixedSize(e, itemBytes)) {
         r.skipValues(e.count * itemBytes, PlyType::UInt8, "skipped element data");
@@ -994,7 +996,8 @@ Mesh loadPlyFromMemory(const char* data, size_t size, const std::string& path,
       }
     }
   }
-  if (mesh.indices.empty()) throw Error(cat(path, ": contains no faces (no triangles to render)"));
+  if (mesh.indices.empty() && readsFaces)
+    throw Error(cat(path, ": contains no faces (no triangles to render)"));
   return mesh;
 }
 

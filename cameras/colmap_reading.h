@@ -1,0 +1,84 @@
+#pragma once
+// Reading COLMAP's files, text and binary: numbered lines and their tokens, numbers and ids
+// parsed with the entry named in every error, and little-endian values read from a whole file,
+// each checked against its end. The camera model reader (colmap_file.cpp) and the points
+// reader (points_file.cpp) both read through these.
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/error.h"
+
+namespace aperture::camera_files {
+
+/// The whole file; Error "PATH: cannot open the file" otherwise.
+std::string readWholeFile(const std::string& path);
+
+/// The file's lines, each with its number (1-based), trimmed of spaces, tabs and '\r'.
+std::vector<std::pair<int, std::string>> textLines(const std::string& text);
+/// The whitespace-separated tokens of a line.
+std::vector<std::string> tokensOf(const std::string& line);
+/// Not empty and not a '#' comment.
+bool isDataLine(const std::string& line);
+
+/// `token` as a double; Error "CONTEXT: WHAT 'TOKEN' is not a number" otherwise.
+double numberToken(const std::string& token, const std::string& context, const char* what);
+/// `token` as an integer in [lo, hi]; Error naming `context`, `what` and the range otherwise.
+long long integerToken(const std::string& token, const std::string& context, const char* what,
+                       long long lo, long long hi);
+
+/// COLMAP's image and camera ids are uint32.
+inline constexpr long long kMaxColmapId = 0xffffffffll;
+
+/// Reads little-endian values from a whole file, checking every read against its end; errors
+/// name the file, what was read and the byte offset.
+class BinaryReader {
+ public:
+  explicit BinaryReader(std::string path) : path_(std::move(path)), bytes_(readWholeFile(path_)) {}
+
+  size_t remaining() const { return bytes_.size() - pos_; }
+  size_t offset() const { return pos_; }
+  const std::string& path() const { return path_; }
+
+  template <typename T>
+  T read(const std::string& what) {
+    static_assert(sizeof(T) == 1 || sizeof(T) == 2 || sizeof(T) == 4 || sizeof(T) == 8, "a scalar");
+    need(sizeof(T), what);
+    uint64_t bits = 0;
+    for (size_t k = 0; k < sizeof(T); ++k)
+      bits |= uint64_t(static_cast<unsigned char>(bytes_[pos_ + k])) << (8 * k);
+    pos_ += sizeof(T);
+    // The low sizeof(T) bytes of `bits` hold the value on a little-endian host.
+    T value;
+    if constexpr (sizeof(T) == 8) {
+      std::memcpy(&value, &bits, 8);
+    } else {
+      const auto narrow = static_cast<uint32_t>(bits);
+      std::memcpy(&value, &narrow, sizeof(T));
+    }
+    return value;
+  }
+
+  /// A NUL-terminated string.
+  std::string readName(const std::string& what);
+
+  void skip(size_t n, const std::string& what) {
+    need(n, what);
+    pos_ += n;
+  }
+
+  /// A count read from the file, checked against what the rest of the file could hold at
+  /// `minBytesEach` per entry, before anything is allocated from it.
+  uint64_t readCount(size_t minBytesEach, const std::string& what);
+
+ private:
+  void need(size_t n, const std::string& what) const;
+
+  std::string path_;
+  std::string bytes_;
+  size_t pos_ = 0;
+};
+
+}  // namespace aperture::camera_files
