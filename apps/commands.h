@@ -12,5 +12,6 @@ Command addBenchCommand(CLI::App& app);
 Command addCameraCommand(CLI::App& app);
 Command addBatchCommand(CLI::App& app);
 Command addTradeoffCommand(CLI::App& app);
+Command addVisibilityCommand(CLI::App& app);
 
 }  // namespace aperture::app

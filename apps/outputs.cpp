@@ -58,11 +58,14 @@ const std::vector<std::string>& supportedExtensions(OutputKind kind) {
   static const std::vector<std::string> exr = {".exr"};
   static const std::vector<std::string> preview = {".png",  ".jpg", ".jpeg", ".tif",
                                                    ".tiff", ".bmp", ".tga",  ".ppm"};
+  static const std::vector<std::string> visibility = {".npz", ".ply"};
   switch (kind) {
     case OutputKind::Exr:
       return exr;
     case OutputKind::Preview:
       return preview;
+    case OutputKind::Visibility:
+      return visibility;
     case OutputKind::Dataset:
       break;
   }

@@ -19,15 +19,16 @@ struct Job;
 
 /// What an output path is written as.
 enum class OutputKind {
-  Exr,      ///< the multi-channel EXR (`--out`, the job's "output")
-  Preview,  ///< the 8-bit preview (`--preview`, the job's "preview")
-  Dataset,  ///< one AOV in a dataset format (`--out x.png` with one AOV, the job's "outputs")
+  Exr,         ///< the multi-channel EXR (`--out`, the job's "output")
+  Preview,     ///< the 8-bit preview (`--preview`, the job's "preview")
+  Dataset,     ///< one AOV in a dataset format (`--out x.png` with one AOV, the job's "outputs")
+  Visibility,  ///< `aperture visibility --out`: the arrays (.npz) or the mesh with them (.ply)
 };
 
 /// The extensions (lower case, with the dot) a kind of output may end in; checks ignore case.
 /// Exr: .exr. Preview: the 8-bit RGB formats OpenImageIO writes here: .png .jpg .jpeg .tif
 /// .tiff .bmp .tga .ppm. Dataset: datasetExtensions() of core/dataset_image.h (.png is a
-/// 16-bit depth file there, an 8-bit picture as a preview).
+/// 16-bit depth file there, an 8-bit picture as a preview). Visibility: .npz .ply.
 const std::vector<std::string>& supportedExtensions(OutputKind kind);
 
 /// Checks the name of the output file `path`, given as `name` (a flag such as "--out" or a job
