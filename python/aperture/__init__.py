@@ -220,6 +220,40 @@ class Scene:
                 yield camera, {name: value[k] for name, value in out.items()}
             del out
 
+    def face_visibility(
+        self, cameras: Camera | Iterable[Camera], front_only: bool = False, threads: int = 0
+    ) -> dict[str, np.ndarray]:
+        """Which faces of the scene's one mesh each camera sees, with the GIL released; the
+        arrays of ``aperture visibility``'s .npz (docs/visibility.md), camera k being the k-th
+        of ``cameras``. A camera sees a face when the face's centroid projects inside its image
+        (through the full lens model, where it is invertible) and the centre ray through that
+        position hits the face first; ``front_only`` also requires the ray to meet the side the
+        counter-clockwise winding faces.
+
+        Returns ``face_view_count`` (uint32, per face), ``face_pixels`` (uint64: pixel-centre
+        rays over all cameras whose first hit is the face, the bincount of the primid renders),
+        ``best_view`` (int32: the camera seeing the face with the largest projected area in
+        pixels, -1 if none) and scipy-style CSR index arrays ``camera_faces_indptr`` /
+        ``camera_faces_indices`` and ``face_cameras_indptr`` / ``face_cameras_indices``."""
+        return self._scene._face_visibility(_camera_list(cameras), front_only, threads)
+
+    def point_visibility(
+        self,
+        points: Any,
+        cameras: Camera | Iterable[Camera],
+        tol: float = 0.01,
+        threads: int = 0,
+    ) -> dict[str, np.ndarray]:
+        """Which cameras see each world point of ``points`` ((N, 3), converted to float64), with
+        the GIL released. Camera c sees point p when p projects inside its image and no surface
+        lies on the camera's ray to p closer than d * (1 - tol), d the distance from the ray's
+        origin to p (``--occlusion-tolerance``). Returns ``point_cameras_indptr`` (uint64,
+        N + 1) and ``point_cameras_indices`` (uint32), scipy-style CSR index arrays."""
+        p = np.ascontiguousarray(points, dtype=np.float64)
+        if p.ndim != 2 or p.shape[1] != 3:
+            raise ValueError(f"point_visibility: points must have shape (N, 3), not {p.shape}")
+        return self._scene._point_visibility(p, _camera_list(cameras), tol, threads)
+
     def __repr__(self) -> str:
         return f"Scene({self._scene.mesh_names!r}, triangles={self.triangle_count})"
 

@@ -96,6 +96,19 @@ class Scene:
         **options: Any,
     ) -> Iterator[tuple[Camera, dict[str, np.ndarray]]]:
         """Yields (camera, name -> (H, W[, C]) array), batch cameras at a time."""
+    def face_visibility(
+        self, cameras: Camera | Iterable[Camera], front_only: bool = False, threads: int = 0
+    ) -> dict[str, np.ndarray]:
+        """Per face: view count, pixels, best view; CSR camera <-> face lists (GIL released)."""
+
+    def point_visibility(
+        self,
+        points: Any,
+        cameras: Camera | Iterable[Camera],
+        tol: float = 0.01,
+        threads: int = 0,
+    ) -> dict[str, np.ndarray]:
+        """Per point: the cameras that see it, as CSR index arrays (GIL released)."""
 
 def load_cameras(path: _PathLike, images: Iterable[str] | None = None) -> list[Camera]:
     """The cameras of a COLMAP model, transforms.json or OpenCV JSON/YAML, each with .name."""

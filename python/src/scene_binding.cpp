@@ -1,6 +1,6 @@
 // aperture.Scene: meshes through the apps' one scene set-up (apps/scene_setup.h) or NumPy
-// arrays through finishMesh, and Scene.render over renderImages (core/render.h) with the GIL
-// released for the whole render.
+// arrays through finishMesh, Scene.render over renderImages (core/render.h) and the face and
+// point visibility (core/visibility.h), with the GIL released for the whole computation.
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/function.h>
 #include <nanobind/stl/optional.h>
@@ -17,12 +17,15 @@
 #include "aov_arrays.h"
 #include "apps/render_options.h"
 #include "apps/scene_setup.h"
+#include "apps/visibility_arrays.h"
 #include "bindings.h"
 #include "cameras/registry.h"
 #include "core/error.h"
 #include "core/layers.h"
 #include "core/render.h"
+#include "core/visibility.h"
 #include "file_errors.h"
+#include "named_arrays.h"
 
 namespace aperture::python {
 
@@ -106,16 +109,7 @@ class PyScene {
                     int layers, const std::string& normalFrame, int threads,
                     const nb::object& progress, int packet, int tile) {
     const bool single = nb::isinstance<PyCamera>(cameras);
-    std::vector<CameraParams> params;
-    if (single) {
-      params.push_back(nb::cast<const PyCamera&>(cameras).params);
-    } else {
-      for (nb::handle c : cameras) {
-        if (!nb::isinstance<PyCamera>(c))
-          throw nb::type_error("Scene.render: cameras must be a Camera or a sequence of Camera");
-        params.push_back(nb::cast<const PyCamera&>(c).params);
-      }
-    }
+    std::vector<CameraParams> params = cameraParamsOf(cameras, "Scene.render");
     // Everything is checked before any work, as the command line does.
     AovSet aovs = parseAovSet(aovList);
     if (layers != 0) checkLayerCount(layers, "layers");
@@ -126,13 +120,10 @@ class PyScene {
     options.threads = threads;
     RenderSettings settings = options.settings(1);
     settings.normalFrame = parseNormalFrame(normalFrame);
-    std::vector<std::unique_ptr<Camera>> owned;
-    std::vector<const Camera*> frameCameras;
-    for (CameraParams& p : params) {
-      if (spp) p.spp = *spp;
-      owned.push_back(makeCamera(p, loaded_.scene->renderOrigin()));
-      frameCameras.push_back(owned.back().get());
-    }
+    if (spp)
+      for (CameraParams& p : params) p.spp = *spp;
+    const std::vector<std::unique_ptr<Camera>> owned = camerasOf(params);
+    const std::vector<const Camera*> frameCameras = pointersOf(owned);
     provide(aovs);
 
     // The progress callback runs with the GIL taken back; an exception it raises stops the
@@ -185,6 +176,43 @@ class PyScene {
     return perFrameLists(frames);
   }
 
+  /// Scene.face_visibility: faceVisibility (core/visibility.h) with the GIL released, as the
+  /// arrays of the command's .npz (apps/visibility_arrays.h).
+  nb::dict faceVisibility(nb::handle cameras, bool frontOnly, int threads) {
+    const std::vector<std::unique_ptr<Camera>> owned =
+        camerasOf(cameraParamsOf(cameras, "Scene.face_visibility"));
+    FaceVisibilityOptions options;
+    options.frontOnly = frontOnly;
+    auto result = std::make_shared<FaceVisibility>();
+    {
+      nb::gil_scoped_release release;
+      app::ThreadLimit limit(threads);
+      *result = aperture::faceVisibility(*loaded_.scene, pointersOf(owned), options);
+    }
+    return namedArrays(result, app::faceVisibilityArrays(*result));
+  }
+
+  /// Scene.point_visibility: pointVisibility (core/visibility.h) of world points (N, 3) with
+  /// the GIL released.
+  nb::dict pointVisibility(
+      const nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>& points,
+      nb::handle cameras, double tolerance, int threads) {
+    const std::vector<std::unique_ptr<Camera>> owned =
+        camerasOf(cameraParamsOf(cameras, "Scene.point_visibility"));
+    std::vector<glm::dvec3> world(points.shape(0));
+    for (size_t k = 0; k < world.size(); ++k)
+      world[k] = {points.data()[3 * k], points.data()[3 * k + 1], points.data()[3 * k + 2]};
+    PointVisibilityOptions options;
+    options.tolerance = tolerance;
+    auto result = std::make_shared<PointVisibility>();
+    {
+      nb::gil_scoped_release release;
+      app::ThreadLimit limit(threads);
+      *result = aperture::pointVisibility(*loaded_.scene, pointersOf(owned), world, options);
+    }
+    return namedArrays(result, app::pointVisibilityArrays(*result));
+  }
+
   nb::dict lastRender() const {
     nb::dict d;
     d["seconds"] = last_.seconds;
@@ -226,6 +254,36 @@ class PyScene {
     } else {
       app::buildLoadedScene(*device_, loaded_, spec_, true);
     }
+  }
+
+  /// The parameters of a Camera or a sequence of Camera; TypeError naming `what` otherwise.
+  static std::vector<CameraParams> cameraParamsOf(nb::handle cameras, const char* what) {
+    std::vector<CameraParams> params;
+    if (nb::isinstance<PyCamera>(cameras)) {
+      params.push_back(nb::cast<const PyCamera&>(cameras).params);
+      return params;
+    }
+    for (nb::handle c : cameras) {
+      if (!nb::isinstance<PyCamera>(c))
+        throw nb::type_error(
+            cat(what, ": cameras must be a Camera or a sequence of Camera").c_str());
+      params.push_back(nb::cast<const PyCamera&>(c).params);
+    }
+    return params;
+  }
+
+  /// The cameras of `params` in this scene's render space.
+  std::vector<std::unique_ptr<Camera>> camerasOf(const std::vector<CameraParams>& params) const {
+    std::vector<std::unique_ptr<Camera>> owned;
+    for (const CameraParams& p : params)
+      owned.push_back(makeCamera(p, loaded_.scene->renderOrigin()));
+    return owned;
+  }
+
+  static std::vector<const Camera*> pointersOf(const std::vector<std::unique_ptr<Camera>>& owned) {
+    std::vector<const Camera*> out;
+    for (const auto& c : owned) out.push_back(c.get());
+    return out;
   }
 
   static bool sameSize(const std::vector<CameraParams>& params) {
@@ -305,6 +363,10 @@ void bindScene(nb::module_& m) {
       .def("_render", &PyScene::render, nb::arg("cameras"), nb::arg("aovs"), nb::arg("spp"),
            nb::arg("layers"), nb::arg("normal_frame"), nb::arg("threads"),
            nb::arg("progress").none(), nb::arg("packet"), nb::arg("tile"))
+      .def("_face_visibility", &PyScene::faceVisibility, nb::arg("cameras"), nb::arg("front_only"),
+           nb::arg("threads"))
+      .def("_point_visibility", &PyScene::pointVisibility, nb::arg("points"), nb::arg("cameras"),
+           nb::arg("tolerance"), nb::arg("threads"))
       .def_prop_ro("last_render", &PyScene::lastRender,
                    "Seconds, rays, hits, frames and Mrays/s of the last render call")
       .def_prop_ro("bounds", &PyScene::bounds, "World bounds ((x, y, z) low, (x, y, z) high)")

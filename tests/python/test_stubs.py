@@ -38,7 +38,7 @@ def test_python_functions_match_their_stubs() -> None:
         assert stub_parameters(functions[name]) == real, name
     scene = next(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "Scene")
     methods = {n.name: n for n in scene.body if isinstance(n, ast.FunctionDef)}
-    for name in ("__init__", "render", "render_iter"):
+    for name in ("__init__", "render", "render_iter", "face_visibility", "point_visibility"):
         real = [p for p in inspect.signature(getattr(aperture.Scene, name)).parameters if p != "self"]
         assert stub_parameters(methods[name]) == real, name
     assert aperture.__version__ and aperture.Scene.render.__doc__ and aperture.Camera.__doc__
