@@ -87,10 +87,6 @@ PointVisibility pointVisibility(const Scene& scene, const std::vector<const Came
                                 const std::vector<glm::dvec3>& points,
                                 const PointVisibilityOptions& options = {});
 
-/// What a camera makes of one point: seen, projected inside the image but occluded by the
-/// mesh, or outside the image (no projection, or outside [0, W) x [0, H)).
-enum class PointView : uint8_t { Seen, Occluded, Outside };
-
 /// One observation of a point in a camera (a COLMAP track element, the camera an index into
 /// the cameras given).
 struct PointObservation {
@@ -98,6 +94,8 @@ struct PointObservation {
   uint32_t camera = 0;
 };
 
+/// How a camera sees observations: seen; projected inside the image but occluded by the mesh;
+/// outside the image (no projection, or outside [0, W) x [0, H)).
 struct ObservationCounts {
   uint64_t seen = 0, occluded = 0, outside = 0;
 };
