@@ -103,14 +103,11 @@ constexpr size_t kItemsPerChunk = size_t(1) << 16;
 size_t chunkCount(size_t n) { return (n + kItemsPerChunk - 1) / kItemsPerChunk; }
 
 /// Calls body(c, begin, end) in parallel for chunk c = [c, c + 1) * kItemsPerChunk of [0, n)
-/// (the last one shorter). Chunks are numbered, so per-chunk results can be combined in
-/// order and give exactly what one serial pass gives, whatever the thread count.
+/// (parallelForChunks: numbered chunks, so per-chunk results can be combined in order and give
+/// exactly what one serial pass gives, whatever the thread count).
 template <class Body>
 void forEachChunk(size_t n, const Body& body) {
-  parallelFor(chunkCount(n), 1, [&](size_t cb, size_t ce) {
-    for (size_t c = cb; c < ce; ++c)
-      body(c, c * kItemsPerChunk, std::min(n, (c + 1) * kItemsPerChunk));
-  });
+  parallelForChunks(n, kItemsPerChunk, body);
 }
 
 /// Throws Error naming the mesh, how many indices are >= vertexCount and the first of them.

@@ -6,6 +6,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cstddef>
 
 #if defined(__SANITIZE_THREAD__)
@@ -35,6 +36,18 @@ void parallelFor(size_t n, size_t grain, const Body& body) {
       },
       tbb::simple_partitioner());
   APERTURE_TSAN_ACQUIRE(&join);
+}
+
+/// Calls body(c, begin, end) in parallel for numbered chunks of `chunk` indices of [0, n):
+/// chunk c covers [c·chunk, min((c + 1)·chunk, n)). The boundaries do not depend on the thread
+/// count (parallelFor's own ranges split in halves and need not fall on multiples of a grain),
+/// so a caller can give chunk c its own result slot and combine the slots in order.
+template <class Body>
+void parallelForChunks(size_t n, size_t chunk, const Body& body) {
+  const size_t chunks = (n + chunk - 1) / chunk;
+  parallelFor(chunks, 1, [&](size_t first, size_t last) {
+    for (size_t c = first; c < last; ++c) body(c, c * chunk, std::min(n, (c + 1) * chunk));
+  });
 }
 
 }  // namespace aperture

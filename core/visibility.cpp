@@ -117,16 +117,11 @@ std::vector<uint32_t> concatenate(const std::vector<std::vector<uint32_t>>& perT
 
 size_t taskCount(size_t items) { return (items + kItemsPerTask - 1) / kItemsPerTask; }
 
-/// Calls body(task, begin, end) in parallel for the tasks of `items`: task t covers items
-/// [t·kItemsPerTask, min((t + 1)·kItemsPerTask, items)). Fixed boundaries, so each task owns
-/// slot t of a per-task array (parallelFor's own chunks split ranges in halves and need not
-/// fall on multiples of the grain).
+/// Calls body(task, begin, end) in parallel for the numbered tasks of kItemsPerTask items
+/// (parallelForChunks), so each task owns slot `task` of a per-task array.
 template <class Body>
 void forEachTask(size_t items, const Body& body) {
-  parallelFor(taskCount(items), 1, [&](size_t first, size_t last) {
-    for (size_t t = first; t < last; ++t)
-      body(t, t * kItemsPerTask, std::min(items, (t + 1) * kItemsPerTask));
-  });
+  parallelForChunks(items, kItemsPerTask, body);
 }
 
 // ---------------------------------------------------------------------------------------------
