@@ -49,6 +49,15 @@ struct RenderTotals {
   size_t frames = 0;
 };
 
+/// Runs f() with the GIL released and TBB limited to `threads` (0: every core): how every long
+/// call of the scene runs, so other Python threads go on meanwhile.
+template <class F>
+void withoutGil(int threads, const F& f) {
+  nb::gil_scoped_release release;
+  app::ThreadLimit limit(threads);
+  f();
+}
+
 /// Thrown on a render thread to stop the frame loop once the progress callback raised.
 struct ProgressRaised {};
 
@@ -156,16 +165,14 @@ class PyScene {
       for (const CameraParams& p : params) frames.emplace_back(p.width, p.height, aovs);
     std::vector<RenderStats> stats;
     const auto start = std::chrono::steady_clock::now();
-    {
-      nb::gil_scoped_release release;
-      app::ThreadLimit limit(threads);
+    withoutGil(threads, [&] {
       try {
         stats = stacked
                     ? renderImagesStacked(*loaded_.scene, frameCameras, settings, *block, onFrame)
                     : renderImages(*loaded_.scene, frameCameras, settings, frames, onFrame);
       } catch (const ProgressRaised&) {
       }
-    }
+    });
     if (raised) std::rethrow_exception(raised);
     last_ = RenderTotals{};
     last_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -184,11 +191,9 @@ class PyScene {
     FaceVisibilityOptions options;
     options.frontOnly = frontOnly;
     auto result = std::make_shared<FaceVisibility>();
-    {
-      nb::gil_scoped_release release;
-      app::ThreadLimit limit(threads);
+    withoutGil(threads, [&] {
       *result = aperture::faceVisibility(*loaded_.scene, pointersOf(owned), options);
-    }
+    });
     return namedArrays(result, app::faceVisibilityArrays(*result));
   }
 
@@ -205,11 +210,9 @@ class PyScene {
     PointVisibilityOptions options;
     options.tolerance = tolerance;
     auto result = std::make_shared<PointVisibility>();
-    {
-      nb::gil_scoped_release release;
-      app::ThreadLimit limit(threads);
+    withoutGil(threads, [&] {
       *result = aperture::pointVisibility(*loaded_.scene, pointersOf(owned), world, options);
-    }
+    });
     return namedArrays(result, app::pointVisibilityArrays(*result));
   }
 
