@@ -7,6 +7,9 @@ from __future__ import annotations
 
 import os
 import subprocess
+import threading
+import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -35,6 +38,34 @@ def cli_error(cli: Path, *args: str) -> str:
     lines = [l for l in done.stderr.splitlines() if l.startswith("aperture: error: ")]
     assert lines, done.stderr
     return lines[-1][len("aperture: error: ") :]
+
+
+def count_during(call: Callable[[], object]) -> tuple[float, int]:
+    """Runs call() while a Python thread counts as fast as it can; returns the seconds the call
+    took and how far the counter advanced meanwhile. With the GIL held for the whole call the
+    counter only advances in the few switch intervals before the call takes it; released, it
+    counts millions a second."""
+    count = 0
+    stop = threading.Event()
+
+    def counter() -> None:
+        nonlocal count
+        while not stop.is_set():
+            count += 1
+
+    thread = threading.Thread(target=counter)
+    thread.start()
+    time.sleep(0.05)  # the thread is running
+    before = count
+    start = time.perf_counter()
+    try:
+        call()
+    finally:
+        seconds = time.perf_counter() - start
+        during = count - before
+        stop.set()
+        thread.join()
+    return seconds, during
 
 
 @pytest.fixture(scope="session")

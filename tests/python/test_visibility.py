@@ -6,8 +6,6 @@ COLMAP track summary, the GIL, and bad inputs leave no output."""
 from __future__ import annotations
 
 import re
-import threading
-import time
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +13,7 @@ import pytest
 
 import aperture
 
-from conftest import cli_error, run_cli
+from conftest import cli_error, count_during, run_cli
 
 # (model, width, height, params in COLMAP's order): a pinhole, a strong radial OPENCV lens
 # and a fisheye, each used by one image.
@@ -207,29 +205,15 @@ def test_points_on_the_command_line_and_in_python(cli: Path, full_bunny: Path, t
     assert outside == 0 and occluded == total - seen
 
 
-def test_face_visibility_releases_the_gil(full_bunny: Path, model: Path) -> None:
+def test_face_and_point_visibility_release_the_gil(full_bunny: Path, model: Path) -> None:
     scene = aperture.Scene(full_bunny)
     cams = aperture.load_cameras(model) * 40
-    count = 0
-    stop = threading.Event()
-
-    def counter() -> None:
-        nonlocal count
-        while not stop.is_set():
-            count += 1
-
-    thread = threading.Thread(target=counter)
-    thread.start()
-    time.sleep(0.05)
-    before = count
-    start = time.perf_counter()
-    scene.face_visibility(cams)
-    seconds = time.perf_counter() - start
-    during = count - before
-    stop.set()
-    thread.join()
-    assert seconds > 0.05, f"face_visibility too short ({seconds:.3f} s) to show anything"
-    assert during > 10000, f"the counter advanced only {during} times in {seconds:.2f} s"
+    points = TARGET + np.random.default_rng(3).uniform(-0.06, 0.06, size=(200000, 3))
+    for name, call in [("face_visibility", lambda: scene.face_visibility(cams)),
+                       ("point_visibility", lambda: scene.point_visibility(points, cams))]:
+        seconds, during = count_during(call)
+        assert seconds > 0.05, f"{name} too short ({seconds:.3f} s) to show anything"
+        assert during > 10000, f"{name}: the counter advanced only {during} times in {seconds:.2f} s"
 
 
 def test_bad_inputs_give_clear_errors_and_no_output(cli: Path, bunny: Path, model: Path,
