@@ -36,6 +36,7 @@
 #include "cameras/colmap_reading.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/little_endian.h"
 #include "core/mapped_file.h"
 
 namespace aperture::camera_files {
@@ -351,13 +352,6 @@ void makeFolder(const std::string& dir) {
   if (ec) throw Error(cat(dir, ": cannot create the folder (", ec.message(), ")"));
 }
 
-template <typename T>
-void putLittleEndian(std::string& out, T value) {
-  uint64_t bits = 0;
-  std::memcpy(&bits, &value, sizeof(T));
-  for (size_t k = 0; k < sizeof(T); ++k) out.push_back(char((bits >> (8 * k)) & 0xff));
-}
-
 }  // namespace
 
 CameraFile readColmapText(const std::string& dir) {
@@ -417,31 +411,30 @@ void writeColmapText(const CameraFile& file, const std::string& dir) {
 }
 
 void writeColmapBinary(const CameraFile& file, const std::string& dir) {
-  using camera_files::putLittleEndian;
   const ColmapModel m = camera_files::colmapModel(file, dir, false);
   std::string cameras;
-  putLittleEndian<uint64_t>(cameras, m.sensors.size());
+  appendLittleEndian<uint64_t>(cameras, m.sensors.size());
   for (size_t k = 0; k < m.sensors.size(); ++k) {
     const CalibratedSensor& s = m.sensors[k];
-    putLittleEndian<uint32_t>(cameras, m.cameraIds[k]);
-    putLittleEndian<int32_t>(cameras, s.lens.info().colmapId);
-    putLittleEndian<uint64_t>(cameras, uint64_t(s.width));
-    putLittleEndian<uint64_t>(cameras, uint64_t(s.height));
-    for (double p : s.lens.params()) putLittleEndian<double>(cameras, p);
+    appendLittleEndian<uint32_t>(cameras, m.cameraIds[k]);
+    appendLittleEndian<int32_t>(cameras, s.lens.info().colmapId);
+    appendLittleEndian<uint64_t>(cameras, uint64_t(s.width));
+    appendLittleEndian<uint64_t>(cameras, uint64_t(s.height));
+    for (double p : s.lens.params()) appendLittleEndian<double>(cameras, p);
   }
   std::string images;
-  putLittleEndian<uint64_t>(images, file.images.size());
+  appendLittleEndian<uint64_t>(images, file.images.size());
   for (size_t k = 0; k < file.images.size(); ++k) {
-    putLittleEndian<uint32_t>(images, uint32_t(k + 1));
-    for (double c : m.q[k]) putLittleEndian<double>(images, c);
-    for (int i = 0; i < 3; ++i) putLittleEndian<double>(images, m.t[k][i]);
-    putLittleEndian<uint32_t>(images, m.cameraIds[size_t(file.images[k].sensor)]);
+    appendLittleEndian<uint32_t>(images, uint32_t(k + 1));
+    for (double c : m.q[k]) appendLittleEndian<double>(images, c);
+    for (int i = 0; i < 3; ++i) appendLittleEndian<double>(images, m.t[k][i]);
+    appendLittleEndian<uint32_t>(images, m.cameraIds[size_t(file.images[k].sensor)]);
     images += file.images[k].name;
     images.push_back('\0');
-    putLittleEndian<uint64_t>(images, 0);  // no 2D points
+    appendLittleEndian<uint64_t>(images, 0);  // no 2D points
   }
   std::string points;
-  putLittleEndian<uint64_t>(points, 0);
+  appendLittleEndian<uint64_t>(points, 0);
   camera_files::makeFolder(dir);
   camera_files::writeAtomicallyInto(dir, "cameras.bin", cameras);
   camera_files::writeAtomicallyInto(dir, "images.bin", images);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/little_endian.h"
 
 namespace aperture::camera_files {
 
@@ -44,20 +45,9 @@ class BinaryReader {
 
   template <typename T>
   T read(const std::string& what) {
-    static_assert(sizeof(T) == 1 || sizeof(T) == 2 || sizeof(T) == 4 || sizeof(T) == 8, "a scalar");
     need(sizeof(T), what);
-    uint64_t bits = 0;
-    for (size_t k = 0; k < sizeof(T); ++k)
-      bits |= uint64_t(static_cast<unsigned char>(bytes_[pos_ + k])) << (8 * k);
+    const T value = loadLittleEndian<T>(bytes_.data() + pos_);
     pos_ += sizeof(T);
-    // The low sizeof(T) bytes of `bits` hold the value on a little-endian host.
-    T value;
-    if constexpr (sizeof(T) == 8) {
-      std::memcpy(&value, &bits, 8);
-    } else {
-      const auto narrow = static_cast<uint32_t>(bits);
-      std::memcpy(&value, &narrow, sizeof(T));
-    }
     return value;
   }
 

@@ -19,6 +19,7 @@
 
 #include "cameras/colmap_reading.h"
 #include "core/error.h"
+#include "core/little_endian.h"
 #include "core/mapped_file.h"
 #include "core/mesh.h"
 #include "core/npy.h"
@@ -130,21 +131,6 @@ PointsFile readPlyPoints(const std::string& path) {
     checkFinite(out.positions[k], cat(path, " (vertex ", k, ")"));
   }
   return out;
-}
-
-template <typename T>
-T loadLittleEndian(const char* p) {
-  uint64_t bits = 0;
-  for (size_t k = 0; k < sizeof(T); ++k)
-    bits |= uint64_t(static_cast<unsigned char>(p[k])) << (8 * k);
-  T value;
-  if constexpr (sizeof(T) == 8) {
-    std::memcpy(&value, &bits, 8);
-  } else {
-    const auto narrow = uint32_t(bits);
-    std::memcpy(&value, &narrow, sizeof(T));
-  }
-  return value;
 }
 
 PointsFile readNpyPoints(const std::string& path) {

@@ -14,6 +14,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/little_endian.h"
 #include "core/mesh.h"
 #include "core/npy.h"
 
@@ -66,10 +67,6 @@ bool formatHolds(DatasetFormat format, int channels, bool isFloat) {
 }
 
 // --- Little-endian byte output (PFM with scale −1, NPY '<f4' / '<u4') -------------------------
-
-void appendLittleEndian(std::string& out, uint32_t bits) {
-  for (int k = 0; k < 4; ++k) out.push_back(char((bits >> (8 * k)) & 0xffu));
-}
 
 uint32_t valueBits(const ImageView& image, size_t index) {
   if (image.u32) return image.u32[index];

@@ -15,6 +15,7 @@
 #include <cstring>
 
 #include "core/error.h"
+#include "core/little_endian.h"
 
 namespace aperture {
 
@@ -135,12 +136,6 @@ class DictParser {
   size_t pos_ = 0;
 };
 
-uint64_t littleEndian(const uint8_t* p, size_t bytes) {
-  uint64_t v = 0;
-  for (size_t k = 0; k < bytes; ++k) v |= uint64_t(p[k]) << (8 * k);
-  return v;
-}
-
 }  // namespace
 
 std::string npyHeader(const std::string& descr, const std::vector<uint64_t>& shape) {
@@ -156,8 +151,7 @@ std::string npyHeader(const std::string& descr, const std::vector<uint64_t>& sha
   std::string out(kMagic, kMagicBytes);
   out.push_back('\x01');
   out.push_back('\x00');
-  out.push_back(char(dict.size() & 0xffu));
-  out.push_back(char((dict.size() >> 8) & 0xffu));
+  appendLittleEndian(out, uint16_t(dict.size()));
   return out + dict;
 }
 
@@ -170,7 +164,7 @@ NpyHeader parseNpyHeader(const uint8_t* data, size_t size, const std::string& wh
   const size_t lengthBytes = major == 1 ? 2 : 4;
   const size_t start = kMagicBytes + 2 + lengthBytes;
   if (size < start) throw Error(cat(what, ": truncated NPY header (", size, " bytes)"));
-  const uint64_t length = littleEndian(data + kMagicBytes + 2, lengthBytes);
+  const uint64_t length = loadLittleEndianBytes(data + kMagicBytes + 2, lengthBytes);
   if (length > size - start)
     throw Error(cat(what, ": truncated NPY header: it claims ", length, " bytes, the file has ",
                     size - start, " after the preamble"));

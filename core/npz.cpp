@@ -24,6 +24,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/little_endian.h"
 #include "core/mapped_file.h"
 #include "core/npy.h"
 
@@ -50,16 +51,6 @@ constexpr uint16_t kEncryptedFlag = 1u << 0;
 constexpr uint16_t kDosDate1980 = (0 << 9) | (1 << 5) | 1;  // year − 1980, month, day
 constexpr uint32_t kMax32 = 0xffffffffu;
 constexpr uint16_t kMax16 = 0xffffu;
-
-void put16(std::string& out, uint16_t v) {
-  for (int k = 0; k < 2; ++k) out.push_back(char((v >> (8 * k)) & 0xffu));
-}
-void put32(std::string& out, uint32_t v) {
-  for (int k = 0; k < 4; ++k) out.push_back(char((v >> (8 * k)) & 0xffu));
-}
-void put64(std::string& out, uint64_t v) {
-  for (int k = 0; k < 8; ++k) out.push_back(char((v >> (8 * k)) & 0xffu));
-}
 
 /// A 32-bit field: the value, or 0xFFFFFFFF when it is in the zip64 extra field instead.
 uint32_t field32(uint64_t v, bool inZip64) { return inZip64 ? kMax32 : uint32_t(v); }
@@ -106,23 +97,23 @@ struct MemberRecord {
 
 std::string localHeader(const MemberRecord& m, bool zip64) {
   std::string h;
-  put32(h, kLocalHeaderSignature);
-  put16(h, zip64 ? kVersionZip64 : kVersionPlain);
-  put16(h, isAscii(m.name) ? 0 : kUtf8NameFlag);
-  put16(h, 0);  // stored
-  put16(h, 0);  // time 00:00:00
-  put16(h, kDosDate1980);
-  put32(h, m.crc);
-  put32(h, field32(m.size, zip64));  // compressed
-  put32(h, field32(m.size, zip64));  // uncompressed
-  put16(h, uint16_t(m.name.size()));
-  put16(h, zip64 ? 4 + 16 : 0);
+  appendLittleEndian<uint32_t>(h, kLocalHeaderSignature);
+  appendLittleEndian<uint16_t>(h, zip64 ? kVersionZip64 : kVersionPlain);
+  appendLittleEndian<uint16_t>(h, isAscii(m.name) ? 0 : kUtf8NameFlag);
+  appendLittleEndian<uint16_t>(h, 0);  // stored
+  appendLittleEndian<uint16_t>(h, 0);  // time 00:00:00
+  appendLittleEndian<uint16_t>(h, kDosDate1980);
+  appendLittleEndian<uint32_t>(h, m.crc);
+  appendLittleEndian<uint32_t>(h, field32(m.size, zip64));  // compressed
+  appendLittleEndian<uint32_t>(h, field32(m.size, zip64));  // uncompressed
+  appendLittleEndian<uint16_t>(h, uint16_t(m.name.size()));
+  appendLittleEndian<uint16_t>(h, zip64 ? 4 + 16 : 0);
   h += m.name;
   if (zip64) {
-    put16(h, kZip64ExtraId);
-    put16(h, 16);
-    put64(h, m.size);  // uncompressed
-    put64(h, m.size);  // compressed
+    appendLittleEndian<uint16_t>(h, kZip64ExtraId);
+    appendLittleEndian<uint16_t>(h, 16);
+    appendLittleEndian<uint64_t>(h, m.size);  // uncompressed
+    appendLittleEndian<uint64_t>(h, m.size);  // compressed
   }
   return h;
 }
@@ -132,33 +123,34 @@ std::string centralHeader(const MemberRecord& m, bool forceZip64) {
   const bool offset64 = forceZip64 || m.offset >= kMax32;
   std::string extra;
   if (sizes64 || offset64) {
-    put16(extra, kZip64ExtraId);
-    put16(extra, uint16_t((sizes64 ? 16 : 0) + (offset64 ? 8 : 0)));
+    appendLittleEndian<uint16_t>(extra, kZip64ExtraId);
+    appendLittleEndian<uint16_t>(extra, uint16_t((sizes64 ? 16 : 0) + (offset64 ? 8 : 0)));
     if (sizes64) {
-      put64(extra, m.size);
-      put64(extra, m.size);
+      appendLittleEndian<uint64_t>(extra, m.size);
+      appendLittleEndian<uint64_t>(extra, m.size);
     }
-    if (offset64) put64(extra, m.offset);
+    if (offset64) appendLittleEndian<uint64_t>(extra, m.offset);
   }
   const uint16_t version = extra.empty() ? kVersionPlain : kVersionZip64;
   std::string h;
-  put32(h, kCentralHeaderSignature);
-  put16(h, version);  // made by: MS-DOS host (no Unix permissions), this version
-  put16(h, version);  // needed to extract
-  put16(h, isAscii(m.name) ? 0 : kUtf8NameFlag);
-  put16(h, 0);  // stored
-  put16(h, 0);
-  put16(h, kDosDate1980);
-  put32(h, m.crc);
-  put32(h, field32(m.size, sizes64));
-  put32(h, field32(m.size, sizes64));
-  put16(h, uint16_t(m.name.size()));
-  put16(h, uint16_t(extra.size()));
-  put16(h, 0);  // comment length
-  put16(h, 0);  // disk number start
-  put16(h, 0);  // internal attributes
-  put32(h, 0);  // external attributes
-  put32(h, field32(m.offset, offset64));
+  appendLittleEndian<uint32_t>(h, kCentralHeaderSignature);
+  appendLittleEndian<uint16_t>(
+      h, version);  // made by: MS-DOS host (no Unix permissions), this version
+  appendLittleEndian<uint16_t>(h, version);  // needed to extract
+  appendLittleEndian<uint16_t>(h, isAscii(m.name) ? 0 : kUtf8NameFlag);
+  appendLittleEndian<uint16_t>(h, 0);  // stored
+  appendLittleEndian<uint16_t>(h, 0);
+  appendLittleEndian<uint16_t>(h, kDosDate1980);
+  appendLittleEndian<uint32_t>(h, m.crc);
+  appendLittleEndian<uint32_t>(h, field32(m.size, sizes64));
+  appendLittleEndian<uint32_t>(h, field32(m.size, sizes64));
+  appendLittleEndian<uint16_t>(h, uint16_t(m.name.size()));
+  appendLittleEndian<uint16_t>(h, uint16_t(extra.size()));
+  appendLittleEndian<uint16_t>(h, 0);  // comment length
+  appendLittleEndian<uint16_t>(h, 0);  // disk number start
+  appendLittleEndian<uint16_t>(h, 0);  // internal attributes
+  appendLittleEndian<uint32_t>(h, 0);  // external attributes
+  appendLittleEndian<uint32_t>(h, field32(m.offset, offset64));
   return h + m.name + extra;
 }
 
@@ -169,30 +161,30 @@ std::string endRecords(uint64_t entries, uint64_t size, uint64_t offset, bool fo
   std::string out;
   if (zip64) {
     const uint64_t zip64EndOffset = offset + size;
-    put32(out, kZip64EndSignature);
-    put64(out, kZip64EndBytes - 12);  // the record's size after this field
-    put16(out, kVersionZip64);
-    put16(out, kVersionZip64);
-    put32(out, 0);  // this disk
-    put32(out, 0);  // the disk of the central directory
-    put64(out, entries);
-    put64(out, entries);
-    put64(out, size);
-    put64(out, offset);
-    put32(out, kZip64LocatorSignature);
-    put32(out, 0);  // the disk of the zip64 end record
-    put64(out, zip64EndOffset);
-    put32(out, 1);  // disks in all
+    appendLittleEndian<uint32_t>(out, kZip64EndSignature);
+    appendLittleEndian<uint64_t>(out, kZip64EndBytes - 12);  // the record's size after this field
+    appendLittleEndian<uint16_t>(out, kVersionZip64);
+    appendLittleEndian<uint16_t>(out, kVersionZip64);
+    appendLittleEndian<uint32_t>(out, 0);  // this disk
+    appendLittleEndian<uint32_t>(out, 0);  // the disk of the central directory
+    appendLittleEndian<uint64_t>(out, entries);
+    appendLittleEndian<uint64_t>(out, entries);
+    appendLittleEndian<uint64_t>(out, size);
+    appendLittleEndian<uint64_t>(out, offset);
+    appendLittleEndian<uint32_t>(out, kZip64LocatorSignature);
+    appendLittleEndian<uint32_t>(out, 0);  // the disk of the zip64 end record
+    appendLittleEndian<uint64_t>(out, zip64EndOffset);
+    appendLittleEndian<uint32_t>(out, 1);  // disks in all
   }
   const uint16_t entries16 = zip64 ? kMax16 : uint16_t(entries);
-  put32(out, kEndSignature);
-  put16(out, 0);
-  put16(out, 0);
-  put16(out, entries16);
-  put16(out, entries16);
-  put32(out, field32(size, zip64));
-  put32(out, field32(offset, zip64));
-  put16(out, 0);  // comment length
+  appendLittleEndian<uint32_t>(out, kEndSignature);
+  appendLittleEndian<uint16_t>(out, 0);
+  appendLittleEndian<uint16_t>(out, 0);
+  appendLittleEndian<uint16_t>(out, entries16);
+  appendLittleEndian<uint16_t>(out, entries16);
+  appendLittleEndian<uint32_t>(out, field32(size, zip64));
+  appendLittleEndian<uint32_t>(out, field32(offset, zip64));
+  appendLittleEndian<uint16_t>(out, 0);  // comment length
   return out;
 }
 
@@ -224,9 +216,7 @@ class ZipBytes {
 
   uint64_t read(uint64_t offset, size_t bytes, const std::string& what) const {
     need(offset, bytes, what);
-    uint64_t v = 0;
-    for (size_t k = 0; k < bytes; ++k) v |= uint64_t(data_[offset + k]) << (8 * k);
-    return v;
+    return loadLittleEndianBytes(data_ + offset, bytes);
   }
 
   void need(uint64_t offset, uint64_t bytes, const std::string& what) const {

@@ -11,18 +11,11 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/little_endian.h"
 
 namespace aperture {
 
 namespace {
-
-template <typename T>
-void putLittleEndian(std::vector<char>& out, T value) {
-  static_assert(sizeof(T) <= 8, "a scalar");
-  uint64_t bits = 0;
-  std::memcpy(&bits, &value, sizeof(T));
-  for (size_t k = 0; k < sizeof(T); ++k) out.push_back(char((bits >> (8 * k)) & 0xffu));
-}
 
 const char* plyTypeName(PlyType type) { return type == PlyType::Int32 ? "int" : "uint"; }
 
@@ -89,15 +82,15 @@ void writePlyWithFaceProperties(const std::string& path, const Mesh& mesh,
   std::vector<char> vertices;
   vertices.reserve(24 * mesh.vertexCount);
   for (size_t k = 0; k < mesh.vertexCount; ++k)
-    for (int a = 0; a < 3; ++a) putLittleEndian(vertices, worldCoordinate(mesh, k, a));
+    for (int a = 0; a < 3; ++a) appendLittleEndian(vertices, worldCoordinate(mesh, k, a));
   std::vector<char> faces;
   const size_t triangles = mesh.triangleCount();
   faces.reserve(triangles * (1 + 12 + 4 * properties.size()));
   for (size_t t = 0; t < triangles; ++t) {
-    putLittleEndian<uint8_t>(faces, 3);
-    for (int c = 0; c < 3; ++c) putLittleEndian(faces, int32_t(mesh.indices[3 * t + size_t(c)]));
+    appendLittleEndian<uint8_t>(faces, 3);
+    for (int c = 0; c < 3; ++c) appendLittleEndian(faces, int32_t(mesh.indices[3 * t + size_t(c)]));
     // Int32 values are given as their two's complement bit pattern: the same four bytes.
-    for (const PlyFaceProperty& p : properties) putLittleEndian(faces, p.values[t]);
+    for (const PlyFaceProperty& p : properties) appendLittleEndian(faces, p.values[t]);
   }
   writePiecesAtomically(path, {{header.data(), header.size()},
                                {vertices.data(), vertices.size()},
