@@ -185,7 +185,7 @@ void markSeenFaces(const Scene& scene, const Mesh& mesh, const CameraImage& imag
   PacketBuffers<kLanes> p;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
-  alignas(64) double facing[kLanes];  // dot(direction, winding normal) per lane
+  alignas(64) double facing[kLanes];  // frontOnly: dot(direction, winding normal) per lane
   for (size_t first = 0; first < count; first += kLanes) {
     int active = 0;
     for (int k = 0; k < kLanes; ++k) {
@@ -198,7 +198,7 @@ void markSeenFaces(const Scene& scene, const Mesh& mesh, const CameraImage& imag
       if (!image.camera.centreRayAt(item.raster.x, item.raster.y, org, dir)) continue;
       if (!finite(org) || !finite(dir)) continue;
       setLane(p.lanes, k, org, dir, std::numeric_limits<float>::infinity());
-      facing[k] = glm::dot(dir, worldTriangle(mesh, item.index).windingNormal());
+      if (frontOnly) facing[k] = glm::dot(dir, worldTriangle(mesh, item.index).windingNormal());
       p.valid[k] = -1;
       ++active;
     }
