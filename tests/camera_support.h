@@ -3,6 +3,7 @@
 #include <embree3/rtcore_ray.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -11,6 +12,18 @@
 #include "core/packet.h"
 
 namespace aperture::test {
+
+/// The fields the packet contract (core/camera.h) fixes for lane k of an unclipped camera:
+/// tnear 0, tfar +inf, time 0, mask all ones, id k, flags 0. Call through
+/// ASSERT_NO_FATAL_FAILURE.
+inline void assertFixedLaneFields(const RayLanes& l, int k) {
+  ASSERT_EQ(l.tnear[k], 0.0f);
+  ASSERT_EQ(l.tfar[k], INFINITY);
+  ASSERT_EQ(l.time[k], 0.0f);
+  ASSERT_EQ(l.mask[k], 0xFFFFFFFFu);
+  ASSERT_EQ(l.id[k], unsigned(k));
+  ASSERT_EQ(l.flags[k], 0u);
+}
 
 /// One aligned RTCRayHitN of width 1, 4, 8 or 16 with RayLanes pointing into it.
 class PacketBuffer {

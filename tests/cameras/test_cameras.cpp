@@ -715,12 +715,7 @@ TEST_P(EveryCamera, PacketsEqualTheScalarPathTailsIncluded) {
           ASSERT_EQ(l.dirX[k], float(dir.x));
           ASSERT_EQ(l.dirY[k], float(dir.y));
           ASSERT_EQ(l.dirZ[k], float(dir.z));
-          ASSERT_EQ(l.tnear[k], 0.0f);
-          ASSERT_EQ(l.tfar[k], INFINITY);
-          ASSERT_EQ(l.time[k], 0.0f);
-          ASSERT_EQ(l.mask[k], 0xFFFFFFFFu);
-          ASSERT_EQ(l.id[k], unsigned(k));
-          ASSERT_EQ(l.flags[k], 0u);
+          ASSERT_NO_FATAL_FAILURE(test::assertFixedLaneFields(l, k));
           ASSERT_NEAR(glm::length(dir), 1.0, 1e-14);
         }
       }

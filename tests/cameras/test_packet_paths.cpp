@@ -110,12 +110,7 @@ void checkBlocks(const CameraBase& cam, const CameraParams& p, const Shape& shap
         ASSERT_EQ(bits(l.dirX[k]), bits(float(dir.x)));
         ASSERT_EQ(bits(l.dirY[k]), bits(float(dir.y)));
         ASSERT_EQ(bits(l.dirZ[k]), bits(float(dir.z)));
-        ASSERT_EQ(l.tnear[k], 0.0f);
-        ASSERT_EQ(l.tfar[k], INFINITY);
-        ASSERT_EQ(l.time[k], 0.0f);
-        ASSERT_EQ(l.mask[k], 0xFFFFFFFFu);
-        ASSERT_EQ(l.id[k], unsigned(k));
-        ASSERT_EQ(l.flags[k], 0u);
+        ASSERT_NO_FATAL_FAILURE(test::assertFixedLaneFields(l, k));
       }
     }
 }
