@@ -139,7 +139,7 @@ void setLane(RayLanes& l, int k, const glm::dvec3& org, const glm::dvec3& dir, f
 void setIdleLane(RayLanes& l, int k) { setLane(l, k, glm::dvec3(0.0), glm::dvec3(0, 0, 1), 0.0f); }
 
 // ---------------------------------------------------------------------------------------------
-// Faces
+// Projection in tile order (faces and points)
 
 /// The items (faces or points) whose world point projects inside `image`, with their raster
 /// positions, ordered by the kTilePixels tile the position falls in (tiles row by row; within
@@ -177,6 +177,9 @@ std::vector<uint32_t> flaggedIndices(const std::vector<uint8_t>& flags) {
   });
   return concatenate(perTask);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Faces
 
 /// Sets seen[f] for the faces of projected[first, last) that `image` sees (conditions 2 and 3
 /// of the header; condition 1 made them projected): packets of up to 16, one centre ray each.
