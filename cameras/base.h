@@ -12,6 +12,7 @@
 #include "cameras/params.h"
 #include "cameras/view_volume.h"
 #include "core/camera.h"
+#include "core/vector_kernel.h"
 
 namespace aperture {
 
@@ -184,6 +185,7 @@ inline void storeBlockLanes(float* __restrict orgX, float* __restrict orgY, floa
                             const float* __restrict dx, const float* __restrict dy,
                             const float* __restrict dz) {
   const float inf = std::numeric_limits<float>::infinity();
+  APERTURE_LANE_LOOP
   for (int k = 0; k < kLanes; ++k) {
     orgX[k] = ox[k];
     orgY[k] = oy[k];
@@ -217,6 +219,7 @@ template <int kLanes>
 inline void writeBlockLanesFromOrigin(RayLanes& out, const glm::dvec3& org, const float* dx,
                                       const float* dy, const float* dz) {
   alignas(64) float ox[kLanes], oy[kLanes], oz[kLanes];
+  APERTURE_LANE_LOOP
   for (int k = 0; k < kLanes; ++k) {
     ox[k] = float(org.x);
     oy[k] = float(org.y);
@@ -229,6 +232,7 @@ inline void writeBlockLanesFromOrigin(RayLanes& out, const glm::dvec3& org, cons
 /// inside the width x height image, 0 past its right or bottom edge (laneInImage).
 template <int kBW, int kBH>
 inline void writeBlockInImage(int x0, int y0, int width, int height, int* __restrict valid) {
+  APERTURE_LANE_LOOP
   for (int k = 0; k < kBW * kBH; ++k)
     valid[k] = laneInImage(x0, y0, kBW, k, width, height) ? -1 : 0;
 }

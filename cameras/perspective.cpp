@@ -50,6 +50,7 @@ APERTURE_VECTOR_KERNEL void pinholeCentreRays(const PinholeKernelInput& in, int 
   const double* __restrict rowV = in.rowV + y0;
   const glm::dvec3 U = in.u, V = in.v, dW = in.dW;
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
+  APERTURE_LANE_LOOP
   for (int k = 0; k < kLanes; ++k) {
     const LanePixel offset = lanePixel(0, 0, kBW, k);  // a constant once unrolled
     const double u = columnU[offset.column], v = rowV[offset.row];

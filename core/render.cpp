@@ -229,6 +229,7 @@ int selectLanes(const ImagePlan& plan, const PacketRequest& req, PacketState<N>&
   // Locals: the stores to valid[] could otherwise alias them and force reloads every lane.
   const int x0 = req.x0, y0 = req.y0, width = plan.width, height = plan.height;
   int active = 0, nonFinite = 0;
+  APERTURE_LANE_LOOP
   for (int k = 0; k < N; ++k) {  // 0/1 integers and & rather than && (no branches)
     const int live = int(valid[k] != 0) & int(laneInImage(x0, y0, kBW, k, width, height));
     const int isFinite = int(finite(ox[k])) & int(finite(oy[k])) & int(finite(oz[k])) &
@@ -256,6 +257,7 @@ void fakeHits(const ImagePlan& plan, PacketState<N>& st) {
     ngX = h.Ng_x, ngY = h.Ng_y, ngZ = h.Ng_z, u = h.u, v = h.v;
     geomID = h.geomID, primID = h.primID, instID = h.instID[0];
   }
+  APERTURE_LANE_LOOP
   for (int k = 0; k < N; ++k) {
     l.tfar[k] = 1.0f;
     ngX[k] = -l.dirX[k], ngY[k] = -l.dirY[k], ngZ[k] = -l.dirZ[k];
@@ -286,6 +288,7 @@ bool tracePacket(const ImagePlan& plan, const PacketRequest& req, PacketState<N>
 template <int N>
 int findHits(const PacketState<N>& st, PacketHits<N>& out) {
   int count = 0;
+  APERTURE_LANE_LOOP
   for (int k = 0; k < N; ++k) {  // & rather than &&: no branch, vector compares
     out.hit[k] = int(st.valid[k] != 0) & int(st.hits.geomID[k] != RTC_INVALID_GEOMETRY_ID);
     count += out.hit[k];
@@ -299,6 +302,7 @@ int findHits(const PacketState<N>& st, PacketHits<N>& out) {
 template <int N>
 void unitNormals(const ImagePlan& plan, const PacketState<N>& st, PacketHits<N>& out) {
   const HitLanes& h = st.hits;
+  APERTURE_LANE_LOOP
   for (int k = 0; k < N; ++k) out.nx[k] = h.ngX[k], out.ny[k] = h.ngY[k], out.nz[k] = h.ngZ[k];
   if (plan.instanced)
     for (int k = 0; k < N; ++k)
@@ -307,6 +311,7 @@ void unitNormals(const ImagePlan& plan, const PacketState<N>& st, PacketHits<N>&
             plan.scene.normalFromMesh(h.instID[k]) * glm::vec3(out.nx[k], out.ny[k], out.nz[k]);
         out.nx[k] = n.x, out.ny[k] = n.y, out.nz[k] = n.z;
       }
+  APERTURE_LANE_LOOP
   for (int k = 0; k < N; ++k) {
     const float len2 = out.nx[k] * out.nx[k] + out.ny[k] * out.ny[k] + out.nz[k] * out.nz[k];
     const float inv = len2 > 0.0f ? 1.0f / std::sqrt(len2) : 0.0f;
@@ -318,6 +323,7 @@ void unitNormals(const ImagePlan& plan, const PacketState<N>& st, PacketHits<N>&
 template <int N>
 void accumulateColor(const PacketState<N>& st, const PacketHits<N>& h, BlockColor<N>& color) {
   const RayLanes& l = st.lanes;
+  APERTURE_LANE_LOOP
   for (int k = 0; k < N; ++k) {
     const float c = std::fabs(h.nx[k] * l.dirX[k] + h.ny[k] * l.dirY[k] + h.nz[k] * l.dirZ[k]);
     color.shade[k] += h.hit[k] ? c : 0.0f;
@@ -330,6 +336,7 @@ template <int N>
 void planarDepths(const ImagePlan& plan, const PacketState<N>& st, float* z) {
   const RayLanes& l = st.lanes;
   const glm::vec3 e = plan.eye, a = plan.axis;
+  APERTURE_LANE_LOOP
   for (int k = 0; k < N; ++k)
     z[k] = (l.orgX[k] - e.x) * a.x + (l.orgY[k] - e.y) * a.y + (l.orgZ[k] - e.z) * a.z +
            st.hits.tfar[k] * (l.dirX[k] * a.x + l.dirY[k] * a.y + l.dirZ[k] * a.z);
@@ -387,6 +394,7 @@ template <int N>
 void worldPositions(const ImagePlan& plan, const PacketState<N>& st, float* x, float* y, float* z) {
   const RayLanes& l = st.lanes;
   const glm::dvec3 o = plan.origin;
+  APERTURE_LANE_LOOP
   for (int k = 0; k < N; ++k) {
     const double t = st.hits.tfar[k];
     x[k] = float((o.x + double(l.orgX[k])) + t * double(l.dirX[k]));
@@ -432,6 +440,7 @@ void storeGeometryAovs(const ImagePlan& plan, const PacketRequest& req, const Pa
   }
   if (plan.geomId) {
     alignas(64) uint32_t ids[N];
+    APERTURE_LANE_LOOP
     for (int k = 0; k < N; ++k) ids[k] = objectId(st.hits, k);
     storeHitLanes<N, 1, uint32_t>(px, h.hit, {ids}, fb.geomId.data());
   }
@@ -540,6 +549,7 @@ void storeColor(const ImagePlan& plan, const PacketRequest& req, const BlockColo
   const float inv = 1.0f / float(plan.colorSamples);
   alignas(64) float shade[N], cover[N];
   alignas(64) int every[N];
+  APERTURE_LANE_LOOP
   for (int k = 0; k < N; ++k) {
     shade[k] = color.shade[k] * inv;
     cover[k] = color.cover[k] * inv;

@@ -14,6 +14,19 @@
 //  - results are bit-identical on every level: the build has -ffp-contract=off (no FMA
 //    contraction) and no fast-math, and IEEE +, −, ×, ÷ and √ round the same in every
 //    vector width. tests/cameras/test_golden.cpp holds the hashes.
+//
+// Lane loops (for k over a packet's N lanes, N a constant) are marked APERTURE_LANE_LOOP. GCC
+// otherwise unrolls such a loop completely before its loop vectoriser runs and leaves the
+// straight-line code to the weaker basic-block vectoriser, which on the frame loop emitted
+// scalar and partial-width code: `bench --null` measured 4.2 ns/ray with it and 3.0 without
+// (bench/RESULTS.md, issue 13). Not unrolling lets the loop vectoriser take the whole loop, at
+// N lanes a single vector iteration. Nothing changes but the instruction selection.
+#if defined(__GNUC__) && !defined(__clang__)
+#define APERTURE_LANE_LOOP _Pragma("GCC unroll 1")
+#else
+#define APERTURE_LANE_LOOP
+#endif
+
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
     !defined(APERTURE_NO_ISA_CLONES)
 #define APERTURE_VECTOR_KERNEL \
