@@ -34,21 +34,21 @@ APERTURE_VECTOR_KERNEL void equirectCentres(const EquirectCentres& c, const glm:
                                             int y0, RayLanes& out, int* valid) {
   constexpr int kLanes = kBW * kBH;
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
-  // Block rows of kBW lanes (lanePixel's order): the inner loop reads the columns' sines and
-  // cosines as contiguous runs.
-  for (int row = 0; row < kBH; ++row)
-    for (int col = 0; col < kBW; ++col) {
-      const int k = row * kBW + col;
-      const double cosLat = c.cosLat[y0 + row], sinLat = c.sinLat[y0 + row];
-      const double a = cosLat * c.sinLon[x0 + col], b = cosLat * c.cosLon[x0 + col];
-      const double gx = (a * c.u.x + sinLat * c.v.x) - b * c.w.x;
-      const double gy = (a * c.u.y + sinLat * c.v.y) - b * c.w.y;
-      const double gz = (a * c.u.z + sinLat * c.v.z) - b * c.w.z;
-      const double length = std::sqrt((gx * gx + gy * gy) + gz * gz);
-      dx[k] = float(gx / length);
-      dy[k] = float(gy / length);
-      dz[k] = float(gz / length);
-    }
+  // One loop over the lanes in lanePixel's order (APERTURE_LANE_LOOP: vectorised whole).
+  APERTURE_LANE_LOOP
+  for (int k = 0; k < kLanes; ++k) {
+    const LanePixel offset = lanePixel(0, 0, kBW, k);
+    const int row = offset.row, col = offset.column;
+    const double cosLat = c.cosLat[y0 + row], sinLat = c.sinLat[y0 + row];
+    const double a = cosLat * c.sinLon[x0 + col], b = cosLat * c.cosLon[x0 + col];
+    const double gx = (a * c.u.x + sinLat * c.v.x) - b * c.w.x;
+    const double gy = (a * c.u.y + sinLat * c.v.y) - b * c.w.y;
+    const double gz = (a * c.u.z + sinLat * c.v.z) - b * c.w.z;
+    const double length = std::sqrt((gx * gx + gy * gy) + gz * gz);
+    dx[k] = float(gx / length);
+    dy[k] = float(gy / length);
+    dz[k] = float(gz / length);
+  }
   writeBlockLanesFromOrigin<kLanes>(out, eye, dx, dy, dz);
   writeBlockInImage<kBW, kBH>(x0, y0, c.width, c.height, valid);
 }

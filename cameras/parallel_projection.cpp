@@ -26,18 +26,19 @@ APERTURE_VECTOR_KERNEL void parallelCentres(const ParallelCentres& c, int x0, in
   const double* __restrict us = c.centres.u.data() + x0;
   const double* __restrict vs = c.centres.v.data() + y0;
   alignas(64) float ox[kLanes], oy[kLanes], oz[kLanes], dx[kLanes], dy[kLanes], dz[kLanes];
-  // Block rows of kBW lanes (lanePixel's order), so the inner loop reads us[] in order.
-  for (int row = 0; row < kBH; ++row)
-    for (int col = 0; col < kBW; ++col) {
-      const int k = row * kBW + col;
-      const double u = us[col], v = vs[row];
-      ox[k] = float((c.eye.x + u * c.u.x) + v * c.v.x);
-      oy[k] = float((c.eye.y + u * c.u.y) + v * c.v.y);
-      oz[k] = float((c.eye.z + u * c.u.z) + v * c.v.z);
-      dx[k] = c.dir.x;
-      dy[k] = c.dir.y;
-      dz[k] = c.dir.z;
-    }
+  // One loop over the lanes in lanePixel's order (APERTURE_LANE_LOOP: vectorised whole).
+  APERTURE_LANE_LOOP
+  for (int k = 0; k < kLanes; ++k) {
+    const LanePixel offset = lanePixel(0, 0, kBW, k);
+    const int row = offset.row, col = offset.column;
+    const double u = us[col], v = vs[row];
+    ox[k] = float((c.eye.x + u * c.u.x) + v * c.v.x);
+    oy[k] = float((c.eye.y + u * c.u.y) + v * c.v.y);
+    oz[k] = float((c.eye.z + u * c.u.z) + v * c.v.z);
+    dx[k] = c.dir.x;
+    dy[k] = c.dir.y;
+    dz[k] = c.dir.z;
+  }
   writeBlockLanesWithOrigins<kLanes>(out, ox, oy, oz, dx, dy, dz);
   writeBlockInImage<kBW, kBH>(x0, y0, c.width, c.height, valid);
 }

@@ -52,7 +52,7 @@ APERTURE_VECTOR_KERNEL void pinholeCentreRays(const PinholeKernelInput& in, int 
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
   APERTURE_LANE_LOOP
   for (int k = 0; k < kLanes; ++k) {
-    const LanePixel offset = lanePixel(0, 0, kBW, k);  // a constant once unrolled
+    const LanePixel offset = lanePixel(0, 0, kBW, k);
     const double u = columnU[offset.column], v = rowV[offset.row];
     const double px = (u * U.x + v * V.x) - dW.x;
     const double py = (u * U.y + v * V.y) - dW.y;

@@ -20,19 +20,20 @@ APERTURE_VECTOR_KERNEL void thinLensCentres(const ThinLensCentres& c, int x0, in
   const double* __restrict us = c.columnU + x0;
   const double* __restrict vs = c.rowV + y0;
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
-  // Block rows of kBW lanes (lanePixel's order), so the inner loop reads us[] in order.
-  for (int row = 0; row < kBH; ++row)
-    for (int col = 0; col < kBW; ++col) {
-      const int k = row * kBW + col;
-      const double u = us[col], v = vs[row];
-      const double tx = ((u * c.u.x + v * c.v.x) - c.dW.x) * c.focusOverD - c.lens.x;
-      const double ty = ((u * c.u.y + v * c.v.y) - c.dW.y) * c.focusOverD - c.lens.y;
-      const double tz = ((u * c.u.z + v * c.v.z) - c.dW.z) * c.focusOverD - c.lens.z;
-      const double length = std::sqrt((tx * tx + ty * ty) + tz * tz);
-      dx[k] = float(tx / length);
-      dy[k] = float(ty / length);
-      dz[k] = float(tz / length);
-    }
+  // One loop over the lanes in lanePixel's order (APERTURE_LANE_LOOP: vectorised whole).
+  APERTURE_LANE_LOOP
+  for (int k = 0; k < kLanes; ++k) {
+    const LanePixel offset = lanePixel(0, 0, kBW, k);
+    const int row = offset.row, col = offset.column;
+    const double u = us[col], v = vs[row];
+    const double tx = ((u * c.u.x + v * c.v.x) - c.dW.x) * c.focusOverD - c.lens.x;
+    const double ty = ((u * c.u.y + v * c.v.y) - c.dW.y) * c.focusOverD - c.lens.y;
+    const double tz = ((u * c.u.z + v * c.v.z) - c.dW.z) * c.focusOverD - c.lens.z;
+    const double length = std::sqrt((tx * tx + ty * ty) + tz * tz);
+    dx[k] = float(tx / length);
+    dy[k] = float(ty / length);
+    dz[k] = float(tz / length);
+  }
   writeBlockLanesFromOrigin<kLanes>(out, c.origin, dx, dy, dz);
   writeBlockInImage<kBW, kBH>(x0, y0, c.width, c.height, valid);
 }
