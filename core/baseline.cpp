@@ -30,6 +30,7 @@ bool plainPinhole(const CameraDescription& d) {
 APERTURE_VECTOR_KERNEL void pinholeBlock(const glm::vec3& eye, const glm::vec3& corner,
                                          const glm::vec3& du, const glm::vec3& dv, int x0, int y0,
                                          int width, int height, RTCRay16& r, int* valid) {
+  APERTURE_LANE_LOOP
   for (int k = 0; k < 16; ++k) {
     const LanePixel px = lanePixel(x0, y0, 4, k);
     const float j = float(px.column), i = float(px.row);
