@@ -13,8 +13,10 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <type_traits>
 
 #include "core/error.h"
+#include "core/interleaved_row.h"
 #include "core/layers.h"
 #include "core/packet.h"
 #include "core/parallel.h"
@@ -376,6 +378,11 @@ void storeHitLanes(const BlockPixels<N>& px, const int* hit, const T* const (&va
   if (px.columns == kBW) {
     for (int r = 0; r < px.rows; ++r) {
       T* __restrict row = base + kC * size_t(r) * px.stride;
+      if constexpr (kBW == 4 && kC == 3 && std::is_same_v<T, float>) {
+        const int l = r * kBW;
+        blendInterleavedRow4x3(value[0] + l, value[1] + l, value[2] + l, hit + l, row);
+        continue;
+      }
       for (int j = 0; j < kBW; ++j)
         for (int c = 0; c < kC; ++c)
           row[kC * j + c] = hit[r * kBW + j] ? value[c][r * kBW + j] : row[kC * j + c];

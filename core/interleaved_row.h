@@ -1,0 +1,52 @@
+#pragma once
+// One row of four pixels of an interleaved x y z float channel (normals), written from the
+// frame loop's per-component lanes with a mask: the pixels whose lane hit get the lane's
+// components, the others keep theirs. GCC's vectorisers emitted this transpose-and-blend as
+// one read-back and store per component; the normal store was a third of
+// `bench --null --aov depth,normal` (bench/RESULTS.md, issue 13). Here it is 4-wide shuffles
+// and selects, which every x86-64 level has (SSE2 and up) and which only move bits.
+#include <cstring>
+
+namespace aperture {
+
+/// Writes pixel j (j = 0..3) of `row` (3 floats per pixel) as (x[j], y[j], z[j]) where
+/// hit[j] != 0, leaving the other pixels as they are. `row` needs no alignment.
+inline void blendInterleavedRow4x3(const float* x, const float* y, const float* z, const int* hit,
+                                   float* row) {
+  using F4 = float __attribute__((vector_size(16)));
+  using I4 = int __attribute__((vector_size(16)));
+  // A whole row of misses is left alone; a whole row of hits (the common case) is stored
+  // without reading the old pixels, whose cache lines may not be loaded yet.
+  const int hits = (hit[0] != 0) + (hit[1] != 0) + (hit[2] != 0) + (hit[3] != 0);
+  if (hits == 0) return;
+  F4 vx, vy, vz;
+  std::memcpy(&vx, x, sizeof vx);
+  std::memcpy(&vy, y, sizeof vy);
+  std::memcpy(&vz, z, sizeof vz);
+  // Three vectors of four floats: x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3.
+  const F4 xy01 = __builtin_shuffle(vx, vy, I4{0, 4, 1, 5});  // x0 y0 x1 y1
+  const F4 yz12 = __builtin_shuffle(vy, vz, I4{1, 5, 2, 6});  // y1 z1 y2 z2
+  const F4 xy33 = __builtin_shuffle(vx, vy, I4{3, 7, 3, 7});  // x3 y3 x3 y3
+  const F4 out[3] = {__builtin_shuffle(xy01, vz, I4{0, 1, 4, 2}),
+                     __builtin_shuffle(yz12, vx, I4{0, 1, 6, 2}),
+                     __builtin_shuffle(xy33, vz, I4{6, 0, 1, 7})};
+  if (hits == 4) {
+    for (int k = 0; k < 3; ++k) std::memcpy(row + 4 * k, &out[k], sizeof out[k]);
+    return;
+  }
+  I4 h;
+  std::memcpy(&h, hit, sizeof h);
+  const I4 m = h != I4{0, 0, 0, 0};  // −1 where the lane hit
+  const I4 mask[3] = {__builtin_shuffle(m, I4{0, 0, 0, 1}), __builtin_shuffle(m, I4{1, 1, 2, 2}),
+                      __builtin_shuffle(m, I4{2, 3, 3, 3})};
+  // One 16-byte load, select and store per vector (a block copy of the arrays would pass
+  // through the stack and stall on store forwarding).
+  for (int k = 0; k < 3; ++k) {
+    F4 old;
+    std::memcpy(&old, row + 4 * k, sizeof old);
+    const F4 blended = mask[k] ? out[k] : old;
+    std::memcpy(row + 4 * k, &blended, sizeof blended);
+  }
+}
+
+}  // namespace aperture

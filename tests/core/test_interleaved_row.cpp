@@ -1,0 +1,49 @@
+#include <gtest/gtest.h>
+
+#include <array>
+#include <random>
+
+#include "core/interleaved_row.h"
+
+namespace aperture {
+namespace {
+
+// Every one of the 16 hit masks, against the per-pixel definition: pixel j of the row is
+// (x[j], y[j], z[j]) where hit[j] != 0 and keeps its old values elsewhere; the floats after
+// the row's 12 are never touched. Values are distinct, so any wrong shuffle index shows.
+TEST(InterleavedRow, EveryMaskMatchesThePerPixelDefinition) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> value(-1.0f, 1.0f);
+  for (int mask = 0; mask < 16; ++mask) {
+    float x[4], y[4], z[4];
+    int hit[4];
+    for (int j = 0; j < 4; ++j) {
+      x[j] = value(rng), y[j] = value(rng), z[j] = value(rng);
+      hit[j] = (mask >> j) & 1 ? 1 + j : 0;  // any non-zero value is a hit
+    }
+    std::array<float, 16> row{}, expected{};
+    for (size_t k = 0; k < row.size(); ++k) row[k] = expected[k] = 100.0f + float(k);
+    for (int j = 0; j < 4; ++j)
+      if (hit[j]) {
+        expected[size_t(3 * j)] = x[j];
+        expected[size_t(3 * j + 1)] = y[j];
+        expected[size_t(3 * j + 2)] = z[j];
+      }
+    blendInterleavedRow4x3(x, y, z, hit, row.data());
+    for (size_t k = 0; k < row.size(); ++k)
+      EXPECT_EQ(row[k], expected[k]) << "mask " << mask << ", float " << k;
+  }
+}
+
+// The row needs no alignment: an odd offset into a buffer gives the same values.
+TEST(InterleavedRow, UnalignedRowsAreWrittenTheSame) {
+  const float x[4] = {1, 2, 3, 4}, y[4] = {5, 6, 7, 8}, z[4] = {9, 10, 11, 12};
+  const int hit[4] = {1, 0, 1, 1};
+  std::array<float, 17> buffer{};
+  blendInterleavedRow4x3(x, y, z, hit, buffer.data() + 1);
+  const std::array<float, 17> expected{0, 1, 5, 9, 0, 0, 0, 3, 7, 11, 4, 8, 12, 0, 0, 0, 0};
+  EXPECT_EQ(buffer, expected);
+}
+
+}  // namespace
+}  // namespace aperture
