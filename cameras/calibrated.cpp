@@ -185,6 +185,19 @@ APERTURE_VECTOR_KERNEL void tableCentres(const CalibratedFrame& f, const Directi
   const double *tx = table.x(), *ty = table.y(), *tz = table.z();
   const unsigned char* tv = table.validity();
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
+  if constexpr (kBW == DirectionTable::kBlock) {
+    // The block's rows are consecutive rows of one table block: kLanes contiguous entries,
+    // in lane order, so one lane loop reads them (APERTURE_LANE_LOOP: vectorised whole).
+    const size_t t0 = table.index(y0, x0);
+    APERTURE_LANE_LOOP
+    for (int k = 0; k < kLanes; ++k) {
+      const size_t t = t0 + size_t(k);
+      worldDirectionLane(f, tx[t], ty[t], tz[t], dx[k], dy[k], dz[k]);
+      valid[k] = tv[t] ? -1 : 0;
+    }
+    writeBlockLanesFromOrigin<kLanes>(out, f.eye, dx, dy, dz);
+    return;
+  }
   for (int row = 0; row < kBH; ++row) {
     const size_t t0 = table.index(y0 + row, x0);
     for (int col = 0; col < kBW; ++col) {
@@ -216,14 +229,14 @@ APERTURE_VECTOR_KERNEL void pinholeCentres(const CalibratedFrame& f, const Pinho
   for (int row = 0; row < kBH; ++row)
     ys[row] = ((((double(y0) + double(row)) + 0.5) + lens.sourceOffset) - lens.cy) / lens.fy;
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
-  // Block rows of kBW lanes (lanePixel's order), so the inner loop reads xs[] in order.
-  for (int row = 0; row < kBH; ++row)
-    for (int col = 0; col < kBW; ++col) {
-      const int k = row * kBW + col;
-      const double x = xs[col], y = ys[row];
-      const double s = 1.0 / std::sqrt((x * x + y * y) + 1.0);
-      worldDirectionLane(f, x * s, y * s, s, dx[k], dy[k], dz[k]);
-    }
+  alignas(64) double xl[kLanes], yl[kLanes];
+  spreadOverLanes<kBW, kBH>(xs, ys, xl, yl);
+  APERTURE_LANE_LOOP
+  for (int k = 0; k < kLanes; ++k) {
+    const double x = xl[k], y = yl[k];
+    const double s = 1.0 / std::sqrt((x * x + y * y) + 1.0);
+    worldDirectionLane(f, x * s, y * s, s, dx[k], dy[k], dz[k]);
+  }
   writeBlockLanesFromOrigin<kLanes>(out, f.eye, dx, dy, dz);
   writeBlockInImage<kBW, kBH>(x0, y0, f.width, f.height, valid);
 }

@@ -34,13 +34,13 @@ APERTURE_VECTOR_KERNEL void equirectCentres(const EquirectCentres& c, const glm:
                                             int y0, RayLanes& out, int* valid) {
   constexpr int kLanes = kBW * kBH;
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
-  // One loop over the lanes in lanePixel's order (APERTURE_LANE_LOOP: vectorised whole).
+  alignas(64) double laneSinLon[kLanes], laneCosLat[kLanes], laneCosLon[kLanes], laneSinLat[kLanes];
+  spreadOverLanes<kBW, kBH>(c.sinLon + x0, c.cosLat + y0, laneSinLon, laneCosLat);
+  spreadOverLanes<kBW, kBH>(c.cosLon + x0, c.sinLat + y0, laneCosLon, laneSinLat);
   APERTURE_LANE_LOOP
   for (int k = 0; k < kLanes; ++k) {
-    const LanePixel offset = lanePixel(0, 0, kBW, k);
-    const int row = offset.row, col = offset.column;
-    const double cosLat = c.cosLat[y0 + row], sinLat = c.sinLat[y0 + row];
-    const double a = cosLat * c.sinLon[x0 + col], b = cosLat * c.cosLon[x0 + col];
+    const double a = laneCosLat[k] * laneSinLon[k], b = laneCosLat[k] * laneCosLon[k];
+    const double sinLat = laneSinLat[k];
     const double gx = (a * c.u.x + sinLat * c.v.x) - b * c.w.x;
     const double gy = (a * c.u.y + sinLat * c.v.y) - b * c.w.y;
     const double gz = (a * c.u.z + sinLat * c.v.z) - b * c.w.z;

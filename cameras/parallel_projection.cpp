@@ -26,12 +26,11 @@ APERTURE_VECTOR_KERNEL void parallelCentres(const ParallelCentres& c, int x0, in
   const double* __restrict us = c.centres.u.data() + x0;
   const double* __restrict vs = c.centres.v.data() + y0;
   alignas(64) float ox[kLanes], oy[kLanes], oz[kLanes], dx[kLanes], dy[kLanes], dz[kLanes];
-  // One loop over the lanes in lanePixel's order (APERTURE_LANE_LOOP: vectorised whole).
+  alignas(64) double laneU[kLanes], laneV[kLanes];
+  spreadOverLanes<kBW, kBH>(us, vs, laneU, laneV);
   APERTURE_LANE_LOOP
   for (int k = 0; k < kLanes; ++k) {
-    const LanePixel offset = lanePixel(0, 0, kBW, k);
-    const int row = offset.row, col = offset.column;
-    const double u = us[col], v = vs[row];
+    const double u = laneU[k], v = laneV[k];
     ox[k] = float((c.eye.x + u * c.u.x) + v * c.v.x);
     oy[k] = float((c.eye.y + u * c.u.y) + v * c.v.y);
     oz[k] = float((c.eye.z + u * c.u.z) + v * c.v.z);

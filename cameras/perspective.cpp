@@ -49,11 +49,12 @@ APERTURE_VECTOR_KERNEL void pinholeCentreRays(const PinholeKernelInput& in, int 
   const double* __restrict columnU = in.columnU + x0;
   const double* __restrict rowV = in.rowV + y0;
   const glm::dvec3 U = in.u, V = in.v, dW = in.dW;
+  alignas(64) double us[kLanes], vs[kLanes];
+  spreadOverLanes<kBW, kBH>(columnU, rowV, us, vs);
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
   APERTURE_LANE_LOOP
   for (int k = 0; k < kLanes; ++k) {
-    const LanePixel offset = lanePixel(0, 0, kBW, k);
-    const double u = columnU[offset.column], v = rowV[offset.row];
+    const double u = us[k], v = vs[k];
     const double px = (u * U.x + v * V.x) - dW.x;
     const double py = (u * U.y + v * V.y) - dW.y;
     const double pz = (u * U.z + v * V.z) - dW.z;

@@ -20,12 +20,11 @@ APERTURE_VECTOR_KERNEL void thinLensCentres(const ThinLensCentres& c, int x0, in
   const double* __restrict us = c.columnU + x0;
   const double* __restrict vs = c.rowV + y0;
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
-  // One loop over the lanes in lanePixel's order (APERTURE_LANE_LOOP: vectorised whole).
+  alignas(64) double laneU[kLanes], laneV[kLanes];
+  spreadOverLanes<kBW, kBH>(us, vs, laneU, laneV);
   APERTURE_LANE_LOOP
   for (int k = 0; k < kLanes; ++k) {
-    const LanePixel offset = lanePixel(0, 0, kBW, k);
-    const int row = offset.row, col = offset.column;
-    const double u = us[col], v = vs[row];
+    const double u = laneU[k], v = laneV[k];
     const double tx = ((u * c.u.x + v * c.v.x) - c.dW.x) * c.focusOverD - c.lens.x;
     const double ty = ((u * c.u.y + v * c.v.y) - c.dW.y) * c.focusOverD - c.lens.y;
     const double tz = ((u * c.u.z + v * c.v.z) - c.dW.z) * c.focusOverD - c.lens.z;
