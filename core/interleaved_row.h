@@ -4,7 +4,8 @@
 // components, the others keep theirs. GCC's vectorisers emitted this transpose-and-blend as
 // one read-back and store per component; the normal store was a third of
 // `bench --null --aov depth,normal` (bench/RESULTS.md, issue 13). Here it is 4-wide shuffles
-// and selects, which every x86-64 level has (SSE2 and up) and which only move bits.
+// and selects, which every x86-64 level has (SSE2 and up) and which only move bits
+// (`__builtin_shufflevector`: GCC 12 and Clang both have it; the fuzz builds are Clang's).
 #include <cstring>
 
 namespace aperture {
@@ -24,12 +25,12 @@ inline void blendInterleavedRow4x3(const float* x, const float* y, const float* 
   std::memcpy(&vy, y, sizeof vy);
   std::memcpy(&vz, z, sizeof vz);
   // Three vectors of four floats: x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3.
-  const F4 xy01 = __builtin_shuffle(vx, vy, I4{0, 4, 1, 5});  // x0 y0 x1 y1
-  const F4 yz12 = __builtin_shuffle(vy, vz, I4{1, 5, 2, 6});  // y1 z1 y2 z2
-  const F4 xy33 = __builtin_shuffle(vx, vy, I4{3, 7, 3, 7});  // x3 y3 x3 y3
-  const F4 out[3] = {__builtin_shuffle(xy01, vz, I4{0, 1, 4, 2}),
-                     __builtin_shuffle(yz12, vx, I4{0, 1, 6, 2}),
-                     __builtin_shuffle(xy33, vz, I4{6, 0, 1, 7})};
+  const F4 xy01 = __builtin_shufflevector(vx, vy, 0, 4, 1, 5);  // x0 y0 x1 y1
+  const F4 yz12 = __builtin_shufflevector(vy, vz, 1, 5, 2, 6);  // y1 z1 y2 z2
+  const F4 xy33 = __builtin_shufflevector(vx, vy, 3, 7, 3, 7);  // x3 y3 x3 y3
+  const F4 out[3] = {__builtin_shufflevector(xy01, vz, 0, 1, 4, 2),
+                     __builtin_shufflevector(yz12, vx, 0, 1, 6, 2),
+                     __builtin_shufflevector(xy33, vz, 6, 0, 1, 7)};
   if (hits == 4) {
     for (int k = 0; k < 3; ++k) std::memcpy(row + 4 * k, &out[k], sizeof out[k]);
     return;
@@ -37,8 +38,9 @@ inline void blendInterleavedRow4x3(const float* x, const float* y, const float* 
   I4 h;
   std::memcpy(&h, hit, sizeof h);
   const I4 m = h != I4{0, 0, 0, 0};  // −1 where the lane hit
-  const I4 mask[3] = {__builtin_shuffle(m, I4{0, 0, 0, 1}), __builtin_shuffle(m, I4{1, 1, 2, 2}),
-                      __builtin_shuffle(m, I4{2, 3, 3, 3})};
+  const I4 mask[3] = {__builtin_shufflevector(m, m, 0, 0, 0, 1),
+                      __builtin_shufflevector(m, m, 1, 1, 2, 2),
+                      __builtin_shufflevector(m, m, 2, 3, 3, 3)};
   // One 16-byte load, select and store per vector (a block copy of the arrays would pass
   // through the stack and stall on store forwarding).
   for (int k = 0; k < 3; ++k) {
