@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "core/error.h"
+#include "core/huge_pages.h"
 #include "core/parallel.h"
 #include "core/spelling.h"
 
@@ -226,8 +227,8 @@ void dropTrianglesOfBadVertices(Mesh& mesh, const std::vector<uint8_t>& bad, boo
 void writeAnchoredPositions(Mesh& mesh, const WorldVertices& world, const std::vector<uint8_t>& bad,
                             bool fromDouble) {
   const size_t n = mesh.vertexCount;
-  if (fromDouble) mesh.positions.assign(3 * n + kVertexPaddingFloats, 0.0f);
-  mesh.positions.resize(3 * n + kVertexPaddingFloats);
+  if (fromDouble) mesh.positions.clear();  // every float is rewritten: nothing to keep
+  resizeOnHugePages(mesh.positions, 3 * n + kVertexPaddingFloats);
   std::fill(mesh.positions.begin() + 3 * n, mesh.positions.end(), 0.0f);
   forEachChunk(n, [&](size_t, size_t b, size_t e) {
     for (size_t k = b; k < e; ++k) {

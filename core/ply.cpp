@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/huge_pages.h"
 #include "core/mapped_file.h"
 #include "core/mesh.h"
 #include "core/parallel.h"
@@ -564,12 +565,13 @@ void readVertices(const std::string& path, const PlyElement& e, Reader& r, Mesh&
     throw Error(cat(path, ": ", e.count, " vertices is more than 32-bit indices can address"));
   mesh.vertexCount = size_t(e.count);
   if (useDouble)
-    mesh.positionsDouble.resize(3 * mesh.vertexCount);
+    resizeOnHugePages(mesh.positionsDouble, 3 * mesh.vertexCount);
   else
-    mesh.positions.resize(3 * mesh.vertexCount);
-  if (req.keepsNormals()) mesh.vertexNormals.resize(3 * mesh.vertexCount);
+    resizeOnHugePages(mesh.positions, 3 * mesh.vertexCount);
+  if (req.keepsNormals()) resizeOnHugePages(mesh.vertexNormals, 3 * mesh.vertexCount);
   for (size_t k = 0; k < e.props.size(); ++k)
-    if (req.slotOf[k] >= 0) mesh.properties[size_t(req.slotOf[k])].values.resize(mesh.vertexCount);
+    if (req.slotOf[k] >= 0)
+      resizeOnHugePages(mesh.properties[size_t(req.slotOf[k])].values, mesh.vertexCount);
   double xyz[3] = {0, 0, 0};
   for (uint64_t i = 0; i < e.count; ++i) {
     for (size_t k = 0; k < e.props.size(); ++k) {
@@ -726,7 +728,7 @@ bool readVerticesFast(const PlyElement& e, BinaryReader& r, Mesh& mesh) {
       return false;
   r.need(12 * e.count, "vertex data");
   mesh.vertexCount = size_t(e.count);
-  mesh.positions.resize(3 * mesh.vertexCount);
+  resizeOnHugePages(mesh.positions, 3 * mesh.vertexCount);
   if (e.count) std::memcpy(mesh.positions.data(), r.pos(), 12 * e.count);
   r.advance(12 * e.count);
   return true;
@@ -821,7 +823,7 @@ bool readVerticesParallel(const PlyElement& e, BinaryReader& r, Mesh& mesh,
   mesh.vertexCount = n;
   // finishMesh pads the float positions for Embree in place: room for the padding now saves
   // it a copy of the whole buffer.
-  if (!useDouble) mesh.positions.reserve(3 * n + kVertexPaddingFloats);
+  if (!useDouble) reserveOnHugePages(mesh.positions, 3 * n + kVertexPaddingFloats);
   if (copyFloats) {
     mesh.positions.resize(3 * n);
     parallelFor(n, kRecordsPerTask, [&](size_t b, size_t end) {
@@ -831,12 +833,12 @@ bool readVerticesParallel(const PlyElement& e, BinaryReader& r, Mesh& mesh,
     return true;
   }
   if (useDouble)
-    mesh.positionsDouble.resize(3 * n);
+    resizeOnHugePages(mesh.positionsDouble, 3 * n);
   else
     mesh.positions.resize(3 * n);
-  if (req.keepsNormals()) mesh.vertexNormals.resize(3 * n);
+  if (req.keepsNormals()) resizeOnHugePages(mesh.vertexNormals, 3 * n);
   for (int slot : req.slotOf)
-    if (slot >= 0) mesh.properties[size_t(slot)].values.resize(n);
+    if (slot >= 0) resizeOnHugePages(mesh.properties[size_t(slot)].values, n);
   const std::vector<VertexField> fields = vertexFields(e, xyz, req);
   const bool swap = r.swap();
   parallelFor(n, kRecordsPerTask, [&](size_t b, size_t end) {
@@ -881,7 +883,7 @@ bool readFacesParallel(const PlyElement& e, BinaryReader& r, Mesh& mesh) {
   const size_t indicesPerFace = corners >= 3 ? 3 * (corners - 2) : 0;
   const uint32_t signBit = p.type == PlyType::Int32 ? 0x80000000u : 0u;
   const size_t before = mesh.indices.size();
-  mesh.indices.resize(before + indicesPerFace * faces);
+  resizeOnHugePages(mesh.indices, before + indicesPerFace * faces);
   const char* const items = r.pos();
   std::atomic<bool> irregular{false};
   parallelFor(faces, kRecordsPerTask, [&](size_t b, size_t end) {

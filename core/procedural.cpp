@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/huge_pages.h"
 #include "core/mesh.h"
 #include "core/parallel.h"
 #include "core/sampling.h"
@@ -153,8 +154,8 @@ SphereShape sphereShape(const std::string& spec, const Params& p) {
 Mesh makeSphere(const SphereShape& s) {
   Mesh m;
   m.vertexCount = sphereVertices(s.segments, s.rings);
-  m.positionsDouble.resize(3 * m.vertexCount);
-  m.indices.resize(3 * sphereTriangles(s.segments, s.rings));
+  resizeOnHugePages(m.positionsDouble, 3 * m.vertexCount);
+  resizeOnHugePages(m.indices, 3 * sphereTriangles(s.segments, s.rings));
   writeSphere(m.positionsDouble.data(), m.indices.data(), 0, s.centre, s.radius, s.segments,
               s.rings);
   return m;
@@ -216,8 +217,8 @@ SpheresPlan planSpheres(const std::string& spec, const Params& p) {
 Mesh makeSpheres(const SpheresPlan& plan) {
   Mesh m;
   m.vertexCount = plan.vOff.back();
-  m.positionsDouble.resize(3 * m.vertexCount);
-  m.indices.resize(3 * plan.tOff.back());
+  resizeOnHugePages(m.positionsDouble, 3 * m.vertexCount);
+  resizeOnHugePages(m.indices, 3 * plan.tOff.back());
   const double h = 6.0;
   const double ground[12] = {-h, 0, h, h, 0, h, h, 0, -h, -h, 0, -h};
   std::copy(ground, ground + 12, m.positionsDouble.begin());
