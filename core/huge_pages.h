@@ -1,8 +1,8 @@
 #pragma once
 // Large buffers on transparent huge pages. A freshly allocated buffer costs a page fault and a
 // kernel page clear per 4 KB page on first touch: for a mesh's vertex and index buffers that is
-// most of a binary PLY load's serial time (the 63 MB of the crown: ~10 ms of faults against
-// ~3 ms on 2 MB pages). Where the kernel offers transparent huge pages only on request
+// a large, serial part of a binary PLY load (the crown's 63 MB: 10-15 ms on 4 KB pages, ~3 ms
+// on 2 MB pages, of a ~45 ms load). Where the kernel offers transparent huge pages only on request
 // (`madvise` mode, Debian's default), asking for them before the first touch takes that cost
 // down; elsewhere the request changes nothing.
 #include <cstddef>
