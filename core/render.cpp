@@ -268,12 +268,11 @@ void fakeHits(const ImagePlan& plan, PacketState<N>& st) {
   }
 }
 
-/// Generates and intersects the packet of `req` (kNull: fakeHits instead of Embree); false
-/// when no lane was traced.
+/// Intersects the packet of `req`, whose rays the camera has generated into `st` (kNull:
+/// fakeHits instead of Embree); false when no lane was traced.
 template <int N, bool kNull>
 bool tracePacket(const ImagePlan& plan, const PacketRequest& req, PacketState<N>& st,
                  TileCounters& count) {
-  plan.camera.generate(req, st.lanes, st.valid);
   const int active = selectLanes<N>(plan, req, st, count);
   if (active == 0) return false;
   if constexpr (kNull) {
@@ -534,8 +533,8 @@ void storeGeometry(const ImagePlan& plan, const PacketRequest& req, const Packet
   if (plan.meshData) storeMeshData<N>(plan, req, st, h);
 }
 
-/// Traces the packet of `req`; adds its shading to `color` when given, and stores the
-/// geometry AOVs when `geometry` is set.
+/// Traces the packet of `req` (its rays already in `st`); adds its shading to `color` when given,
+/// and stores the geometry AOVs when `geometry` is set.
 template <int N, bool kNull>
 void renderPass(const ImagePlan& plan, const PacketRequest& req, PacketState<N>& st,
                 BlockColor<N>* color, bool geometry, TileCounters& count) {
@@ -562,24 +561,83 @@ void storeColor(const ImagePlan& plan, const PacketRequest& req, const BlockColo
     cover[k] = color.cover[k] * inv;
     every[k] = 1;
   }
-  storeHitLanes<N, 4, float>(BlockPixels<N>(plan, req), every, {shade, shade, shade, cover},
-                             plan.fb.rgba.data());
+  const BlockPixels<N> px(plan, req);
+  storeHitLanes<N, 4, float>(px, every, {shade, shade, shade, cover}, plan.fb.rgba.data());
 }
 
-/// Renders the block of N pixels whose top-left pixel is (row by, column bx): the colour
-/// samples, then the centre ray when it is a pass of its own. One call site of renderPass,
-/// so the compiler inlines the whole pass into the block loop.
+/// A tile's packets in render order, block by block (rows of blocks, left to right) and
+/// within a block pass by pass, with the rays of the next packet generated before the current
+/// one is traced: the camera's long dependency chain (a double √ and ÷ per ray) then overlaps
+/// the tracing and stores of the packet before it instead of stalling them. Cameras are pure
+/// functions of the request, so the order of generation changes no ray.
+template <int N>
+class PacketPipeline {
+ public:
+  static constexpr int kBW = blockWidthFor(N), kBH = blockHeightFor(N);
+
+  PacketPipeline(const ImagePlan& plan, int x0, int y0, int x1, int y1)
+      : plan_(plan),
+        x0_(x0),
+        x1_(x1),
+        y1_(y1),
+        next_{x0, y0, kBW, kBH, sampleOf(0)},
+        more_(x0 < x1 && y0 < y1) {
+    if (more_) generateNext();
+  }
+
+  /// Whether packets are left.
+  bool more() const { return more_; }
+  /// The next packet's request and its state, holding its rays; generates the packet after
+  /// it. Valid until the call after next.
+  PacketState<N>& advance(PacketRequest& req) {
+    req = next_;
+    PacketState<N>& current = states_[slot_];
+    slot_ ^= 1;
+    more_ = step();
+    if (more_) generateNext();
+    return current;
+  }
+
+ private:
+  int sampleOf(int pass) const {
+    return pass == plan_.colorSamples ? PacketRequest::kCentreRay : pass;
+  }
+  /// Moves next_ to the request after it; false past the tile's last packet.
+  bool step() {
+    if (++pass_ < plan_.passes) {
+      next_.sample = sampleOf(pass_);
+      return true;
+    }
+    pass_ = 0;
+    next_.sample = sampleOf(0);
+    if ((next_.x0 += kBW) < x1_) return true;
+    next_.x0 = x0_;
+    return (next_.y0 += kBH) < y1_;
+  }
+  void generateNext() { plan_.camera.generate(next_, states_[slot_].lanes, states_[slot_].valid); }
+
+  const ImagePlan& plan_;
+  const int x0_, x1_, y1_;
+  PacketRequest next_;
+  int pass_ = 0, slot_ = 0;
+  bool more_;
+  PacketState<N> states_[2];
+};
+
+/// Renders the next block of the pipeline: the colour samples, then the centre ray when it
+/// is a pass of its own. One call site of renderPass, so the compiler inlines the whole pass
+/// into the block loop.
 template <int N, bool kNull>
-void renderBlock(const ImagePlan& plan, int bx, int by, PacketState<N>& st, TileCounters& count) {
-  constexpr int kBW = blockWidthFor(N), kBH = blockHeightFor(N);
+void renderBlock(const ImagePlan& plan, PacketPipeline<N>& packets, TileCounters& count) {
   BlockColor<N> color;
+  PacketRequest req;
   for (int pass = 0; pass < plan.passes; ++pass) {
+    PacketState<N>& st = packets.advance(req);
     const bool centre = pass == plan.colorSamples;
-    const PacketRequest req{bx, by, kBW, kBH, centre ? PacketRequest::kCentreRay : pass};
     renderPass<N, kNull>(plan, req, st, centre ? nullptr : &color,
                          centre || plan.geometryFromSample, count);
   }
-  if (plan.color) storeColor<N>(plan, {bx, by, kBW, kBH, 0}, color);
+  if (plan.color) storeColor<N>(plan, {req.x0, req.y0, req.blockW, req.blockH, 0}, color);
 }
 
 /// Renders the tile of columns [x0, x1) and rows [y0, y1), block by block (a TileRenderer).
@@ -591,10 +649,8 @@ APERTURE_VECTOR_KERNEL void renderTile(const ImagePlan& plan, int x0, int y0, in
   // Denormals flushed on every worker (Embree's recommendation); same mode on all threads.
   _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
   _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
-  PacketState<N> st;
-  for (int by = y0; by < y1; by += blockHeightFor(N))
-    for (int bx = x0; bx < x1; bx += blockWidthFor(N))
-      renderBlock<N, kNull>(plan, bx, by, st, count);
+  PacketPipeline<N> packets(plan, x0, y0, x1, y1);
+  while (packets.more()) renderBlock<N, kNull>(plan, packets, count);
 }
 
 template <bool kNull>
