@@ -48,45 +48,54 @@ struct FisheyeCentres {
 /// A kBW x kBH block of rays through pixel centres, FisheyeCamera::rayAt term by term: a and b
 /// once per column and row, sin θ / ρ and cos θ from the quadrant table, then
 /// g = (s·a)·U + (s·b)·V − cos θ·W and g / |g|; −W where ρ = 0 or there is no ray.
+/// The table entries are copied to per-lane arrays first (scalar loads: the entries of a block
+/// row run forwards or backwards through the table, or both across the centre column), so the
+/// arithmetic is one lane loop over contiguous arrays that the compiler vectorises whole.
 template <int kBW, int kBH>
 APERTURE_VECTOR_KERNEL void fisheyeCentres(const FisheyeCentres& c, int x0, int y0, RayLanes& out,
                                            int* valid) {
   constexpr int kLanes = kBW * kBH;
   double as[kBW], bs[kBH];
-  int qjs[kBW], qis[kBH];
+  size_t qjs[kBW], qis[kBH];
   for (int col = 0; col < kBW; ++col) {
     as[col] = (((double(x0) + double(col)) + 0.5) - c.cx) / c.radius;
     const int twice = 2 * (x0 + col) + 1 - c.width;
-    qjs[col] = (twice < 0 ? -twice : twice) / 2;
+    qjs[col] = size_t((twice < 0 ? -twice : twice) / 2);
   }
   for (int row = 0; row < kBH; ++row) {
     bs[row] = (c.cy - ((double(y0) + double(row)) + 0.5)) / c.radius;
     const int twice = 2 * (y0 + row) + 1 - c.height;
-    qis[row] = (twice < 0 ? -twice : twice) / 2;
+    qis[row] = size_t((twice < 0 ? -twice : twice) / 2) * size_t(c.quadrant.columns);
   }
-  const double* sinOverRho = c.quadrant.sinOverRho.data();
-  const double* cosTheta = c.quadrant.cosTheta.data();
-  const uint8_t* kind = c.quadrant.kind.data();
+  alignas(64) double al[kLanes], bl[kLanes], sl[kLanes], cl[kLanes];
+  alignas(64) int kinds[kLanes];
+  spreadOverLanes<kBW, kBH>(as, bs, al, bl);
+  for (int k = 0; k < kLanes; ++k) {  // lanePixel's order
+    const size_t q = qis[k / kBW] + qjs[k % kBW];
+    sl[k] = c.quadrant.sinOverRho[q];
+    cl[k] = c.quadrant.cosTheta[q];
+    kinds[k] = c.quadrant.kind[q];
+  }
+  const glm::dvec3 U = c.u, V = c.v, W = c.w;
+  const glm::vec3 axis = c.axis;
+  const int width = c.width, height = c.height;  // locals: the stores to valid[] could alias c
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
-  // Block rows of kBW lanes (lanePixel's order), so the inner loop reads as[] in order.
-  for (int row = 0; row < kBH; ++row)
-    for (int col = 0; col < kBW; ++col) {
-      const int k = row * kBW + col;
-      const double a = as[col], b = bs[row];
-      const size_t q = size_t(qis[row]) * size_t(c.quadrant.columns) + size_t(qjs[col]);
-      const double s = sinOverRho[q], cosT = cosTheta[q];
-      const double sa = s * a, sb = s * b;
-      const double gx = (sa * c.u.x + sb * c.v.x) - cosT * c.w.x;
-      const double gy = (sa * c.u.y + sb * c.v.y) - cosT * c.w.y;
-      const double gz = (sa * c.u.z + sb * c.v.z) - cosT * c.w.z;
-      const double length = std::sqrt((gx * gx + gy * gy) + gz * gz);
-      const bool ray = kind[q] == FisheyeQuadrant::kRay;
-      dx[k] = ray ? float(gx / length) : c.axis.x;
-      dy[k] = ray ? float(gy / length) : c.axis.y;
-      dz[k] = ray ? float(gz / length) : c.axis.z;
-      const LanePixel px = lanePixel(x0, y0, kBW, k);
-      valid[k] = (kind[q] != FisheyeQuadrant::kNoRay && px.inImage(c.width, c.height)) ? -1 : 0;
-    }
+  APERTURE_LANE_LOOP
+  for (int k = 0; k < kLanes; ++k) {
+    const double sa = sl[k] * al[k], sb = sl[k] * bl[k], cosT = cl[k];
+    const double gx = (sa * U.x + sb * V.x) - cosT * W.x;
+    const double gy = (sa * U.y + sb * V.y) - cosT * W.y;
+    const double gz = (sa * U.z + sb * V.z) - cosT * W.z;
+    const double length = std::sqrt((gx * gx + gy * gy) + gz * gz);
+    // Divided on every lane, then selected: a divide under the condition stays scalar.
+    const float ux = float(gx / length), uy = float(gy / length), uz = float(gz / length);
+    const bool ray = kinds[k] == FisheyeQuadrant::kRay;
+    dx[k] = ray ? ux : axis.x;
+    dy[k] = ray ? uy : axis.y;
+    dz[k] = ray ? uz : axis.z;
+    valid[k] = -(int(kinds[k] != FisheyeQuadrant::kNoRay) &
+                 int(laneInImage(x0, y0, kBW, k, width, height)));
+  }
   writeBlockLanesFromOrigin<kLanes>(out, c.eye, dx, dy, dz);
 }
 
