@@ -345,7 +345,9 @@ void planarDepths(const ImagePlan& plan, const PacketState<N>& st, float* z) {
 
 /// The object of a hit: the instance, or the geometry when the mesh is attached directly.
 inline unsigned objectId(const HitLanes& h, int k) {
-  return h.instID[k] == RTC_INVALID_GEOMETRY_ID ? h.geomID[k] : h.instID[k];
+  // Both loaded first: a load under the condition kept the geomid lane loop scalar.
+  const unsigned instance = h.instID[k], geometry = h.geomID[k];
+  return instance == RTC_INVALID_GEOMETRY_ID ? geometry : instance;
 }
 
 /// Where a block's lanes land in one framebuffer channel: the block's top-left pixel, the
