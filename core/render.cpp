@@ -563,8 +563,8 @@ void storeColor(const ImagePlan& plan, const PacketRequest& req, const BlockColo
     cover[k] = color.cover[k] * inv;
     every[k] = 1;
   }
-  const BlockPixels<N> px(plan, req);
-  storeHitLanes<N, 4, float>(px, every, {shade, shade, shade, cover}, plan.fb.rgba.data());
+  storeHitLanes<N, 4, float>(BlockPixels<N>(plan, req), every, {shade, shade, shade, cover},
+                             plan.fb.rgba.data());
 }
 
 /// A tile's packets in render order, block by block (rows of blocks, left to right) and
@@ -590,7 +590,7 @@ class PacketPipeline {
   /// Whether packets are left.
   bool more() const { return more_; }
   /// The next packet's request and its state, holding its rays; generates the packet after
-  /// it. Valid until the call after next.
+  /// it into the other buffer. The state stays valid until the next call.
   PacketState<N>& advance(PacketRequest& req) {
     req = next_;
     PacketState<N>& current = states_[slot_];
