@@ -635,7 +635,7 @@ void renderBlock(const ImagePlan& plan, PacketPipeline<N>& packets, TileCounters
   PacketRequest req;
   for (int pass = 0; pass < plan.passes; ++pass) {
     PacketState<N>& st = packets.advance(req);
-    const bool centre = pass == plan.colorSamples;
+    const bool centre = req.centreRay();  // the pipeline maps passes to samples (sampleOf)
     renderPass<N, kNull>(plan, req, st, centre ? nullptr : &color,
                          centre || plan.geometryFromSample, count);
   }

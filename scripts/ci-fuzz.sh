@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# CI: each fuzz target for 20 s (FUZZ_SECONDS; 60, 40, then 30 s, until CI neared its 30 minutes), then the
+# CI: each fuzz target for 20 s (FUZZ_SECONDS; it was 60, 40 and 30 s before CI neared its 30 minutes), then the
 # committed corpus, regressions and malformed corpora replayed once. Fails on any crash, leak,
 # UB report, hang (> 1 s) or allocation over 256 MB.
 set -euo pipefail
