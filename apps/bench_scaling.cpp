@@ -281,7 +281,7 @@ MemoryEstimate benchMemoryEstimate(const SceneOptions& o, int width, int height,
                                    const AovSet& aovs) {
   std::vector<std::string> specs;
   for (const MeshPlacement& m : o.spec().meshes) specs.push_back(m.spec);
-  return estimateMemory(specs, uint64_t(width), uint64_t(height), aovs, 0, o.compact);
+  return estimateMemory(specs, uint64_t(width), uint64_t(height), aovs, 0, o.buildOptions());
 }
 
 int runScaling(const ScalingRun& run) {

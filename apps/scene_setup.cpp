@@ -19,7 +19,7 @@ void checkMemoryBudget(const SceneOptions& o, glm::ivec2 size, const AovSet& aov
   std::vector<std::string> specs = o.meshes;
   if (specs.empty()) specs.push_back("procedural:default");
   const MemoryEstimate e = estimateMemory(specs, uint64_t(size.x), uint64_t(size.y), aovs,
-                                          extraBytesPerPixel, o.compact);
+                                          extraBytesPerPixel, o.buildOptions());
   checkMemoryLimit(e, limit, "--max-memory", o.maxMemory);
 }
 
@@ -170,11 +170,11 @@ void computeWorldBounds(LoadedScene& s) {
 void logBuild(const SceneSpec& spec, const LoadedScene& s) {
   const BuildStats& b = s.scene->stats();
   std::fprintf(stderr,
-               "aperture: built BVH (%s%s%s): %zu triangles (%zu stored, %zu instances) in "
-               "%.3f s, Embree memory %.1f MB (%.1f bytes/triangle)\n",
+               "aperture: built BVH (%s%s%s): %zu triangles (%zu stored, %zu instances, %zu "
+               "chunks) in %.3f s, Embree memory %.1f MB (%.1f bytes/triangle)\n",
                bvhQualityName(spec.build.quality), spec.build.robust ? ", robust" : ", not robust",
                spec.build.compact ? ", compact" : "", b.triangles, b.uniqueTriangles,
-               s.scene->instanceCount(), b.buildSeconds, b.embreeBytes / 1e6,
+               s.scene->instanceCount(), b.chunks, b.buildSeconds, b.embreeBytes / 1e6,
                b.triangles ? double(b.embreeBytes) / double(b.triangles) : 0.0);
 }
 

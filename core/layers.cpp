@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "core/error.h"
+#include "core/intersect_scene.h"
 #include "core/spelling.h"
 
 namespace aperture {
@@ -129,6 +130,7 @@ struct FilterContext {
   RTCIntersectContext base;
   LaneLayers* lanes;
   int capacity;
+  const Scene* scene;  // its chunk hits are resolved before they are recorded
 };
 static_assert(offsetof(FilterContext, base) == 0, "Embree passes &base back to the filter");
 
@@ -142,8 +144,9 @@ void collectHit(const RTCFilterFunctionNArguments* args) {
   const unsigned n = args->N;
   for (unsigned i = 0; i < n; ++i) {
     if (args->valid[i] == 0) continue;
-    const LayerHit h{RTCRayN_tfar(args->ray, n, i), RTCHitN_primID(args->hit, n, i),
-                     RTCHitN_geomID(args->hit, n, i), RTCHitN_instID(args->hit, n, i, 0)};
+    LayerHit h{RTCRayN_tfar(args->ray, n, i), RTCHitN_primID(args->hit, n, i),
+               RTCHitN_geomID(args->hit, n, i), RTCHitN_instID(args->hit, n, i, 0)};
+    if (ctx->scene->hasChunks()) ctx->scene->resolveChunkHits(&h.geomID, &h.primID, &h.instID, 1);
     LaneLayers& lane = ctx->lanes[RTCRayN_id(args->ray, n, i)];
     const int at = lane.insert(h, ctx->capacity);
     const bool lastOfFull = at == ctx->capacity - 1;
@@ -172,8 +175,9 @@ void traceByFilter(const LayerPlan& plan, LayerPacket<N>& lp) {
   ctx.base.filter = collectHit;
   ctx.lanes = lp.found;
   ctx.capacity = plan.layers;
+  ctx.scene = &plan.scene;
   clearHits<N>(lp.packet);
-  intersect<N>(plan.scene.handle(), &ctx.base, lp.valid, lp.packet);
+  intersectScene<N>(plan.scene, &ctx.base, lp.valid, lp.packet);
 }
 
 /// Retrace: from the first hit, trace the lanes short of K again just past their last hit.
@@ -200,7 +204,7 @@ void traceByRetracing(const LayerPlan& plan, const LayerHit* first, LayerPacket<
       lp.lanes.tfar[k] = lp.tfar[k];
     }
     clearHits<N>(lp.packet);
-    intersect<N>(plan.scene.handle(), &ctx, lp.valid, lp.packet);
+    intersectScene<N>(plan.scene, &ctx, lp.valid, lp.packet);
     active = 0;
     for (int k = 0; k < N; ++k) {
       if (lp.valid[k] == 0) continue;

@@ -307,18 +307,28 @@ std::string MemoryEstimate::describe() const {
 
 MemoryEstimate estimateMemory(const std::vector<std::string>& meshSpecs, uint64_t width,
                               uint64_t height, const AovSet& aovs, uint64_t extraBytesPerPixel,
-                              bool compactBvh) {
+                              const BuildOptions& build) {
   MemoryEstimate e;
+  const uint64_t chunk = build.effectiveChunkTriangles();
+  uint64_t wholeTriangles = 0;  // in the top-level BVH, built in one go
+  uint64_t largestChunk = 0;
   for (const std::string& spec : meshSpecs) {
     const MeshSizeEstimate m = estimateMeshSize(spec);
     // Meshes load one after the other: the ones before are kept while this one loads.
     e.loadPeakBytes = std::max(e.loadPeakBytes, e.meshBytes + m.loaderBytes);
     e.meshBytes += m.meshBytes;
     e.triangles += m.triangles;
+    if (chunk > 0 && m.triangles > chunk)
+      largestChunk = chunk;
+    else
+      wholeTriangles += m.triangles;
   }
-  e.bvhBytes = e.triangles * (compactBvh ? kCompactBvhBytesPerTriangle : kBvhBytesPerTriangle);
-  e.bvhBuildBytes =
-      e.triangles * (compactBvh ? kCompactBvhBuildBytesPerTriangle : kBvhBuildBytesPerTriangle);
+  const uint64_t bvh = build.compact ? kCompactBvhBytesPerTriangle : kBvhBytesPerTriangle;
+  const uint64_t references =
+      (build.compact ? kCompactBvhBuildBytesPerTriangle : kBvhBuildBytesPerTriangle) - bvh;
+  e.bvhBytes = e.triangles * bvh;
+  // Every BVH is resident at the end; the references are those of the largest single build.
+  e.bvhBuildBytes = e.bvhBytes + references * std::max(wholeTriangles, largestChunk);
   e.runtimeBytes = kRuntimeBytes;
   // Sizes are validated before this is called, so the product does not overflow.
   e.framebufferBytes = width * height * (framebufferBytesPerPixel(aovs) + extraBytesPerPixel);

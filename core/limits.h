@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/framebuffer.h"
+#include "core/scene.h"
 
 namespace aperture {
 
@@ -40,7 +41,9 @@ uint64_t framebufferBytesPerPixel(const AovSet& aovs);
 //              the ones loaded before are kept);
 //   building   the kept mesh buffers (Embree reads them: they are shared, not copied) plus
 //              Embree's build peak: the finished BVH and, until the build ends, its array of
-//              32-byte primitive references, one per triangle;
+//              32-byte primitive references, one per triangle of the BVH being built: a
+//              mesh built in chunks (BuildOptions::bvhChunkTriangles) holds one chunk's at a
+//              time, the other meshes are built together in the top-level BVH;
 //   rendering  the mesh buffers, the BVH and the framebuffers (allocated after the build, in
 //              the pages the primitive references gave back).
 // Measured at 1e7 triangles: mesh 18.0 B/tri (12 B per vertex, 12 per triangle, 0.5 vertices
@@ -80,12 +83,13 @@ struct MemoryEstimate {
   std::string describe() const;
 };
 
-/// Estimates the memory of rendering `meshSpecs` at width x height with `aovs`;
-/// `extraBytesPerPixel` covers outputs made beside the framebuffer (a PNG preview: 4);
-/// `compactBvh` for RTC_SCENE_FLAG_COMPACT (--compact).
+/// Estimates the memory of rendering `meshSpecs` (each mesh placed once) at width x height
+/// with `aovs`; `extraBytesPerPixel` covers outputs made beside the framebuffer (a PNG
+/// preview: 4); `build` for the compact BVH (--compact) and the chunked build of large meshes
+/// (BuildOptions::bvhChunkTriangles).
 MemoryEstimate estimateMemory(const std::vector<std::string>& meshSpecs, uint64_t width,
                               uint64_t height, const AovSet& aovs, uint64_t extraBytesPerPixel = 0,
-                              bool compactBvh = false);
+                              const BuildOptions& build = {});
 
 /// MemAvailable from /proc/meminfo, in bytes. Throws Error if it cannot be read.
 uint64_t availableMemoryBytes();

@@ -17,6 +17,7 @@
 
 #include "core/error.h"
 #include "core/interleaved_row.h"
+#include "core/intersect_scene.h"
 #include "core/layers.h"
 #include "core/packet.h"
 #include "core/parallel.h"
@@ -279,7 +280,7 @@ bool tracePacket(const ImagePlan& plan, const PacketRequest& req, PacketState<N>
     fakeHits<N>(plan, st);
   } else {
     clearHits<N>(st.packet);
-    intersect<N>(plan.scene.handle(), &st.ctx, st.valid, st.packet);
+    intersectScene<N>(plan.scene, &st.ctx, st.valid, st.packet);
   }
   count.traced += uint64_t(active);
   return true;

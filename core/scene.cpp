@@ -1,5 +1,6 @@
 #include "core/scene.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
@@ -135,20 +136,40 @@ std::vector<SceneObject> untransformed(const std::vector<const Mesh*>& meshes) {
   return objects;
 }
 
-RTCGeometry triangleGeometry(const Device& device, const Mesh& m, const TriangleSubset* subset,
-                             RTCBuildQuality quality) {
+/// A triangle geometry over `triangles` triangles of `m` whose vertex indices start at
+/// `indices` (the mesh's, a subset's, or a chunk of either); both buffers are shared.
+RTCGeometry triangleGeometry(const Device& device, const Mesh& m, const uint32_t* indices,
+                             size_t triangles, RTCBuildQuality quality) {
   // Embree may read 16 bytes at the last vertex: the loader pads positions for that.
   APERTURE_CHECK_OP(m.positions.size(), >=, 3 * m.vertexCount + kVertexPaddingFloats - 1);
   RTCGeometry geom = rtcNewGeometry(device.handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
   rtcSetGeometryBuildQuality(geom, quality);
   rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, m.positions.data(),
                              0, 3 * sizeof(float), m.vertexCount);
-  const std::vector<uint32_t>& indices = subset ? subset->indices : m.indices;
-  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices.data(), 0,
-                             3 * sizeof(uint32_t), indices.size() / 3);
+  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices, 0,
+                             3 * sizeof(uint32_t), triangles);
   rtcCommitGeometry(geom);
   device.check(cat("adding mesh '", m.name, "'").c_str());
   return geom;
+}
+
+RTCScene newEmbreeScene(const Device& device, RTCSceneFlags flags, RTCBuildQuality quality) {
+  RTCScene s = rtcNewScene(device.handle());
+  device.check("rtcNewScene");
+  rtcSetSceneFlags(s, flags);
+  rtcSetSceneBuildQuality(s, quality);
+  return s;
+}
+
+/// An instance of `sub` under render-space transform `xf`, attached to `scene` as `id`.
+void attachInstance(const Device& device, RTCScene scene, RTCScene sub, const glm::mat4& xf,
+                    unsigned id) {
+  RTCGeometry inst = rtcNewGeometry(device.handle(), RTC_GEOMETRY_TYPE_INSTANCE);
+  rtcSetGeometryInstancedScene(inst, sub);
+  rtcSetGeometryTransform(inst, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &xf[0][0]);
+  rtcCommitGeometry(inst);
+  rtcAttachGeometryByID(scene, inst, id);
+  rtcReleaseGeometry(inst);
 }
 
 }  // namespace
@@ -169,18 +190,13 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
   const long long bytesBefore = device.memoryBytes();
   const auto start = std::chrono::steady_clock::now();
   const RTCBuildQuality quality = toEmbree(options.quality);
-  int flags = RTC_SCENE_FLAG_NONE;
-  if (options.robust) flags |= RTC_SCENE_FLAG_ROBUST;
-  if (options.compact) flags |= RTC_SCENE_FLAG_COMPACT;
-  if (options.contextFilter) flags |= RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION;
-  auto newScene = [&] {
-    RTCScene s = rtcNewScene(device.handle());
-    device.check("rtcNewScene");
-    rtcSetSceneFlags(s, RTCSceneFlags(flags));
-    rtcSetSceneBuildQuality(s, quality);
-    return s;
-  };
-  scene_ = newScene();
+  int flagBits = RTC_SCENE_FLAG_NONE;
+  if (options.robust) flagBits |= RTC_SCENE_FLAG_ROBUST;
+  if (options.compact) flagBits |= RTC_SCENE_FLAG_COMPACT;
+  if (options.contextFilter) flagBits |= RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION;
+  const RTCSceneFlags flags = RTCSceneFlags(flagBits);
+  const size_t chunkTriangles = options.effectiveChunkTriangles();
+  scene_ = newEmbreeScene(device, flags, quality);
   std::map<const Mesh*, RTCScene> built;  // sub-scene of each instanced mesh
   normalFromMesh_.assign(objects.size(), glm::mat3(1.0f));
   for (const SceneObject& o : objects) objectMeshes_.push_back(o.mesh);
@@ -200,8 +216,14 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
     }
     const bool direct =
         uses[&m] == 1 && objects[k].worldFromMesh == glm::dmat4(1.0) && m.anchor == renderOrigin_;
+    const std::vector<uint32_t>& indices = subset ? subset->indices : m.indices;
+    if (direct && chunkTriangles > 0 && placed > chunkTriangles) {
+      attachChunks(unsigned(k), m, indices, chunkTriangles, quality, flags);
+      stats_.uniqueTriangles += placed;
+      continue;
+    }
     if (direct) {
-      RTCGeometry geom = triangleGeometry(device, m, subset, quality);
+      RTCGeometry geom = triangleGeometry(device, m, indices.data(), placed, quality);
       rtcAttachGeometryByID(scene_, geom, unsigned(k));
       rtcReleaseGeometry(geom);
       stats_.uniqueTriangles += placed;
@@ -209,8 +231,8 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
     }
     auto it = built.find(&m);
     if (it == built.end()) {
-      RTCScene sub = newScene();
-      RTCGeometry geom = triangleGeometry(device, m, subset, quality);
+      RTCScene sub = newEmbreeScene(device, flags, quality);
+      RTCGeometry geom = triangleGeometry(device, m, indices.data(), placed, quality);
       rtcAttachGeometryByID(sub, geom, 0);
       rtcReleaseGeometry(geom);
       rtcCommitScene(sub);
@@ -223,13 +245,7 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
     const glm::dmat4 renderFromLocal = glm::translate(glm::dmat4(1.0), -renderOrigin_) *
                                        objects[k].worldFromMesh *
                                        glm::translate(glm::dmat4(1.0), m.anchor);
-    const glm::mat4 xf(renderFromLocal);
-    RTCGeometry inst = rtcNewGeometry(device.handle(), RTC_GEOMETRY_TYPE_INSTANCE);
-    rtcSetGeometryInstancedScene(inst, it->second);
-    rtcSetGeometryTransform(inst, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &xf[0][0]);
-    rtcCommitGeometry(inst);
-    rtcAttachGeometryByID(scene_, inst, unsigned(k));
-    rtcReleaseGeometry(inst);
+    attachInstance(device, scene_, it->second, glm::mat4(renderFromLocal), unsigned(k));
     device.check(cat("instancing mesh '", m.name, "'").c_str());
     normalFromMesh_[k] = glm::mat3(glm::transpose(glm::inverse(glm::dmat3(renderFromLocal))));
     ++instanced_;
@@ -239,6 +255,46 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
   stats_.buildSeconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   stats_.embreeBytes = device.memoryBytes() - bytesBefore;
+}
+
+// Each chunk's BVH is committed before the next chunk's geometry is made, so Embree holds
+// the primitive references of one chunk at a time. Chunk 0's instance takes the object's own
+// geomID; the others take geomIDs after the last object's.
+void Scene::attachChunks(unsigned object, const Mesh& m, const std::vector<uint32_t>& indices,
+                         size_t chunkTriangles, RTCBuildQuality quality, RTCSceneFlags flags) {
+  const size_t triangles = indices.size() / 3;
+  const size_t chunks = (triangles + chunkTriangles - 1) / chunkTriangles;
+  const size_t firstExtraId = std::max(objectMeshes_.size(), chunkObject_.size());
+  chunkObject_.resize(firstExtraId + chunks - 1, RTC_INVALID_GEOMETRY_ID);
+  chunkFirstPrim_.resize(chunkObject_.size(), 0);
+  for (size_t c = 0; c < chunks; ++c) {
+    const size_t first = c * chunkTriangles;
+    const size_t count = std::min(chunkTriangles, triangles - first);
+    RTCScene sub = newEmbreeScene(device_, flags, quality);
+    RTCGeometry geom = triangleGeometry(device_, m, indices.data() + 3 * first, count, quality);
+    rtcAttachGeometryByID(sub, geom, 0);
+    rtcReleaseGeometry(geom);
+    rtcCommitScene(sub);
+    device_.check(cat("building the BVH of chunk ", c, " of mesh '", m.name, "'").c_str());
+    subScenes_.push_back(sub);
+    const unsigned id = c == 0 ? object : unsigned(firstExtraId + c - 1);
+    attachInstance(device_, scene_, sub, glm::mat4(1.0f), id);
+    device_.check(cat("placing chunk ", c, " of mesh '", m.name, "'").c_str());
+    chunkObject_[id] = object;
+    chunkFirstPrim_[id] = uint32_t(first);
+  }
+  stats_.chunks += chunks;
+}
+
+void Scene::resolveChunkHits(unsigned* geomID, unsigned* primID, unsigned* instID, size_t n) const {
+  const size_t ids = chunkObject_.size();
+  for (size_t k = 0; k < n; ++k) {
+    const unsigned inst = instID[k];
+    if (inst >= ids || chunkObject_[inst] == RTC_INVALID_GEOMETRY_ID) continue;
+    geomID[k] = chunkObject_[inst];
+    primID[k] += chunkFirstPrim_[inst];
+    instID[k] = RTC_INVALID_GEOMETRY_ID;
+  }
 }
 
 Scene::~Scene() {

@@ -42,6 +42,11 @@ enum class BvhQuality { Low, Medium, High };
 BvhQuality parseBvhQuality(const std::string& name);  ///< "low|medium|high", else Error
 const char* bvhQualityName(BvhQuality q);
 
+/// Default of BuildOptions::bvhChunkTriangles: 2^24 triangles, so a 10^8-triangle mesh is
+/// built as 6 BVHs and its build peaks at about 90 bytes per triangle instead of 117
+/// (bench/RESULTS.md, "Scaling").
+inline constexpr size_t kBvhChunkTriangles = size_t(1) << 24;
+
 struct BuildOptions {
   BvhQuality quality = BvhQuality::High;
   /// RTC_SCENE_FLAG_ROBUST: watertight traversal, on by default (issue 15): without it a few
@@ -54,6 +59,14 @@ struct BuildOptions {
   /// the intersection context. Off unless layers are asked for: Embree then selects its
   /// filter-capable traversal kernels for every ray of the scene.
   bool contextFilter = false;
+  /// A directly attached object with more triangles than this is built as several BVHs of at
+  /// most this many consecutive triangles each, one after the other, each placed by an
+  /// identity instance. Embree holds 32 bytes of primitive references per triangle of the BVH
+  /// it is building until that build ends; in chunks only one chunk's are held at a time. 0:
+  /// never. Not used with `compact`, whose build holds no such array beside its BVH.
+  size_t bvhChunkTriangles = kBvhChunkTriangles;
+  /// The chunk size that applies under these options (0: none).
+  size_t effectiveChunkTriangles() const { return compact ? 0 : bvhChunkTriangles; }
 };
 
 struct BuildStats {
@@ -62,6 +75,7 @@ struct BuildStats {
   size_t uniqueTriangles = 0;  ///< triangles stored (each mesh once)
   double buildSeconds = 0;     ///< rtcCommitScene wall time
   long long embreeBytes = 0;   ///< Embree's memory after the build
+  size_t chunks = 0;           ///< BVHs built for chunked objects (BuildOptions::bvhChunkTriangles)
 };
 
 /// Some of a mesh's triangles (for view-volume culling, core/cull.h): the kept triangles'
@@ -85,7 +99,10 @@ struct SceneObject {
 /// with Embree, not copied). Object k gets top-level geomID k. An object whose mesh appears
 /// once, untransformed, with the render origin as its anchor is attached directly; a mesh
 /// placed several times (or transformed) is built once as a sub-scene and placed by Embree
-/// instances. The render origin is the first object's anchor.
+/// instances. A directly attached object larger than BuildOptions::bvhChunkTriangles is built
+/// as chunks, each its own sub-scene under an identity instance; every trace goes through
+/// intersectScene (core/intersect_scene.h), which reports its hits as those of the object.
+/// The render origin is the first object's anchor.
 class Scene {
  public:
   Scene(const Device& device, const std::vector<SceneObject>& objects,
@@ -121,6 +138,13 @@ class Scene {
     const uint32_t* map = primIdMaps_.empty() ? nullptr : primIdMaps_[object];
     return map ? map[prim] : prim;
   }
+  /// True when some object was built in chunks: Embree then reports its hits through the
+  /// chunks' instances, and resolveChunkHits must run on every hit before anything reads it.
+  bool hasChunks() const { return !chunkObject_.empty(); }
+  /// Turns the `n` hits reported through a chunk's instance into what Embree reports for the
+  /// object attached directly: geomID the object, primID counted from the object's first
+  /// triangle, instID RTC_INVALID_GEOMETRY_ID. Other hits and misses are left as they are.
+  void resolveChunkHits(unsigned* geomID, unsigned* primID, unsigned* instID, size_t n) const;
 
  private:
   const Device& device_;
@@ -133,6 +157,13 @@ class Scene {
   std::vector<const Mesh*> objectMeshes_;    ///< per object
   std::vector<const uint32_t*> primIdMaps_;  ///< per object; empty when nothing is culled
   std::vector<RTCScene> subScenes_;
+  /// Per top-level geomID: the object a chunk instance belongs to (RTC_INVALID_GEOMETRY_ID
+  /// for any other geomID), and its chunk's first triangle. Empty when nothing is chunked.
+  std::vector<unsigned> chunkObject_;
+  std::vector<uint32_t> chunkFirstPrim_;
+
+  void attachChunks(unsigned object, const Mesh& m, const std::vector<uint32_t>& indices,
+                    size_t chunkTriangles, RTCBuildQuality quality, RTCSceneFlags flags);
 };
 
 }  // namespace aperture

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/intersect_scene.h"
 #include "core/packet.h"
 
 namespace aperture {
@@ -38,7 +39,7 @@ void traceAll(const Scene& scene, const std::vector<TraceRay>& rays, std::vector
     }
     if (active == 0) continue;
     clearHits<N>(packet);
-    intersect<N>(scene.handle(), &ctx, valid, packet);
+    intersectScene<N>(scene, &ctx, valid, packet);
     for (int k = 0; k < N && first + size_t(k) < rays.size(); ++k) {
       if (!valid[k] || h.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
       TraceHit& hit = out[first + size_t(k)];

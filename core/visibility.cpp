@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "core/framebuffer.h"
+#include "core/intersect_scene.h"
 #include "core/packet.h"
 #include "core/parallel.h"
 
@@ -207,7 +208,7 @@ void markSeenFaces(const Scene& scene, const Mesh& mesh, const CameraImage& imag
     }
     if (active == 0) continue;
     clearHits<kLanes>(p.packet);
-    intersect<kLanes>(scene.handle(), &ctx, p.valid, p.packet);
+    intersectScene<kLanes>(scene, &ctx, p.valid, p.packet);
     for (int k = 0; k < kLanes; ++k) {
       if (!p.valid[k]) continue;
       const uint32_t f = projected[first + size_t(k)].index;

@@ -126,10 +126,20 @@ TEST(LimitsEstimate, ThePeakIsTheLargestPhase) {
       estimateMemory({"procedural:spheres?tris=100000000"}, 64, 64, kAovDepth);
   const uint64_t mesh = 12 * big.vertices + 4 * kVertexPaddingFloats + 12 * big.triangles;
   EXPECT_EQ(build.meshBytes, mesh);
-  EXPECT_EQ(build.total(), kRuntimeBytes + mesh + kBvhBuildBytesPerTriangle * big.triangles)
-      << "100M triangles: the build (mesh, BVH and its primitive references) is the peak";
+  const uint64_t references = kBvhBuildBytesPerTriangle - kBvhBytesPerTriangle;
+  EXPECT_EQ(build.total(), kRuntimeBytes + mesh + kBvhBytesPerTriangle * big.triangles +
+                               references * kBvhChunkTriangles)
+      << "100M triangles: the build (mesh, BVH and one chunk's primitive references) is the peak";
+  BuildOptions whole;
+  whole.bvhChunkTriangles = 0;
+  const MemoryEstimate unchunked =
+      estimateMemory({"procedural:spheres?tris=100000000"}, 64, 64, kAovDepth, 0, whole);
+  EXPECT_EQ(unchunked.total(), kRuntimeBytes + mesh + kBvhBuildBytesPerTriangle * big.triangles)
+      << "built as one BVH, every triangle's primitive reference is held at the peak";
+  BuildOptions compactBvh;
+  compactBvh.compact = true;
   const MemoryEstimate compact =
-      estimateMemory({"procedural:spheres?tris=100000000"}, 64, 64, kAovDepth, 0, true);
+      estimateMemory({"procedural:spheres?tris=100000000"}, 64, 64, kAovDepth, 0, compactBvh);
   EXPECT_EQ(compact.total(),
             kRuntimeBytes + mesh + kCompactBvhBuildBytesPerTriangle * big.triangles);
   EXPECT_LT(compact.total(), build.total());
