@@ -345,8 +345,9 @@ void readMeshDataKeys(const Object& top, Job& job) {
 
 void readPerformance(const Object& top, Job& job) {
   if (top.has("performance")) {
-    const Object p(top.file(), top.keyPath("performance"), top.required("performance"),
-                   {"packet", "tile", "threads", "bvh_quality", "robust", "compact", "cull"});
+    const Object p(
+        top.file(), top.keyPath("performance"), top.required("performance"),
+        {"packet", "tile", "threads", "bvh_quality", "robust", "compact", "bvh_chunk", "cull"});
     job.render.packetWidth = p.integer("packet", 16);
     job.render.tileSize = p.integer("tile", 32);
     job.threads = p.integer("threads", 0);
@@ -361,6 +362,12 @@ void readPerformance(const Object& top, Job& job) {
     // Robust (watertight) traversal is the default; "robust": false opts out, as --no-robust.
     job.build.robust = p.boolean("robust", job.build.robust);
     job.build.compact = p.boolean("compact", false);
+    const int chunk = p.integer("bvh_chunk", int(kBvhChunkTriangles));
+    try {
+      job.build.bvhChunkTriangles = checkedBvhChunkTriangles(chunk, "bvh_chunk");
+    } catch (const Error& e) {
+      p.fail(p.keyPath("bvh_chunk"), e.what());
+    }
     job.cull = p.boolean("cull", false);
   }
   try {

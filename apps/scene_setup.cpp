@@ -34,6 +34,7 @@ BuildOptions SceneOptions::buildOptions() const {
   b.quality = parseBvhQuality(quality);
   b.robust = robust;
   b.compact = compact;
+  b.bvhChunkTriangles = checkedBvhChunkTriangles(bvhChunk, "--bvh-chunk");
   return b;
 }
 
@@ -50,6 +51,12 @@ void addSceneOptions(CLI::App& app, SceneOptions& o) {
                "Embree robust (watertight) traversal: on by default; --no-robust trades it for "
                "0-8 % of trace time and lets a few rays in ten million slip through shared edges");
   app.add_flag("--compact", o.compact, "Embree compact BVH (less memory, slower)");
+  app.add_option("--bvh-chunk", o.bvhChunk,
+                 "Build a mesh of more triangles than this as several BVHs of at most this many, "
+                 "one after the other, so Embree's build holds 32 bytes per triangle of one chunk "
+                 "rather than of the mesh, when its triangle order keeps the chunks apart in space "
+                 "(0: one BVH per mesh; not with --compact)")
+      ->capture_default_str();
   app.add_flag("--cull", o.cull,
                "Build the BVH over only the triangles the camera's view volume may reach "
                "(conservative: the image is bit-identical; panoramas keep all)");
@@ -169,13 +176,14 @@ void computeWorldBounds(LoadedScene& s) {
 
 void logBuild(const SceneSpec& spec, const LoadedScene& s) {
   const BuildStats& b = s.scene->stats();
-  std::fprintf(stderr,
-               "aperture: built BVH (%s%s%s): %zu triangles (%zu stored, %zu instances, %zu "
-               "chunks) in %.3f s, Embree memory %.1f MB (%.1f bytes/triangle)\n",
-               bvhQualityName(spec.build.quality), spec.build.robust ? ", robust" : ", not robust",
-               spec.build.compact ? ", compact" : "", b.triangles, b.uniqueTriangles,
-               s.scene->instanceCount(), b.chunks, b.buildSeconds, b.embreeBytes / 1e6,
-               b.triangles ? double(b.embreeBytes) / double(b.triangles) : 0.0);
+  std::fprintf(
+      stderr,
+      "aperture: built BVH (%s%s%s): %zu triangles (%zu stored, %zu instances, %zu "
+      "chunks, %.2f chunks per cell) in %.3f s, Embree memory %.1f MB (%.1f bytes/triangle)\n",
+      bvhQualityName(spec.build.quality), spec.build.robust ? ", robust" : ", not robust",
+      spec.build.compact ? ", compact" : "", b.triangles, b.uniqueTriangles,
+      s.scene->instanceCount(), b.chunks, b.chunksPerCell, b.buildSeconds, b.embreeBytes / 1e6,
+      b.triangles ? double(b.embreeBytes) / double(b.triangles) : 0.0);
 }
 
 }  // namespace

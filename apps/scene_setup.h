@@ -45,6 +45,7 @@ struct SceneOptions {
   std::string quality = "high";
   bool robust = true;  ///< --robust (the default) / --no-robust
   bool compact = false, worldSpace = false;
+  long long bvhChunk = kBvhChunkTriangles;  ///< --bvh-chunk: BuildOptions::bvhChunkTriangles
   /// Leave triangles outside the cameras' view volumes out of the BVH (off by default).
   bool cull = false;
   std::string maxMemory;  ///< --max-memory: BYTES[K|M|G|T], auto, or "" for no limit

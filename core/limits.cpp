@@ -230,6 +230,7 @@ void estimateProcedural(const std::string& spec, MeshSizeEstimate& m) {
   m.meshBytes = keptMeshBytes(m.vertices, m.triangles);
   m.loaderBytes = m.meshBytes + m.vertices * (24 + 1);
   m.how = "procedural spec";
+  m.spatiallyOrdered = true;
 }
 
 }  // namespace
@@ -318,7 +319,7 @@ MemoryEstimate estimateMemory(const std::vector<std::string>& meshSpecs, uint64_
     e.loadPeakBytes = std::max(e.loadPeakBytes, e.meshBytes + m.loaderBytes);
     e.meshBytes += m.meshBytes;
     e.triangles += m.triangles;
-    if (chunk > 0 && m.triangles > chunk)
+    if (chunk > 0 && m.triangles > chunk && m.spatiallyOrdered)
       largestChunk = chunk;
     else
       wholeTriangles += m.triangles;

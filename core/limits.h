@@ -20,6 +20,11 @@ struct MeshSizeEstimate {
   /// Bytes kept once loaded, shared with Embree: float positions (padded) and indices.
   uint64_t meshBytes = 0;
   std::string how;  ///< "PLY header", "OBJ sample of N bytes", "procedural spec"
+  /// True where the triangle order is known to keep neighbours together, so a large mesh is
+  /// built in chunks (kMaxChunksPerCell): the procedural generators make their shapes one
+  /// after the other. A file's order is known only once it is loaded, so its build is
+  /// estimated as one BVH, the larger of the two.
+  bool spatiallyOrdered = false;
 };
 
 /// Estimates `spec` (a .ply or .obj path or a procedural spec): a PLY's counts from its header
@@ -42,8 +47,9 @@ uint64_t framebufferBytesPerPixel(const AovSet& aovs);
 //   building   the kept mesh buffers (Embree reads them: they are shared, not copied) plus
 //              Embree's build peak: the finished BVH and, until the build ends, its array of
 //              32-byte primitive references, one per triangle of the BVH being built: a
-//              mesh built in chunks (BuildOptions::bvhChunkTriangles) holds one chunk's at a
-//              time, the other meshes are built together in the top-level BVH;
+//              mesh built in chunks (BuildOptions::bvhChunkTriangles, for procedural meshes;
+//              see MeshSizeEstimate::spatiallyOrdered) holds one chunk's at a time, the other
+//              meshes are built together in the top-level BVH;
 //   rendering  the mesh buffers, the BVH and the framebuffers (allocated after the build, in
 //              the pages the primitive references gave back).
 // Measured at 1e7 triangles: mesh 18.0 B/tri (12 B per vertex, 12 per triangle, 0.5 vertices

@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <glm/gtc/matrix_transform.hpp>
 #include <map>
 #include <mutex>
 
 #include "core/error.h"
+#include "core/parallel.h"
 
 namespace aperture {
 
@@ -123,6 +125,46 @@ const char* bvhQualityName(BvhQuality q) {
   return "?";
 }
 
+size_t checkedBvhChunkTriangles(long long triangles, const std::string& where) {
+  if (triangles != 0 && (triangles < (long long)kMinBvhChunkTriangles || triangles > (1ll << 32)))
+    throw Error(cat(where, " ", triangles, ": must be 0 (one BVH per mesh) or at least ",
+                    kMinBvhChunkTriangles, " triangles (at most 2^32)"));
+  return size_t(triangles);
+}
+
+double chunksPerCell(const Mesh& m, const uint32_t* indices, size_t triangles,
+                     size_t chunkTriangles) {
+  constexpr int kGrid = 64;
+  constexpr size_t kCells = size_t(kGrid) * kGrid * kGrid, kWords = kCells / 64;
+  glm::vec3 lo, hi;
+  m.bounds(lo, hi);
+  const glm::vec3 scale = float(kGrid) / glm::max(hi - lo, glm::vec3(1e-30f));
+  const size_t chunks = (triangles + chunkTriangles - 1) / chunkTriangles;
+  std::vector<uint64_t> occupied(chunks * kWords, 0);  // per chunk, a bit per cell
+  parallelForChunks(triangles, chunkTriangles, [&](size_t c, size_t begin, size_t end) {
+    uint64_t* bits = &occupied[c * kWords];
+    for (size_t t = begin; t < end; ++t) {
+      const uint32_t* corner = &indices[3 * t];
+      const glm::vec3 centroid =
+          (m.vertex(corner[0]) + m.vertex(corner[1]) + m.vertex(corner[2])) / 3.0f;
+      if (!std::isfinite(centroid.x + centroid.y + centroid.z)) continue;
+      const glm::ivec3 cell = glm::clamp(glm::ivec3((centroid - lo) * scale), 0, kGrid - 1);
+      const size_t at = (size_t(cell.z) * kGrid + size_t(cell.y)) * kGrid + size_t(cell.x);
+      bits[at / 64] |= uint64_t(1) << (at % 64);
+    }
+  });
+  uint64_t cells = 0, memberships = 0;
+  for (size_t w = 0; w < kWords; ++w) {
+    uint64_t any = 0;
+    for (size_t c = 0; c < chunks; ++c) {
+      any |= occupied[c * kWords + w];
+      memberships += uint64_t(__builtin_popcountll(occupied[c * kWords + w]));
+    }
+    cells += uint64_t(__builtin_popcountll(any));
+  }
+  return cells ? double(memberships) / double(cells) : 1.0;
+}
+
 namespace {
 
 std::vector<SceneObject> untransformed(const std::vector<const Mesh*>& meshes) {
@@ -218,9 +260,13 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
         uses[&m] == 1 && objects[k].worldFromMesh == glm::dmat4(1.0) && m.anchor == renderOrigin_;
     const std::vector<uint32_t>& indices = subset ? subset->indices : m.indices;
     if (direct && chunkTriangles > 0 && placed > chunkTriangles) {
-      attachChunks(unsigned(k), m, indices, chunkTriangles, quality, flags);
-      stats_.uniqueTriangles += placed;
-      continue;
+      const double shared = chunksPerCell(m, indices.data(), placed, chunkTriangles);
+      stats_.chunksPerCell = std::max(stats_.chunksPerCell, shared);
+      if (shared <= options.maxChunksPerCell) {
+        attachChunks(unsigned(k), m, indices, chunkTriangles, quality, flags);
+        stats_.uniqueTriangles += placed;
+        continue;
+      }
     }
     if (direct) {
       RTCGeometry geom = triangleGeometry(device, m, indices.data(), placed, quality);

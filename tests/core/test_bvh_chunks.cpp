@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <deque>
 #include <glm/gtc/matrix_transform.hpp>
@@ -29,10 +30,13 @@ Device& device() {
   return d;
 }
 
+/// Chunks of `triangles`, whatever the mesh's order (these tests are about what the chunks
+/// report; ChunkPolicy is about when they are built).
 BuildOptions chunked(size_t triangles, bool robust = true) {
   BuildOptions b;
   b.robust = robust;
   b.bvhChunkTriangles = triangles;
+  b.maxChunksPerCell = INFINITY;
   return b;
 }
 
@@ -238,6 +242,58 @@ TEST(BvhChunks, LayersTraceAndVisibilityMatchTheOneBvhBuild) {
   EXPECT_GT(
       std::count_if(vb.pixels.begin() + 3000, vb.pixels.end(), [](uint64_t c) { return c > 0; }),
       0);
+}
+
+/// Four triangles: 0 and 1 near the origin, 2 and 3 far from it, in the order `order`.
+Mesh twoClusters(const std::vector<uint32_t>& order) {
+  Mesh m = loadMesh("procedural:quad");  // for the anchor and padding conventions
+  const float at[4][3] = {{0, 0, 0}, {0.1f, 0, 0}, {10, 10, 10}, {10.1f, 10, 10}};
+  m.positions.assign(3 * 12 + kVertexPaddingFloats, 0.0f);
+  m.vertexCount = 12;
+  m.indices.clear();
+  for (uint32_t t : order) {
+    for (uint32_t c = 0; c < 3; ++c) {
+      const uint32_t v = 3 * t + c;
+      for (int a = 0; a < 3; ++a)
+        m.positions[3 * v + uint32_t(a)] =
+            at[t][a] + (c == 1 && a == 1 ? 0.05f : 0.0f) + (c == 2 && a == 2 ? 0.05f : 0.0f);
+      m.indices.push_back(v);
+    }
+  }
+  return m;
+}
+
+TEST(ChunkPolicy, ChunksPerCellCountsTheRunsThatShareACell) {
+  const Mesh apart = twoClusters({0, 1, 2, 3}), interleaved = twoClusters({0, 2, 1, 3});
+  // Runs of 2: {0, 1} and {2, 3} keep to their own cell; {0, 2} and {1, 3} meet in both.
+  EXPECT_EQ(chunksPerCell(apart, apart.indices.data(), 4, 2), 1.0);
+  EXPECT_EQ(chunksPerCell(interleaved, interleaved.indices.data(), 4, 2), 2.0);
+  // Runs of 1: two runs in each occupied cell, whatever the order.
+  EXPECT_EQ(chunksPerCell(apart, apart.indices.data(), 4, 1), 2.0);
+  // One run: 1.
+  EXPECT_EQ(chunksPerCell(interleaved, interleaved.indices.data(), 4, 4), 1.0);
+}
+
+TEST(ChunkPolicy, OnlyAMeshWhoseOrderKeepsChunksApartIsBuiltInChunks) {
+  const Mesh spheres = loadMesh("procedural:spheres?tris=20000");
+  BuildOptions policy;  // the default maxChunksPerCell
+  policy.bvhChunkTriangles = 5000;
+  const Scene ordered(device(), {&spheres}, policy);
+  EXPECT_LE(ordered.stats().chunksPerCell, kMaxChunksPerCell);
+  EXPECT_EQ(ordered.stats().chunks, (spheres.triangleCount() + 4999) / 5000);
+  // The same triangles dealt out like cards: every run of 5000 spans every sphere.
+  Mesh dealt = spheres;
+  const size_t n = spheres.triangleCount(), runs = (n + 4999) / 5000;
+  size_t next = 0;
+  for (size_t r = 0; r < runs; ++r)
+    for (size_t t = r; t < n; t += runs, ++next)
+      for (int c = 0; c < 3; ++c)
+        dealt.indices[3 * next + size_t(c)] = spheres.indices[3 * t + size_t(c)];
+  ASSERT_EQ(next, n);
+  const Scene scattered(device(), {&dealt}, policy);
+  EXPECT_GT(scattered.stats().chunksPerCell, 1.5);
+  EXPECT_EQ(scattered.stats().chunks, 0u) << "built as one BVH";
+  EXPECT_FALSE(scattered.hasChunks());
 }
 
 TEST(BvhChunksShared, BunnyInSevenChunksIsBitIdentical) {

@@ -130,6 +130,7 @@ TEST(LimitsEstimate, ThePeakIsTheLargestPhase) {
   EXPECT_EQ(build.total(), kRuntimeBytes + mesh + kBvhBytesPerTriangle * big.triangles +
                                references * kBvhChunkTriangles)
       << "100M triangles: the build (mesh, BVH and one chunk's primitive references) is the peak";
+  EXPECT_TRUE(estimateMeshSize("procedural:spheres?tris=100000000").spatiallyOrdered);
   BuildOptions whole;
   whole.bvhChunkTriangles = 0;
   const MemoryEstimate unchunked =
@@ -165,7 +166,9 @@ TEST(LimitsEstimate, SharedPlyCountsEqualTheLoaders) {
         "scenes/crown_flat.ply", "scenes/contemporary-bathroom_flat.ply"}) {
     const std::string path = test::sharedMesh(rel);
     if (path.empty()) ADD_FAILURE() << rel << " is missing from ../shared/meshes";
-    if (!path.empty()) expectEstimateCountsTheLoadedMesh(path);
+    if (path.empty()) continue;
+    expectEstimateCountsTheLoadedMesh(path);
+    EXPECT_FALSE(estimateMeshSize(path).spatiallyOrdered) << rel;
   }
 }
 
@@ -334,6 +337,8 @@ TEST(LimitsCli, AbsurdValuesAreErrorsBeforeAnyAllocation) {
       {"--packet 0", "packet width 0"},
       {"--packet 32", "packet width 32"},
       {"--packet -16", "packet width -16"},
+      {"--bvh-chunk 5", "--bvh-chunk 5: must be 0 (one BVH per mesh) or at least 1024"},
+      {"--bvh-chunk -1", "--bvh-chunk"},
   };
   for (const Case& c : cases) {
     std::string out;
