@@ -52,21 +52,11 @@ Framebuffer render(const Scene& scene, const CameraParams& p, AovSet aovs = pars
 }
 
 CameraParams cityView() {
-  CameraParams p;
-  p.eye = glm::dvec3(30, 25, 30);
-  p.at = glm::dvec3(0.0);
-  p.width = 160;
-  p.height = 120;
-  p.fovDeg = 40;
-  return p;
+  return test::cameraParamsFromFlags("--eye 30,25,30 --at 0,0,0 --size 160,120 --fov 40");
 }
 
 CameraParams cityCloseUp() {
-  CameraParams p = cityView();
-  p.eye = glm::dvec3(-3.0, 1.5, 4.0);
-  p.at = glm::dvec3(-5.6, 1.0, -2.5);
-  p.fovDeg = 35;
-  return p;
+  return test::cameraParamsFromFlags("--eye -3,1.5,4 --at -5.6,1,-2.5 --size 160,120 --fov 35");
 }
 
 /// Every AOV of `a` and `b` is bit-identical: test::differingAovs's, the shading normal and
@@ -191,12 +181,8 @@ TEST(BvhChunks, LayersTraceAndVisibilityMatchTheOneBvhBuild) {
   const Scene one(device(), {&spheres}, wholeFiltered);
   const Scene split(device(), {&spheres}, splitFiltered);
   EXPECT_EQ(split.stats().chunks, (spheres.triangleCount() + 2999) / 3000);
-  CameraParams p;
-  p.eye = glm::dvec3(0.0, 0.12, 0.45);
-  p.at = glm::dvec3(0.0, 0.12, 0.0);
-  p.width = 160;
-  p.height = 120;
-  p.fovDeg = 50;
+  const CameraParams p =
+      test::cameraParamsFromFlags("--eye 0,0.12,0.45 --at 0,0.12,0 --size 160,120 --fov 50");
   // Layers: every surface along the centre ray (the filter collects the chunks' raw hits).
   for (LayerMethod method : {LayerMethod::Filter, LayerMethod::Retrace}) {
     const LayerMethod saved = defaultLayerMethod();
@@ -302,12 +288,8 @@ TEST(BvhChunksShared, BunnyInSevenChunksIsBitIdentical) {
   const Scene one(device(), {&bunny}, whole());
   const Scene split(device(), {&bunny}, chunked(10000));
   EXPECT_EQ(split.stats().chunks, (bunny.triangleCount() + 9999) / 10000);
-  CameraParams p;
-  p.eye = glm::dvec3(-0.02, 0.11, 0.35);
-  p.at = glm::dvec3(-0.017, 0.11, 0.0);
-  p.width = 200;
-  p.height = 200;
-  p.fovDeg = 30;
+  const CameraParams p = test::cameraParamsFromFlags(
+      "--eye -0.02,0.11,0.35 --at -0.017,0.11,0 --size 200,200 --fov 30");  // the bench's view
   const Framebuffer a = render(split, p), b = render(one, p);
   expectIdentical(a, b, "bunny");
   EXPECT_GE(largestPrimId(b), 60000u);
