@@ -139,10 +139,10 @@ double chunksPerCell(const Mesh& m, const uint32_t* indices, size_t triangles,
   glm::vec3 lo, hi;
   m.bounds(lo, hi);
   const glm::vec3 scale = float(kGrid) / glm::max(hi - lo, glm::vec3(1e-30f));
-  const size_t chunks = (triangles + chunkTriangles - 1) / chunkTriangles;
-  std::vector<uint64_t> occupied(chunks * kWords, 0);  // per chunk, a bit per cell
-  parallelForChunks(triangles, chunkTriangles, [&](size_t c, size_t begin, size_t end) {
-    uint64_t* bits = &occupied[c * kWords];
+  std::vector<uint32_t> chunksIn(kCells, 0);  // per cell, the chunks with a centroid in it
+  std::mutex merge;
+  parallelForChunks(triangles, chunkTriangles, [&](size_t, size_t begin, size_t end) {
+    std::vector<uint64_t> bits(kWords, 0);  // this chunk's cells
     for (size_t t = begin; t < end; ++t) {
       const uint32_t* corner = &indices[3 * t];
       const glm::vec3 centroid =
@@ -152,16 +152,13 @@ double chunksPerCell(const Mesh& m, const uint32_t* indices, size_t triangles,
       const size_t at = (size_t(cell.z) * kGrid + size_t(cell.y)) * kGrid + size_t(cell.x);
       bits[at / 64] |= uint64_t(1) << (at % 64);
     }
+    std::lock_guard<std::mutex> lock(merge);
+    for (size_t w = 0; w < kWords; ++w)
+      for (uint64_t b = bits[w]; b != 0; b &= b - 1)
+        ++chunksIn[64 * w + size_t(__builtin_ctzll(b))];
   });
   uint64_t cells = 0, memberships = 0;
-  for (size_t w = 0; w < kWords; ++w) {
-    uint64_t any = 0;
-    for (size_t c = 0; c < chunks; ++c) {
-      any |= occupied[c * kWords + w];
-      memberships += uint64_t(__builtin_popcountll(occupied[c * kWords + w]));
-    }
-    cells += uint64_t(__builtin_popcountll(any));
-  }
+  for (uint32_t n : chunksIn) cells += n > 0, memberships += n;
   return cells ? double(memberships) / double(cells) : 1.0;
 }
 

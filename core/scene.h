@@ -43,16 +43,16 @@ BvhQuality parseBvhQuality(const std::string& name);  ///< "low|medium|high", el
 const char* bvhQualityName(BvhQuality q);
 
 /// Default of BuildOptions::bvhChunkTriangles: 2^24 triangles, so a 10^8-triangle mesh is
-/// built as 6 BVHs and its build peaks at about 90 bytes per triangle instead of 117
-/// (bench/RESULTS.md, "Scaling").
+/// built as 6 BVHs and its build peaks at 90 bytes per triangle instead of 117
+/// (bench/RESULTS.md, "Issue 13, item 3: large meshes built in chunks").
 inline constexpr size_t kBvhChunkTriangles = size_t(1) << 24;
 
 /// Default of BuildOptions::maxChunksPerCell. Chunks pay only where they keep to their own part
 /// of space. The procedural spheres' consecutive triangles are neighbours (1.00-1.01 chunks
-/// per cell; 1e8 triangles in 6 chunks traced 3 % slower than one BVH); the shared scans and
-/// scenes are ordered by scan, part or material and are not (in 3 chunks: the dragon 1.05 and
-/// 5-12 % slower, the bathroom 1.10 and 30 %, the crown 1.15 and 30 %). Tiled exports
-/// (photogrammetry, city models) are written region by region and chunk well.
+/// per cell; 1e8 triangles in 6 chunks traced 1-10 % slower than one BVH); the shared scans
+/// and scenes are ordered by scan, part or material and are not (in 3 chunks: the dragon 1.05
+/// and 5-12 % slower, the bathroom 1.10 and 30 %, the crown 1.15 and 30 %). A mesh written
+/// region by region (a tiled export) would pass; none of the shared meshes is one.
 inline constexpr double kMaxChunksPerCell = 1.03;
 
 /// The smallest BuildOptions::bvhChunkTriangles the command line and job files accept, 0 aside:
