@@ -274,14 +274,9 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
     }
     auto it = built.find(&m);
     if (it == built.end()) {
-      RTCScene sub = newEmbreeScene(device, flags, quality);
-      RTCGeometry geom = triangleGeometry(device, m, indices.data(), placed, quality);
-      rtcAttachGeometryByID(sub, geom, 0);
-      rtcReleaseGeometry(geom);
-      rtcCommitScene(sub);
-      device.check(cat("building the BVH of mesh '", m.name, "'").c_str());
+      RTCScene sub = buildSubScene(m, indices.data(), placed, quality, flags,
+                                   cat("building the BVH of mesh '", m.name, "'"));
       it = built.emplace(&m, sub).first;
-      subScenes_.push_back(sub);
       stats_.uniqueTriangles += placed;
     }
     // Render space from mesh-local space, composed in double: T(−origin) · M · T(anchor).
@@ -300,6 +295,19 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
   stats_.embreeBytes = device.memoryBytes() - bytesBefore;
 }
 
+RTCScene Scene::buildSubScene(const Mesh& m, const uint32_t* indices, size_t triangles,
+                              RTCBuildQuality quality, RTCSceneFlags flags,
+                              const std::string& what) {
+  RTCScene sub = newEmbreeScene(device_, flags, quality);
+  subScenes_.push_back(sub);
+  RTCGeometry geom = triangleGeometry(device_, m, indices, triangles, quality);
+  rtcAttachGeometryByID(sub, geom, 0);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(sub);
+  device_.check(what.c_str());
+  return sub;
+}
+
 // Each chunk's BVH is committed before the next chunk's geometry is made, so Embree holds
 // the primitive references of one chunk at a time. Chunk 0's instance takes the object's own
 // geomID; the others take geomIDs after the last object's.
@@ -307,35 +315,28 @@ void Scene::attachChunks(unsigned object, const Mesh& m, const std::vector<uint3
                          size_t chunkTriangles, RTCBuildQuality quality, RTCSceneFlags flags) {
   const size_t triangles = indices.size() / 3;
   const size_t chunks = (triangles + chunkTriangles - 1) / chunkTriangles;
-  const size_t firstExtraId = std::max(objectMeshes_.size(), chunkObject_.size());
-  chunkObject_.resize(firstExtraId + chunks - 1, RTC_INVALID_GEOMETRY_ID);
-  chunkFirstPrim_.resize(chunkObject_.size(), 0);
+  const size_t firstExtraId = std::max(objectMeshes_.size(), chunkSlots_.size());
+  chunkSlots_.resize(firstExtraId + chunks - 1);
   for (size_t c = 0; c < chunks; ++c) {
     const size_t first = c * chunkTriangles;
     const size_t count = std::min(chunkTriangles, triangles - first);
-    RTCScene sub = newEmbreeScene(device_, flags, quality);
-    RTCGeometry geom = triangleGeometry(device_, m, indices.data() + 3 * first, count, quality);
-    rtcAttachGeometryByID(sub, geom, 0);
-    rtcReleaseGeometry(geom);
-    rtcCommitScene(sub);
-    device_.check(cat("building the BVH of chunk ", c, " of mesh '", m.name, "'").c_str());
-    subScenes_.push_back(sub);
+    RTCScene sub = buildSubScene(m, indices.data() + 3 * first, count, quality, flags,
+                                 cat("building the BVH of chunk ", c, " of mesh '", m.name, "'"));
     const unsigned id = c == 0 ? object : unsigned(firstExtraId + c - 1);
     attachInstance(device_, scene_, sub, glm::mat4(1.0f), id);
     device_.check(cat("placing chunk ", c, " of mesh '", m.name, "'").c_str());
-    chunkObject_[id] = object;
-    chunkFirstPrim_[id] = uint32_t(first);
+    chunkSlots_[id] = {object, uint32_t(first)};
   }
   stats_.chunks += chunks;
 }
 
 void Scene::resolveChunkHits(unsigned* geomID, unsigned* primID, unsigned* instID, size_t n) const {
-  const size_t ids = chunkObject_.size();
+  const size_t ids = chunkSlots_.size();
   for (size_t k = 0; k < n; ++k) {
     const unsigned inst = instID[k];
-    if (inst >= ids || chunkObject_[inst] == RTC_INVALID_GEOMETRY_ID) continue;
-    geomID[k] = chunkObject_[inst];
-    primID[k] += chunkFirstPrim_[inst];
+    if (inst >= ids || chunkSlots_[inst].object == RTC_INVALID_GEOMETRY_ID) continue;
+    geomID[k] = chunkSlots_[inst].object;
+    primID[k] += chunkSlots_[inst].firstPrim;
     instID[k] = RTC_INVALID_GEOMETRY_ID;
   }
 }

@@ -168,7 +168,7 @@ class Scene {
   }
   /// True when some object was built in chunks: Embree then reports its hits through the
   /// chunks' instances, and resolveChunkHits must run on every hit before anything reads it.
-  bool hasChunks() const { return !chunkObject_.empty(); }
+  bool hasChunks() const { return !chunkSlots_.empty(); }
   /// Turns the `n` hits reported through a chunk's instance into what Embree reports for the
   /// object attached directly: geomID the object, primID counted from the object's first
   /// triangle, instID RTC_INVALID_GEOMETRY_ID. Other hits and misses are left as they are.
@@ -185,10 +185,18 @@ class Scene {
   std::vector<const Mesh*> objectMeshes_;    ///< per object
   std::vector<const uint32_t*> primIdMaps_;  ///< per object; empty when nothing is culled
   std::vector<RTCScene> subScenes_;
-  /// Per top-level geomID: the object a chunk instance belongs to (RTC_INVALID_GEOMETRY_ID
-  /// for any other geomID), and its chunk's first triangle. Empty when nothing is chunked.
-  std::vector<unsigned> chunkObject_;
-  std::vector<uint32_t> chunkFirstPrim_;
+  /// What a top-level geomID placing a chunk stands for: the chunk's object
+  /// (RTC_INVALID_GEOMETRY_ID for a geomID that places no chunk) and its first triangle.
+  struct ChunkSlot {
+    unsigned object = RTC_INVALID_GEOMETRY_ID;
+    uint32_t firstPrim = 0;
+  };
+  std::vector<ChunkSlot> chunkSlots_;  ///< per top-level geomID; empty when nothing is chunked
+
+  /// A sub-scene (owned by subScenes_) of one triangle geometry over `triangles` triangles of
+  /// `m` from `indices`, committed; `what` names it in an Embree error.
+  RTCScene buildSubScene(const Mesh& m, const uint32_t* indices, size_t triangles,
+                         RTCBuildQuality quality, RTCSceneFlags flags, const std::string& what);
 
   void attachChunks(unsigned object, const Mesh& m, const std::vector<uint32_t>& indices,
                     size_t chunkTriangles, RTCBuildQuality quality, RTCSceneFlags flags);

@@ -7,7 +7,6 @@
 #include <cstring>
 #include <deque>
 #include <glm/gtc/matrix_transform.hpp>
-#include <memory>
 #include <string>
 #include <vector>
 
