@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "core/spelling.h"
+#include "core/units.h"
 
 namespace aperture {
 
@@ -104,7 +105,6 @@ bool Lens::distorted() const {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // The valid region is found by scanning the undistorted radius (r or θ) in geometric steps of
@@ -159,7 +159,7 @@ std::string LensValidRegion::text(bool fisheye) const {
   const double offAxis = fisheye ? maxUndistorted : std::atan(maxUndistorted);
   char s[160];
   std::snprintf(s, sizeof s, "%s < %.4g%s (distorted %.4g, %.1f° off-axis)", fisheye ? "θ" : "r",
-                maxUndistorted, fisheye ? " rad" : "", maxDistorted, offAxis * 180 / kPi);
+                maxUndistorted, fisheye ? " rad" : "", maxDistorted, offAxis * kDegPerRad);
   return s;
 }
 

@@ -45,6 +45,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/spelling.h"
+#include "core/units.h"
 
 namespace aperture::camera_files {
 
@@ -52,8 +53,6 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // The camera_model names nerfstudio accepts that map onto COLMAP's models.
 const std::vector<std::string>& nerfModelNames() {
