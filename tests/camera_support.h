@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <glm/glm.hpp>
 #include <memory>
 #include <vector>
 
@@ -12,6 +13,11 @@
 #include "core/packet.h"
 
 namespace aperture::test {
+
+/// Angle between two directions, accurate for tiny angles.
+inline double angleBetween(const glm::dvec3& a, const glm::dvec3& b) {
+  return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
+}
 
 /// The fields the packet contract (core/camera.h) fixes for lane k of an unclipped camera:
 /// tnear 0, tfar +inf, time 0, mask all ones, id k, flags 0. Call through

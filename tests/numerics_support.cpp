@@ -18,7 +18,7 @@ Loaded load(const std::string& spec, const LoadOptions& lo, const BuildOptions& 
   return l;
 }
 
-Framebuffer render(const Scene& scene, const CameraParams& p, AovMask aovs, RenderStats* stats) {
+Framebuffer render(const Scene& scene, const CameraParams& p, AovSet aovs, RenderStats* stats) {
   const auto cam = makeCamera(p, scene.renderOrigin());
   Framebuffer fb(p.width, p.height, aovs);
   RenderSettings rs;

@@ -25,7 +25,7 @@ struct Loaded {
 Loaded load(const std::string& spec, const LoadOptions& lo = {}, const BuildOptions& bo = {});
 
 /// Renders `p` (its size and spp) into a fresh framebuffer of `aovs`.
-Framebuffer render(const Scene& scene, const CameraParams& p, AovMask aovs,
+Framebuffer render(const Scene& scene, const CameraParams& p, AovSet aovs = parseAovList("all"),
                    RenderStats* stats = nullptr);
 
 /// A 40° perspective camera at `eye` looking at `at`, w x h pixels.

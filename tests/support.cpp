@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "apps/camera_flags.h"
@@ -117,6 +118,13 @@ std::string differingAovs(const Framebuffer& a, const Framebuffer& b) {
   check(sameBits(a.position, b.position), "position");
   check(sameBits(a.primId, b.primId), "primid");
   check(sameBits(a.geomId, b.geomId), "geomid");
+  check(sameBits(a.shadingNormal, b.shadingNormal), "shading-normal");
+  for (size_t k = 0; k < a.properties.size(); ++k)
+    check(sameBits(a.properties[k].values, b.properties[k].values),
+          a.properties[k].property.aovName().c_str());
+  check(sameBits(a.layerDepth, b.layerDepth) && sameBits(a.layerDistance, b.layerDistance) &&
+            sameBits(a.layerPrimId, b.layerPrimId) && sameBits(a.layerGeomId, b.layerGeomId),
+        "layers");
   return diff;
 }
 
@@ -154,6 +162,11 @@ std::string readFile(const std::string& path) {
   std::ostringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+nlohmann::json readJson(const std::string& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
 }
 
 int forEachHit(const Framebuffer& fb,

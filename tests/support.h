@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 
 #include "cameras/params.h"
@@ -42,10 +43,21 @@ std::string readFile(const std::string& path);
 /// Writes a file (binary-safe).
 void writeFile(const std::string& path, const std::string& bytes);
 bool fileExists(const std::string& path);
+/// A JSON file, parsed (throws nlohmann::json::parse_error when it is missing or malformed).
+nlohmann::json readJson(const std::string& path);
 
 /// The AOVs (by name) whose size or pixel bits differ between a and b; "" when the two have the
-/// same size, the same AOVs and bit-identical pixels in every one.
+/// same size, the same AOVs and bit-identical pixels in every one: the named AOVs, the shading
+/// normal, every mesh-property AOV and the layers.
 std::string differingAovs(const Framebuffer& a, const Framebuffer& b);
+/// How far (pixels) a float32 world position P, projected by an EXR header's matrices, may
+/// land from its pixel centre.
+inline constexpr double kMaxPixelError = 1e-2;
+
+/// Expects differingAovs(a, b) to be "", naming `what` when it is not.
+inline void expectIdentical(const Framebuffer& a, const Framebuffer& b, const std::string& what) {
+  EXPECT_EQ(differingAovs(a, b), "") << what;
+}
 inline bool samePixels(const Framebuffer& a, const Framebuffer& b) {
   return differingAovs(a, b).empty();
 }

@@ -32,6 +32,7 @@ using aperture::app::Job;
 using aperture::app::parseJobText;
 using aperture::test::apertureBinary;
 using aperture::test::quote;
+using aperture::test::readJson;
 using aperture::test::runCommand;
 using aperture::test::scratchDir;
 using aperture::test::writeFile;
@@ -94,11 +95,6 @@ std::string writeJob(const std::string& dir, const json& j) {
   const std::string path = dir + "/job.json";
   writeFile(path, j.dump(2));
   return path;
-}
-
-json readJson(const std::string& path) {
-  std::ifstream in(path);
-  return json::parse(in);
 }
 
 }  // namespace

@@ -26,6 +26,7 @@
 using namespace aperture;
 using aperture::test::apertureBinary;
 using aperture::test::quote;
+using aperture::test::readJson;
 using aperture::test::runCommand;
 using aperture::test::scratchDir;
 using aperture::test::writeFile;
@@ -61,11 +62,6 @@ std::string writeJob(const std::string& dir, const json& j, const std::string& n
   const std::string path = dir + "/" + name;
   writeFile(path, j.dump(2));
   return path;
-}
-
-json readJson(const std::string& path) {
-  std::ifstream in(path);
-  return json::parse(in);
 }
 
 /// Entry k of a "scenes" job as a one-scene job of its own, writing to sep/<name>/.

@@ -29,6 +29,7 @@
 
 #include "cameras/camera_file.h"
 #include "core/exr.h"
+#include "core/units.h"
 #include "tests/support.h"
 
 namespace aperture {
@@ -39,8 +40,7 @@ using nlohmann::json;
 using test::apertureBinary;
 using test::runCommand;
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kMaxPixelError = 1e-2;  // pixels; P is float32
+using test::kMaxPixelError;
 constexpr double kPoseTolerance = 1e-12;
 
 using Mat3 = std::array<std::array<double, 3>, 3>;

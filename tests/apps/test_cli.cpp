@@ -228,21 +228,19 @@ TEST(Cli, PacketWidthsGiveBitIdenticalPrimIdsOnTheCrown) {
 }
 
 TEST(Cli, BenchReportsRenderAndBaselineInJson) {
-  const std::string json = scratchDir() + "/b.json";
+  const std::string jsonPath = scratchDir() + "/b.json";
   std::string out;
   ASSERT_EQ(runCommand(apertureBinary() +
                            " bench --quiet --size 64,64 --frames 3 --warmup 1 --builds 2 "
                            "--baseline --mesh 'procedural:sphere' --json " +
-                           json,
+                           jsonPath,
                        &out),
             0)
       << out;
-  std::ifstream in(json);
-  std::stringstream text;
-  text << in.rdbuf();
+  const std::string text = test::readFile(jsonPath);
   for (const char* key : {"\"mrays_per_s_median\"", "\"baseline_mrays_per_s_median\"",
                           "\"build_seconds_median\"", "\"embree_bytes_per_triangle\"", "\"isa\""})
-    EXPECT_NE(text.str().find(key), std::string::npos) << key;
+    EXPECT_NE(text.find(key), std::string::npos) << key;
   EXPECT_NE(out.find("render / baseline"), std::string::npos) << out;
 }
 
@@ -250,17 +248,16 @@ TEST(Cli, BenchBaselineStreamApisTraceTheSameRays) {
   // Every Embree API of the baseline traces every pixel: the same ray count in the JSON
   // (no lane lost or doubled in the stream layouts). The count is the image's pixel count.
   for (const char* api : {"packet16", "stream-nm", "stream-1m"}) {
-    const std::string json = scratchDir() + "/b_" + api + ".json";
+    const std::string jsonPath = scratchDir() + "/b_" + api + ".json";
     std::string out;
     ASSERT_EQ(runCommand(apertureBinary() +
                              " bench --quiet --size 61,45 --frames 1 --warmup 0 --builds 1 "
                              "--baseline --mesh 'procedural:sphere' --baseline-api " +
-                             api + " --json " + json,
+                             api + " --json " + jsonPath,
                          &out),
               0)
         << out;
-    std::ifstream in(json);
-    const nlohmann::json j = nlohmann::json::parse(in);
+    const nlohmann::json j = test::readJson(jsonPath);
     EXPECT_EQ(j["baseline_api"], api);
     EXPECT_EQ(j["baseline_rays_per_frame"], 61 * 45) << api;
   }

@@ -29,13 +29,13 @@
 #include <vector>
 
 #include "core/exr.h"
+#include "core/units.h"
 #include "tests/support.h"
 
 namespace aperture {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kMaxPixelError = 1e-2;  // pixels
+using test::kMaxPixelError;
 constexpr double kMaxDepthError = 1e-4;  // relative
 
 /// An image rendered by the binary: its pixels (P, Z, T) and its header as OpenEXR reads it.

@@ -16,6 +16,7 @@
 #include "cameras/calibration.h"
 #include "cameras/camera_file.h"
 #include "core/error.h"
+#include "core/units.h"
 #include "tests/support.h"
 
 namespace aperture {
@@ -28,8 +29,6 @@ using nlohmann::json;
 using test::readFile;
 using test::scratchDir;
 using test::writeFile;
-
-constexpr double kPi = 3.14159265358979323846;
 
 #define EXPECT_ERROR_MENTIONS(call, ...)                                  \
   do {                                                                    \

@@ -13,24 +13,20 @@
 #include "cameras/registry.h"
 #include "cameras/view_volume.h"
 #include "core/error.h"
+#include "core/units.h"
 #include "tests/camera_support.h"
 
 namespace aperture {
 namespace {
 
+using test::angleBetween;
 using test::PacketBuffer;
 
-constexpr double kPi = 3.14159265358979323846;
 double rad(double deg) { return deg * kPi / 180.0; }
 
 std::unique_ptr<CameraBase> make(const CameraParams& p,
                                  const glm::dvec3& renderOrigin = glm::dvec3(0.0)) {
   return makeCameraModel(p, renderOrigin);
-}
-
-/// Angle between two directions, accurate for tiny angles.
-double angleBetween(const glm::dvec3& a, const glm::dvec3& b) {
-  return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
 }
 
 glm::dvec3 toDouble(const glm::vec3& v) { return glm::dvec3(v); }
@@ -456,13 +452,13 @@ TEST(PerspectiveArchitectural, RequestedAxisStaysAtTheImageCentre) {
 // ---------------------------------------------------------------------------------------
 // Thin lens.
 
-struct LensCase {
+struct ThinLensCase {
   double radius, focus;
 };
-class ThinLens : public ::testing::TestWithParam<LensCase> {};
+class ThinLens : public ::testing::TestWithParam<ThinLensCase> {};
 
 TEST_P(ThinLens, RaysOfAPixelMeetOnTheFocusPlane) {
-  const LensCase c = GetParam();
+  const ThinLensCase c = GetParam();
   CameraParams p = test::tiltedParams("thinlens");
   p.width = 64;
   p.height = 48;
@@ -502,9 +498,9 @@ TEST_P(ThinLens, RaysOfAPixelMeetOnTheFocusPlane) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Sweep, ThinLens,
-                         ::testing::Values(LensCase{0.05, 0.5}, LensCase{0.3, 7.0},
-                                           LensCase{1.0, 1000.0}, LensCase{1e-9, 3.0},
-                                           LensCase{0.2, 1e-3}));
+                         ::testing::Values(ThinLensCase{0.05, 0.5}, ThinLensCase{0.3, 7.0},
+                                           ThinLensCase{1.0, 1000.0}, ThinLensCase{1e-9, 3.0},
+                                           ThinLensCase{0.2, 1e-3}));
 
 TEST(ThinLensCamera, ApertureZeroEqualsThePinholeBitForBit) {
   for (int spp : {1, 4, 9}) {

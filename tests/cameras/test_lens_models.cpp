@@ -16,13 +16,15 @@
 
 #include "cameras/lens_model.h"
 #include "core/error.h"
+#include "core/units.h"
+#include "tests/camera_support.h"
 
 namespace aperture {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180;
 using M = LensModelId;
+using test::angleBetween;
 
 struct LensCase {
   const char* label;
@@ -216,10 +218,6 @@ glm::dvec3 directionOf(const Lens& lens, const glm::dvec2& u) {
   const double theta = glm::length(u);
   if (theta == 0) return {0, 0, 1};
   return {std::sin(theta) * u.x / theta, std::sin(theta) * u.y / theta, std::cos(theta)};
-}
-
-double angleBetween(const glm::dvec3& a, const glm::dvec3& b) {
-  return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
 }
 
 /// Whether the distortion has a term that is not radial (it can fold the map in 2D).

@@ -19,15 +19,11 @@
 #include "core/scene.h"
 #include "core/trace.h"
 #include "core/visibility.h"
+#include "tests/numerics_support.h"
 #include "tests/support.h"
 
 namespace aperture {
 namespace {
-
-Device& device() {
-  static Device d;
-  return d;
-}
 
 /// Chunks of `triangles`, whatever the mesh's order (these tests are about what the chunks
 /// report; ChunkPolicy is about when they are built).
@@ -41,37 +37,12 @@ BuildOptions chunked(size_t triangles, bool robust = true) {
 
 BuildOptions whole(bool robust = true) { return chunked(0, robust); }
 
-Framebuffer render(const Scene& scene, const CameraParams& p, AovSet aovs = parseAovList("all")) {
-  const auto cam = makeCamera(p, scene.renderOrigin());
-  Framebuffer fb(p.width, p.height, aovs);
-  RenderSettings rs;
-  rs.spp = p.spp;
-  renderImage(scene, *cam, rs, fb);
-  return fb;
-}
-
 CameraParams cityView() {
   return test::cameraParamsFromFlags("--eye 30,25,30 --at 0,0,0 --size 160,120 --fov 40");
 }
 
 CameraParams cityCloseUp() {
   return test::cameraParamsFromFlags("--eye -3,1.5,4 --at -5.6,1,-2.5 --size 160,120 --fov 35");
-}
-
-/// Every AOV of `a` and `b` is bit-identical: test::differingAovs's, the shading normal and
-/// the layers.
-void expectIdentical(const Framebuffer& a, const Framebuffer& b, const std::string& what) {
-  EXPECT_EQ(test::differingAovs(a, b), "") << what;
-  const auto bits = [](const std::vector<float>& v) {
-    std::vector<uint32_t> out(v.size());
-    if (!v.empty()) std::memcpy(out.data(), v.data(), 4 * v.size());
-    return out;
-  };
-  EXPECT_EQ(bits(a.shadingNormal), bits(b.shadingNormal)) << what;
-  EXPECT_EQ(bits(a.layerDepth), bits(b.layerDepth)) << what;
-  EXPECT_EQ(bits(a.layerDistance), bits(b.layerDistance)) << what;
-  EXPECT_EQ(a.layerPrimId, b.layerPrimId) << what;
-  EXPECT_EQ(a.layerGeomId, b.layerGeomId) << what;
 }
 
 /// The largest primID in the image: a hit past the first chunk shows that chunk offsets were
@@ -87,20 +58,20 @@ TEST(BvhChunks, EveryAovIsBitIdenticalToTheOneBvhBuild) {
   const Mesh city = loadMesh("procedural:city");
   const size_t n = city.triangleCount();
   for (bool robust : {true, false}) {
-    const Scene one(device(), {&city}, whole(robust));
+    const Scene one(test::numericsDevice(), {&city}, whole(robust));
     EXPECT_EQ(one.stats().chunks, 0u);
     EXPECT_FALSE(one.hasChunks());
     // Chunks of 100 (the last one short), a third, and just under the whole mesh.
     for (size_t size : {size_t(100), n / 3, n - 1}) {
-      const Scene split(device(), {&city}, chunked(size, robust));
+      const Scene split(test::numericsDevice(), {&city}, chunked(size, robust));
       EXPECT_EQ(split.stats().chunks, (n + size - 1) / size) << size;
       EXPECT_TRUE(split.hasChunks());
       EXPECT_EQ(split.instanceCount(), 0u) << "chunks are not instances of the user's";
       EXPECT_EQ(split.stats().uniqueTriangles, n);
       for (const CameraParams& p : {cityView(), cityCloseUp()}) {
-        const Framebuffer a = render(split, p), b = render(one, p);
-        expectIdentical(a, b,
-                        "chunk " + std::to_string(size) + " robust " + std::to_string(robust));
+        const Framebuffer a = test::render(split, p), b = test::render(one, p);
+        test::expectIdentical(
+            a, b, "chunk " + std::to_string(size) + " robust " + std::to_string(robust));
         if (size < n - 1) {
           EXPECT_GE(largestPrimId(b), size) << "a hit past the first chunk";
         }
@@ -111,11 +82,12 @@ TEST(BvhChunks, EveryAovIsBitIdenticalToTheOneBvhBuild) {
 
 TEST(BvhChunks, AMeshNoLargerThanAChunkAndTheCompactBvhAreBuiltWhole) {
   const Mesh city = loadMesh("procedural:city");
-  EXPECT_EQ(Scene(device(), {&city}, chunked(city.triangleCount())).stats().chunks, 0u);
+  EXPECT_EQ(Scene(test::numericsDevice(), {&city}, chunked(city.triangleCount())).stats().chunks,
+            0u);
   BuildOptions compact = chunked(100);
   compact.compact = true;
   EXPECT_EQ(compact.effectiveChunkTriangles(), 0u);
-  EXPECT_EQ(Scene(device(), {&city}, compact).stats().chunks, 0u);
+  EXPECT_EQ(Scene(test::numericsDevice(), {&city}, compact).stats().chunks, 0u);
 }
 
 // Chunk instances take geomIDs after the objects': hits on the other objects, direct or
@@ -141,14 +113,14 @@ TEST(BvhChunks, OtherObjectsKeepTheirGeomIdsAndNormals) {
                                          {&second, moved, nullptr},
                                          {&raised, glm::dmat4(1.0), nullptr},
                                          {&second, behind, nullptr}};
-  const Scene one(device(), objects, whole());
-  const Scene split(device(), objects, chunked(150));
+  const Scene one(test::numericsDevice(), objects, whole());
+  const Scene split(test::numericsDevice(), objects, chunked(150));
   EXPECT_EQ(split.stats().chunks, 2 * ((city.triangleCount() + 149) / 150));
   EXPECT_EQ(split.instanceCount(), 2u);
   std::vector<uint32_t> seen;
   for (const CameraParams& p : {cityView(), cityCloseUp()}) {
-    const Framebuffer a = render(split, p), b = render(one, p);
-    expectIdentical(a, b, "five objects");
+    const Framebuffer a = test::render(split, p), b = test::render(one, p);
+    test::expectIdentical(a, b, "five objects");
     seen.insert(seen.end(), b.geomId.begin(), b.geomId.end());
   }
   for (uint32_t object : {0u, 1u, 2u, 3u, 4u})
@@ -159,16 +131,16 @@ TEST(BvhChunks, CulledChunksReportTheMeshsPrimIds) {
   const Mesh city = loadMesh("procedural:city");
   const std::vector<SceneObject> objects{{&city, glm::dmat4(1.0), nullptr}};
   const CameraParams p = cityCloseUp();
-  const Scene full(device(), objects, whole());
+  const Scene full(test::numericsDevice(), objects, whole());
   std::deque<TriangleSubset> subsets;
   std::vector<SceneObject> culledObjects = objects;
   const CameraCuller culler = cullerFor({p}, full.renderOrigin());
   const CullStats stats = cullObjects(culledObjects, culler.test(), subsets);
   ASSERT_GT(stats.trianglesKept, 60u);
-  const Scene culled(device(), culledObjects, chunked(stats.trianglesKept / 3));
+  const Scene culled(test::numericsDevice(), culledObjects, chunked(stats.trianglesKept / 3));
   EXPECT_GE(culled.stats().chunks, 3u);
   EXPECT_TRUE(culled.remapsPrimIds());
-  expectIdentical(render(culled, p), render(full, p), "culled");
+  test::expectIdentical(test::render(culled, p), test::render(full, p), "culled");
 }
 
 // On spheres: the city's building floors lie on its ground, and where two triangles coincide
@@ -177,8 +149,8 @@ TEST(BvhChunks, LayersTraceAndVisibilityMatchTheOneBvhBuild) {
   const Mesh spheres = loadMesh("procedural:spheres?tris=20000");
   BuildOptions wholeFiltered = whole(), splitFiltered = chunked(3000);
   wholeFiltered.contextFilter = splitFiltered.contextFilter = true;  // LayerMethod::Filter runs
-  const Scene one(device(), {&spheres}, wholeFiltered);
-  const Scene split(device(), {&spheres}, splitFiltered);
+  const Scene one(test::numericsDevice(), {&spheres}, wholeFiltered);
+  const Scene split(test::numericsDevice(), {&spheres}, splitFiltered);
   EXPECT_EQ(split.stats().chunks, (spheres.triangleCount() + 2999) / 3000);
   const CameraParams p =
       test::cameraParamsFromFlags("--eye 0,0.12,0.45 --at 0,0.12,0 --size 160,120 --fov 50");
@@ -188,9 +160,9 @@ TEST(BvhChunks, LayersTraceAndVisibilityMatchTheOneBvhBuild) {
     setLayerMethod(method);
     AovSet set(kAovDepth | kAovPrimId | kAovGeomId);
     set.layers = 4;
-    const Framebuffer a = render(split, p, set), b = render(one, p, set);
+    const Framebuffer a = test::render(split, p, set), b = test::render(one, p, set);
     setLayerMethod(saved);
-    expectIdentical(a, b, "layers by method " + std::to_string(int(method)));
+    test::expectIdentical(a, b, "layers by method " + std::to_string(int(method)));
     EXPECT_GE(*std::max_element(b.layerPrimId.begin(), b.layerPrimId.end(),
                                 [](uint32_t x, uint32_t y) {
                                   return (x == 0xFFFFFFFFu ? 0 : x) < (y == 0xFFFFFFFFu ? 0 : y);
@@ -263,7 +235,7 @@ TEST(ChunkPolicy, OnlyAMeshWhoseOrderKeepsChunksApartIsBuiltInChunks) {
   const Mesh spheres = loadMesh("procedural:spheres?tris=20000");
   BuildOptions policy;  // the default maxChunksPerCell
   policy.bvhChunkTriangles = 5000;
-  const Scene ordered(device(), {&spheres}, policy);
+  const Scene ordered(test::numericsDevice(), {&spheres}, policy);
   EXPECT_LE(ordered.stats().chunksPerCell, kMaxChunksPerCell);
   EXPECT_EQ(ordered.stats().chunks, (spheres.triangleCount() + 4999) / 5000);
   // The same triangles dealt out like cards: every run of 5000 spans every sphere.
@@ -275,7 +247,7 @@ TEST(ChunkPolicy, OnlyAMeshWhoseOrderKeepsChunksApartIsBuiltInChunks) {
       for (int c = 0; c < 3; ++c)
         dealt.indices[3 * next + size_t(c)] = spheres.indices[3 * t + size_t(c)];
   ASSERT_EQ(next, n);
-  const Scene scattered(device(), {&dealt}, policy);
+  const Scene scattered(test::numericsDevice(), {&dealt}, policy);
   EXPECT_GT(scattered.stats().chunksPerCell, 1.5);
   EXPECT_EQ(scattered.stats().chunks, 0u) << "built as one BVH";
   EXPECT_FALSE(scattered.hasChunks());
@@ -284,13 +256,13 @@ TEST(ChunkPolicy, OnlyAMeshWhoseOrderKeepsChunksApartIsBuiltInChunks) {
 TEST(BvhChunksShared, BunnyInSevenChunksIsBitIdentical) {
   APERTURE_REQUIRE_SHARED_MESH(path, "stanford/bun_zipper.ply");
   const Mesh bunny = loadMesh(path);
-  const Scene one(device(), {&bunny}, whole());
-  const Scene split(device(), {&bunny}, chunked(10000));
+  const Scene one(test::numericsDevice(), {&bunny}, whole());
+  const Scene split(test::numericsDevice(), {&bunny}, chunked(10000));
   EXPECT_EQ(split.stats().chunks, (bunny.triangleCount() + 9999) / 10000);
   const CameraParams p = test::cameraParamsFromFlags(
       "--eye -0.02,0.11,0.35 --at -0.017,0.11,0 --size 200,200 --fov 30");  // the bench's view
-  const Framebuffer a = render(split, p), b = render(one, p);
-  expectIdentical(a, b, "bunny");
+  const Framebuffer a = test::render(split, p), b = test::render(one, p);
+  test::expectIdentical(a, b, "bunny");
   EXPECT_GE(largestPrimId(b), 60000u);
 }
 

@@ -16,28 +16,11 @@
 #include "core/mesh.h"
 #include "core/render.h"
 #include "core/scene.h"
+#include "tests/numerics_support.h"
 #include "tests/support.h"
 
 namespace aperture {
 namespace {
-
-Device& device() {
-  static Device d;
-  return d;
-}
-
-Framebuffer render(const Scene& scene, const CameraParams& p) {
-  const auto cam = makeCamera(p, scene.renderOrigin());
-  Framebuffer fb(p.width, p.height, parseAovList("all"));
-  RenderSettings rs;
-  rs.spp = p.spp;
-  renderImage(scene, *cam, rs, fb);
-  return fb;
-}
-
-void expectIdentical(const Framebuffer& a, const Framebuffer& b, const std::string& what) {
-  EXPECT_EQ(test::differingAovs(a, b), "") << what;
-}
 
 /// Culled and full scenes over the same objects, for `cameras`.
 struct CulledPair {
@@ -50,10 +33,10 @@ std::unique_ptr<CulledPair> cullFor(std::vector<SceneObject> objects,
                                     const std::vector<CameraParams>& cameras,
                                     const BuildOptions& bo = {}) {
   auto pair = std::make_unique<CulledPair>();
-  pair->full = std::make_unique<Scene>(device(), objects, bo);
+  pair->full = std::make_unique<Scene>(test::numericsDevice(), objects, bo);
   const CameraCuller culler = cullerFor(cameras, pair->full->renderOrigin());
   pair->stats = cullObjects(objects, culler.test(), pair->subsets);
-  pair->culled = std::make_unique<Scene>(device(), objects, bo);
+  pair->culled = std::make_unique<Scene>(test::numericsDevice(), objects, bo);
   return pair;
 }
 
@@ -106,7 +89,7 @@ TEST(CullingCity, EveryAovIsBitIdenticalForEveryCameraKind) {
       EXPECT_EQ(pair->culled->stats().triangles + pair->culled->stats().culledTriangles,
                 city.triangleCount());
       EXPECT_TRUE(pair->culled->remapsPrimIds());
-      expectIdentical(render(*pair->culled, p), render(*pair->full, p), p.type);
+      test::expectIdentical(test::render(*pair->culled, p), test::render(*pair->full, p), p.type);
     }
   }
 }
@@ -116,7 +99,7 @@ TEST(CullingCity, TheUnionOfSeveralCamerasServesEachOfThem) {
   const std::vector<CameraParams> cams = cameraKinds();
   const auto pair = cullFor({{&city, glm::dmat4(1.0), nullptr}}, cams);
   for (const CameraParams& p : cams)
-    expectIdentical(render(*pair->culled, p), render(*pair->full, p), p.type);
+    test::expectIdentical(test::render(*pair->culled, p), test::render(*pair->full, p), p.type);
 }
 
 TEST(CullingCity, FarFromTheOriginInWorldSpaceTheOriginRoundingIsCovered) {
@@ -129,7 +112,8 @@ TEST(CullingCity, FarFromTheOriginInWorldSpaceTheOriginRoundingIsCovered) {
   *p.at += lo.translate;
   const auto pair = cullFor({{&city, glm::dmat4(1.0), nullptr}}, {p});
   EXPECT_LT(pair->stats.trianglesKept, city.triangleCount());
-  expectIdentical(render(*pair->culled, p), render(*pair->full, p), "world-space");
+  test::expectIdentical(test::render(*pair->culled, p), test::render(*pair->full, p),
+                        "world-space");
 }
 
 TEST(CullingCity, InstancedPlacementsKeepTheUnionAndReportOriginalPrimIds) {
@@ -142,8 +126,9 @@ TEST(CullingCity, InstancedPlacementsKeepTheUnionAndReportOriginalPrimIds) {
       cullFor({{&city, glm::dmat4(1.0), nullptr}, {&city, moved, nullptr}}, {p, closeUp()});
   EXPECT_EQ(pair->culled->instanceCount(), 2u);
   EXPECT_LT(pair->stats.trianglesKept, city.triangleCount());
-  expectIdentical(render(*pair->culled, p), render(*pair->full, p), "instance 1");
-  expectIdentical(render(*pair->culled, closeUp()), render(*pair->full, closeUp()), "instance 0");
+  test::expectIdentical(test::render(*pair->culled, p), test::render(*pair->full, p), "instance 1");
+  test::expectIdentical(test::render(*pair->culled, closeUp()),
+                        test::render(*pair->full, closeUp()), "instance 0");
 }
 
 TEST(CullingCity, PanoramasSeeEverything) {
@@ -176,7 +161,8 @@ TEST(CullingCity, AnObjectWithNothingKeptLeavesItsGeomIdUnused) {
   objects[1].mesh = &farMoved;
   const auto pair = cullFor(objects, {closeUp()});
   EXPECT_EQ(pair->subsets[1].triangleCount(), 0u);
-  expectIdentical(render(*pair->culled, closeUp()), render(*pair->full, closeUp()), "empty");
+  test::expectIdentical(test::render(*pair->culled, closeUp()),
+                        test::render(*pair->full, closeUp()), "empty");
 }
 
 TEST(CullingShared, BunnyCloseUpAndThinLensAreBitIdentical) {
@@ -196,7 +182,7 @@ TEST(CullingShared, BunnyCloseUpAndThinLensAreBitIdentical) {
   for (const CameraParams& c : {p, lens}) {
     const auto pair = cullFor({{&bunny, glm::dmat4(1.0), nullptr}}, {c});
     EXPECT_LT(pair->stats.trianglesKept, bunny.triangleCount());
-    expectIdentical(render(*pair->culled, c), render(*pair->full, c), c.type);
+    test::expectIdentical(test::render(*pair->culled, c), test::render(*pair->full, c), c.type);
   }
 }
 
@@ -209,7 +195,7 @@ TEST(CullingCli, RenderWithCullWritesTheSamePixelsAndJobFilesAcceptCull) {
   ASSERT_EQ(test::runCommand(common + dir + "/a.exr", &out), 0) << out;
   ASSERT_EQ(test::runCommand(common + dir + "/b.exr --cull", &out), 0) << out;
   EXPECT_NE(out.find("culled to the view volume of 1 camera: kept"), std::string::npos) << out;
-  expectIdentical(readExr(dir + "/b.exr"), readExr(dir + "/a.exr"), "cli");
+  test::expectIdentical(readExr(dir + "/b.exr"), readExr(dir + "/a.exr"), "cli");
 
   test::writeFile(dir + "/job.json", R"({
     "scene": {"meshes": [{"path": "procedural:city"}], "placement": "world-space"},

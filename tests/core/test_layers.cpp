@@ -18,14 +18,10 @@
 #include "core/packet.h"
 #include "core/render.h"
 #include "core/scene.h"
+#include "tests/numerics_support.h"
 
 namespace aperture {
 namespace {
-
-Device& device() {
-  static Device d;
-  return d;
-}
 
 /// Restores the process's layer method after a test that picks one.
 struct MethodGuard {
@@ -201,7 +197,7 @@ struct SphereStack {
       meshes.push_back(worldMesh(spec));
     std::vector<const Mesh*> ptrs;
     for (const Mesh& m : meshes) ptrs.push_back(&m);
-    scene = std::make_unique<Scene>(device(), ptrs, withFilter());
+    scene = std::make_unique<Scene>(test::numericsDevice(), ptrs, withFilter());
     for (size_t g = 0; g < meshes.size(); ++g)
       brute.push_back(bruteObject(meshes[g], glm::dmat4(1.0), scene->renderOrigin(), uint32_t(g)));
   }
@@ -298,7 +294,7 @@ TEST(Layers, CulledInstancedSceneReportsOriginalPrimIdsAndInstanceIds) {
                        glm::scale(glm::translate(glm::dmat4(1.0), glm::dvec3(0.05 * z, 0.0, z)),
                                   glm::dvec3(1.0 + 0.1 * z)),
                        &subset});
-  const Scene scene(device(), objects, withFilter());
+  const Scene scene(test::numericsDevice(), objects, withFilter());
   ASSERT_EQ(scene.instanceCount(), 3u);
   ASSERT_TRUE(scene.remapsPrimIds());
   std::vector<BruteObject> brute;
@@ -314,7 +310,7 @@ TEST(Layers, CoincidentSurfacesAreTwoLayersByFilterAndOneByRetracing) {
   // The documented difference: two identical quads at the same depth.
   MethodGuard guard;
   const Mesh a = worldMesh("procedural:quad?size=4"), b = worldMesh("procedural:quad?size=4");
-  const Scene scene(device(), std::vector<const Mesh*>{&a, &b}, withFilter());
+  const Scene scene(test::numericsDevice(), std::vector<const Mesh*>{&a, &b}, withFilter());
   CameraParams p = stackCamera();
   p.width = p.height = 8;
   const size_t centre = 4 * 8 + 4, n = 64;
@@ -329,7 +325,7 @@ TEST(Layers, CoincidentSurfacesAreTwoLayersByFilterAndOneByRetracing) {
 
 TEST(Layers, FilterFallsBackToRetracingOnASceneWithoutContextFilter) {
   const Mesh m = worldMesh("procedural:sphere");
-  const Scene plain(device(), std::vector<const Mesh*>{&m});
+  const Scene plain(test::numericsDevice(), std::vector<const Mesh*>{&m});
   const auto cam = makeCamera(stackCamera(), plain.renderOrigin());
   AovSet set(kAovDepth);
   set.layers = 2;

@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "core/mesh.h"
+#include "core/units.h"
 #include "tests/support.h"
 
 namespace aperture {
@@ -99,7 +100,6 @@ TEST(Procedural, SphereVerticesOnTheSphereAndWithinTheSagitta) {
   for (uint32_t k = 0; k < m.vertexCount; ++k)
     EXPECT_NEAR(glm::length(worldVertex(m, k) - centre), r, 1e-5) << k;
   // The documented bound: every point of the surface is within r*(1-cos(pi/2Q)cos(pi/S)).
-  const double kPi = 3.14159265358979323846;
   const double sagitta = r * (1 - std::cos(kPi / (2 * rings)) * std::cos(kPi / segments));
   double deepest = 0;
   for (size_t t = 0; t < m.triangleCount(); ++t) {

@@ -13,12 +13,11 @@
 #include "core/mesh.h"
 #include "core/render.h"
 #include "core/scene.h"
+#include "core/units.h"
 #include "tests/support.h"
 
 namespace aperture {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 /// A coarse UV sphere of radius 1 at the origin as ASCII PLY, with its analytic unit normals
 /// (nx ny nz) when `normals`.
