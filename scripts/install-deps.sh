@@ -9,6 +9,7 @@ pkgs=(
   nlohmann-json3-dev libcli11-dev
   libyaml-cpp-dev  # OpenCV FileStorage YAML camera files
   clang-format  # the Format test enforces .clang-format
+  ccache  # scripts/test.sh: its `pip install .` check reuses the objects of the CMake build
   openimageio-tools  # Debian's OpenImageIO CMake config references its binaries
   python3-dev python3-venv  # the Python module: headers, and venv with pip for .venv
 )
