@@ -14,13 +14,15 @@ cmake --build build -j"$(nproc)"
 ctest --test-dir build --output-on-failure -j"$(nproc)" "$@"
 
 # `pip install .` (scikit-build-core, the extension target only) into .venv, then a render
-# through the installed module. Its compile commands are the CMake build's (-Werror too), so
-# ccache serves its objects from that build: on 2 cores it took 95 s from a clean clone
-# without ccache. APERTURE_PIP_CHECK=0 skips it.
+# through the installed module. Its compile commands are the CMake build's (its compiler by the
+# same name, -Werror too), so ccache serves its objects from that build: on 2 cores it took
+# 95 s from a clean clone without ccache. APERTURE_PIP_CHECK=0 skips it.
 if [[ "${APERTURE_PIP_CHECK:-1}" != 0 ]]; then
   t0=$SECONDS
+  compiler=$(sed -n 's/^CMAKE_CXX_COMPILER:[A-Z]*=//p' build/CMakeCache.txt)
   CMAKE_BUILD_PARALLEL_LEVEL="$(nproc)" .venv/bin/python -m pip install -q \
     --disable-pip-version-check --no-build-isolation \
+    --config-settings=cmake.define.CMAKE_CXX_COMPILER="$compiler" \
     --config-settings=cmake.define.CMAKE_CXX_COMPILER_LAUNCHER=ccache \
     --config-settings=cmake.define.APERTURE_WERROR=ON .
   (cd /tmp && "$OLDPWD/.venv/bin/python" -c '
