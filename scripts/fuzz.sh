@@ -25,9 +25,11 @@ if ! command -v clang++ >/dev/null || ! ls /usr/lib/llvm-*/lib/clang/*/lib/linux
 fi
 
 build=${FUZZ_BUILD_DIR:-build-fuzz}
-# -O1 -g: about half the compile time of -O2, and what the sanitizers' documentation advises.
+# -O1 -g, as the sanitizers' documentation advises (compiling the fuzz targets took 220 s of CPU
+# at -O1 against 244 s at -O2 on 2 cores).
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g -DNDEBUG" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DAPERTURE_FUZZ=ON \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g -DNDEBUG" \
+  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DAPERTURE_FUZZ=ON \
   -DAPERTURE_BUILD_TESTS=OFF -DAPERTURE_BUILD_BENCH=OFF -DAPERTURE_NATIVE=OFF >/dev/null
 cmake --build "$build" -j"${FUZZ_JOBS:-2}" --target "${targets[@]/#/fuzz_}"
 
