@@ -9,12 +9,13 @@
 #include "core/mesh.h"
 #include "core/render.h"
 #include "core/scene.h"
+#include "core/units.h"
 
 namespace aperture::test {
 
-inline constexpr double kDeg = 3.14159265358979323846 / 180.0;
+inline constexpr double kDeg = kRadPerDeg;
 
-/// One Embree device for all numerics tests.
+/// One Embree device for the tests that build scenes themselves.
 Device& numericsDevice();
 
 /// A loaded mesh and the scene over it (the mesh must outlive the scene).

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <deque>
 #include <glm/gtc/matrix_transform.hpp>
 #include <string>
