@@ -238,7 +238,7 @@ void storeLayer(const LayerPlan& plan, size_t px, int layer, const LayerHit& h, 
   fb.layerDepth[at] = z;
   fb.layerDistance[at] = h.t;
   fb.layerPrimId[at] =
-      plan.scene.remapsPrimIds() ? plan.scene.originalPrimId(object, h.primID) : h.primID;
+      plan.scene.remapsPrimIds() ? plan.scene.sourcePrimId(object, h.primID) : h.primID;
   fb.layerGeomId[at] = object;
 }
 

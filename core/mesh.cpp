@@ -41,7 +41,8 @@ size_t meshBufferBytes(const Mesh& mesh) {
   size_t bytes = mesh.positions.capacity() * sizeof(float) +
                  mesh.indices.capacity() * sizeof(uint32_t) +
                  mesh.positionsDouble.capacity() * sizeof(double) +
-                 mesh.vertexNormals.capacity() * sizeof(float);
+                 mesh.vertexNormals.capacity() * sizeof(float) +
+                 mesh.sourceTriangles.capacity() * sizeof(uint32_t);
   for (const MeshProperty& p : mesh.properties) bytes += p.values.capacity() * sizeof(uint32_t);
   return bytes;
 }

@@ -54,9 +54,17 @@ struct Mesh {
   std::vector<float> vertexNormals;
   /// The integer properties LoadOptions::properties asked for, in that order.
   std::vector<MeshProperty> properties;
+  /// Empty while the triangles are in the order they were loaded in (the order primID
+  /// numbers them by). After orderTrianglesInSpace (core/triangle_order.h) moved them, the
+  /// loaded index of each stored triangle: primID outputs go through sourceTriangle().
+  std::vector<uint32_t> sourceTriangles;
   MeshStats stats;
 
   size_t triangleCount() const { return indices.size() / 3; }
+  /// The index in the loaded order (what primID reports) of stored triangle `t`.
+  uint32_t sourceTriangle(size_t t) const {
+    return sourceTriangles.empty() ? uint32_t(t) : sourceTriangles[t];
+  }
   glm::vec3 vertex(size_t k) const {
     return {positions[3 * k], positions[3 * k + 1], positions[3 * k + 2]};
   }
@@ -67,7 +75,8 @@ struct Mesh {
 };
 
 /// Bytes the mesh's buffers hold (capacities: what is allocated, not only what is used):
-/// positions, indices, vertex normals, properties and any loader-only double positions.
+/// positions, indices, vertex normals, properties, the source order of reordered triangles
+/// and any loader-only double positions.
 size_t meshBufferBytes(const Mesh& mesh);
 
 /// How coordinates are stored.

@@ -12,6 +12,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/little_endian.h"
+#include "core/triangle_order.h"
 
 namespace aperture {
 
@@ -86,11 +87,13 @@ void writePlyWithFaceProperties(const std::string& path, const Mesh& mesh,
   std::vector<char> faces;
   const size_t triangles = mesh.triangleCount();
   faces.reserve(triangles * (1 + 12 + 4 * properties.size()));
-  for (size_t t = 0; t < triangles; ++t) {
+  const std::vector<uint32_t> storedAt = storedTriangles(mesh);
+  for (size_t f = 0; f < triangles; ++f) {  // in the loaded order, as the properties are
+    const size_t t = storedAt.empty() ? f : storedAt[f];
     appendLittleEndian<uint8_t>(faces, 3);
     for (int c = 0; c < 3; ++c) appendLittleEndian(faces, int32_t(mesh.indices[3 * t + size_t(c)]));
     // Int32 values are given as their two's complement bit pattern: the same four bytes.
-    for (const PlyFaceProperty& p : properties) appendLittleEndian(faces, p.values[t]);
+    for (const PlyFaceProperty& p : properties) appendLittleEndian(faces, p.values[f]);
   }
   writePiecesAtomically(path, {{header.data(), header.size()},
                                {vertices.data(), vertices.size()},

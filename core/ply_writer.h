@@ -21,8 +21,9 @@ struct PlyFaceProperty {
 
 /// Writes `mesh` to `path` (atomically): element vertex with double x, y, z (world: anchor +
 /// position, summed in double), element face with `list uchar int vertex_indices` and then
-/// `properties` in order. Throws Error naming the file for a property type other than UInt32
-/// or Int32, a bad property name, or an I/O failure.
+/// `properties` in order. Faces are written in the order the mesh was loaded in (primID's),
+/// which the properties' values follow. Throws Error naming the file for a property type other than
+/// UInt32 or Int32, a bad property name, or an I/O failure.
 void writePlyWithFaceProperties(const std::string& path, const Mesh& mesh,
                                 const std::vector<PlyFaceProperty>& properties);
 

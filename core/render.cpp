@@ -128,7 +128,7 @@ struct ImagePlan {
   std::optional<LayerPlan> layers;  // --layers K: the first K surfaces of the centre ray
   bool anyGeometry;                 // any AOV filled from the centre ray
   bool instanced;                   // normals of instanced hits need the instance's normal matrix
-  bool remapPrimIds;  // the scene was culled: primID goes through Scene::originalPrimId
+  bool remapPrimIds;                // Scene::remapsPrimIds: culled or reordered, primID is mapped
   // The passes over each block: colour averages samples [0, colorSamples); the geometry AOVs
   // come from the centre ray, which at spp 1 is sample 0 itself (geometryFromSample) and
   // otherwise one extra ray per pixel, traced in pass colorSamples (the last of `passes`).
@@ -182,7 +182,7 @@ ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSet
     // The fake hits must name a real object and triangle (the mesh-data AOVs read them), and
     // layers would call Embree again.
     if (layers) throw Error("null trace (bench --null): layered hits (--layers) trace Embree");
-    if (remapPrimIds) throw Error("null trace (bench --null): not available on a culled scene");
+    if (scene.culled()) throw Error("null trace (bench --null): not available on a culled scene");
     if (scene.objectCount() == 0) throw Error("null trace (bench --null): the scene is empty");
     const size_t triangles = scene.objectMesh(0).triangleCount();
     if (triangles == 0) throw Error("null trace (bench --null): object 0 has no triangle");
@@ -412,7 +412,7 @@ void worldPositions(const ImagePlan& plan, const PacketState<N>& st, float* x, f
   }
 }
 
-/// The primitive id of every lane as the user's mesh numbers it (through the cull's remap).
+/// The primitive id of every lane as the user's mesh numbers it (Scene::sourcePrimId).
 template <int N>
 void primIds(const ImagePlan& plan, const PacketState<N>& st, const int* hit, uint32_t* out) {
   if (!plan.remapPrimIds) {
@@ -420,7 +420,7 @@ void primIds(const ImagePlan& plan, const PacketState<N>& st, const int* hit, ui
     return;
   }
   for (int k = 0; k < N; ++k)
-    out[k] = hit[k] ? plan.scene.originalPrimId(objectId(st.hits, k), st.hits.primID[k]) : 0;
+    out[k] = hit[k] ? plan.scene.sourcePrimId(objectId(st.hits, k), st.hits.primID[k]) : 0;
 }
 
 /// Stores the geometry AOVs of every hit lane of the packet of `req` (misses keep the
@@ -482,7 +482,7 @@ void storeMeshDataLane(const ImagePlan& plan, const PacketState<N>& st, const Pa
   Framebuffer& fb = plan.fb;
   const unsigned object = objectId(st.hits, k);
   const uint32_t prim =
-      plan.remapPrimIds ? plan.scene.originalPrimId(object, st.hits.primID[k]) : st.hits.primID[k];
+      plan.remapPrimIds ? plan.scene.meshTriangle(object, st.hits.primID[k]) : st.hits.primID[k];
   const Mesh& mesh = plan.scene.objectMesh(object);
   const uint32_t* corner = &mesh.indices[3 * size_t(prim)];
   const float u = st.hits.u[k], v = st.hits.v[k];

@@ -213,6 +213,20 @@ void attachInstance(const Device& device, RTCScene scene, RTCScene sub, const gl
 
 }  // namespace
 
+std::vector<bool> attachedDirectly(const std::vector<SceneObject>& objects) {
+  std::vector<bool> direct(objects.size(), false);
+  if (objects.empty()) return direct;
+  const glm::dvec3 origin =
+      glm::dvec3(objects.front().worldFromMesh * glm::dvec4(objects.front().mesh->anchor, 1.0));
+  std::map<const Mesh*, size_t> uses;
+  for (const SceneObject& o : objects) ++uses[o.mesh];
+  for (size_t k = 0; k < objects.size(); ++k) {
+    const SceneObject& o = objects[k];
+    direct[k] = uses[o.mesh] == 1 && o.worldFromMesh == glm::dmat4(1.0) && o.mesh->anchor == origin;
+  }
+  return direct;
+}
+
 Scene::Scene(const Device& device, const std::vector<const Mesh*>& meshes,
              const BuildOptions& options)
     : Scene(device, untransformed(meshes), options) {}
@@ -223,8 +237,7 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
   if (objects.empty()) throw Error("scene: no meshes");
   renderOrigin_ =
       glm::dvec3(objects.front().worldFromMesh * glm::dvec4(objects.front().mesh->anchor, 1.0));
-  std::map<const Mesh*, size_t> uses;
-  for (const SceneObject& o : objects) ++uses[o.mesh];
+  const std::vector<bool> direct = attachedDirectly(objects);
 
   const long long bytesBefore = device.memoryBytes();
   const auto start = std::chrono::steady_clock::now();
@@ -239,6 +252,7 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
   std::map<const Mesh*, RTCScene> built;  // sub-scene of each instanced mesh
   normalFromMesh_.assign(objects.size(), glm::mat3(1.0f));
   for (const SceneObject& o : objects) objectMeshes_.push_back(o.mesh);
+  for (const SceneObject& o : objects) reordered_ = reordered_ || !o.mesh->sourceTriangles.empty();
   for (const SceneObject& o : objects)
     if (o.subset) primIdMaps_.assign(objects.size(), nullptr);
   for (size_t k = 0; k < objects.size(); ++k) {
@@ -253,10 +267,8 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
       // Nothing of this object is kept: leave its geomID unused.
       if (placed == 0) continue;
     }
-    const bool direct =
-        uses[&m] == 1 && objects[k].worldFromMesh == glm::dmat4(1.0) && m.anchor == renderOrigin_;
     const std::vector<uint32_t>& indices = subset ? subset->indices : m.indices;
-    if (direct && chunkTriangles > 0 && placed > chunkTriangles) {
+    if (direct[k] && chunkTriangles > 0 && placed > chunkTriangles) {
       const double shared = chunksPerCell(m, indices.data(), placed, chunkTriangles);
       stats_.chunksPerCell = std::max(stats_.chunksPerCell, shared);
       if (shared <= options.maxChunksPerCell) {
@@ -265,7 +277,7 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
         continue;
       }
     }
-    if (direct) {
+    if (direct[k]) {
       RTCGeometry geom = triangleGeometry(device, m, indices.data(), placed, quality);
       rtcAttachGeometryByID(scene_, geom, unsigned(k));
       rtcReleaseGeometry(geom);

@@ -123,6 +123,11 @@ struct SceneObject {
   const TriangleSubset* subset = nullptr;
 };
 
+/// For each object, whether a Scene over `objects` attaches it directly rather than through an
+/// instance: its mesh is placed once, untransformed, and its anchor is the render origin (the
+/// first object's anchor, placed). Only such objects are built in chunks.
+std::vector<bool> attachedDirectly(const std::vector<SceneObject>& objects);
+
 /// An Embree scene over meshes that outlive it (their vertex and index buffers are shared
 /// with Embree, not copied). Object k gets top-level geomID k. An object whose mesh appears
 /// once, untransformed, with the render origin as its anchor is attached directly; a mesh
@@ -153,18 +158,26 @@ class Scene {
   /// Indexed by the top-level geomID (hit.instID[0]).
   const glm::mat3& normalFromMesh(unsigned object) const { return normalFromMesh_[object]; }
   /// The mesh of object `object` (the top-level geomID, or the instance's): its properties
-  /// and vertex normals, indexed by originalPrimId().
+  /// and vertex normals, indexed by meshTriangle().
   const Mesh& objectMesh(unsigned object) const { return *objectMeshes_[object]; }
   /// Number of objects (top-level geomIDs 0 .. objectCount() - 1).
   size_t objectCount() const { return objectMeshes_.size(); }
-  /// True when some object was built from a TriangleSubset, so Embree's primID is an index
-  /// into the subset and must go through originalPrimId().
-  bool remapsPrimIds() const { return !primIdMaps_.empty(); }
-  /// The mesh's triangle index of Embree's primID `prim` on object `object` (the top-level
-  /// geomID, or the instance's).
-  uint32_t originalPrimId(unsigned object, uint32_t prim) const {
+  /// True when some object was built from a TriangleSubset (view-volume culling).
+  bool culled() const { return !primIdMaps_.empty(); }
+  /// True when Embree's primID is not what the user numbers a triangle by: some object was
+  /// culled (primID indexes its subset), or its mesh's triangles were moved by
+  /// orderTrianglesInSpace (core/triangle_order.h). Then outputs go through sourcePrimId().
+  bool remapsPrimIds() const { return culled() || reordered_; }
+  /// The stored triangle of object `object`'s mesh (an index into its buffers) that Embree's
+  /// primID `prim` on that object (the top-level geomID, or the instance's) stands for.
+  uint32_t meshTriangle(unsigned object, uint32_t prim) const {
     const uint32_t* map = primIdMaps_.empty() ? nullptr : primIdMaps_[object];
     return map ? map[prim] : prim;
+  }
+  /// The primID to report for Embree's primID `prim` on object `object`: the triangle's index
+  /// in the order its mesh was loaded in.
+  uint32_t sourcePrimId(unsigned object, uint32_t prim) const {
+    return objectMeshes_[object]->sourceTriangle(meshTriangle(object, prim));
   }
   /// True when some object was built in chunks: Embree then reports its hits through the
   /// chunks' instances, and resolveChunkHits must run on every hit before anything reads it.
@@ -184,6 +197,7 @@ class Scene {
   std::vector<glm::mat3> normalFromMesh_;
   std::vector<const Mesh*> objectMeshes_;    ///< per object
   std::vector<const uint32_t*> primIdMaps_;  ///< per object; empty when nothing is culled
+  bool reordered_ = false;                   ///< some object's mesh has Mesh::sourceTriangles
   std::vector<RTCScene> subScenes_;
   /// What a top-level geomID placing a chunk stands for: the chunk's object
   /// (RTC_INVALID_GEOMETRY_ID for a geomID that places no chunk) and its first triangle.

@@ -26,7 +26,7 @@ struct TraceHit {
   float u = 0, v = 0;        ///< Embree's barycentric coordinates of the hit
   glm::vec3 ng{0.0f};        ///< unnormalised geometric normal as Embree reports it
   uint32_t geomId = kNoHit;  ///< the object (top-level geomID, or the instance's)
-  uint32_t primId = kNoHit;  ///< the triangle in the object's mesh (original index)
+  uint32_t primId = kNoHit;  ///< the triangle in the object's mesh, loaded order
   bool hit() const { return geomId != kNoHit; }
 };
 

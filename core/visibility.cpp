@@ -74,7 +74,7 @@ const Mesh& onlyMesh(const Scene& scene, const char* what) {
     throw Error(cat(what,
                     ": the mesh is placed by an Embree instance (transformed or "
                     "repeated); visibility needs it untransformed and placed once"));
-  if (scene.remapsPrimIds())
+  if (scene.culled())
     throw Error(cat(what,
                     ": the scene was culled to a subset of triangles; visibility needs "
                     "every triangle of the mesh"));
@@ -443,6 +443,28 @@ SparseRows transposeRows(const SparseRows& rows, size_t columns) {
   return t;
 }
 
+/// The per-face results counted over the stored triangles (viewCount, bestView, cameraFaces)
+/// put in the loaded order, which faces are reported in, for a mesh whose triangles
+/// orderTrianglesInSpace moved. `pixels`, bincounted from primID renders, is in it already.
+void putInLoadedOrder(const Mesh& mesh, FaceVisibility& out) {
+  if (mesh.sourceTriangles.empty()) return;
+  std::vector<uint32_t> viewCount(out.viewCount.size());
+  std::vector<int32_t> bestView(out.bestView.size());
+  for (size_t t = 0; t < viewCount.size(); ++t) {
+    viewCount[mesh.sourceTriangle(t)] = out.viewCount[t];
+    bestView[mesh.sourceTriangle(t)] = out.bestView[t];
+  }
+  out.viewCount.swap(viewCount);
+  out.bestView.swap(bestView);
+  SparseRows& rows = out.cameraFaces;
+  for (size_t r = 0; r < rows.rows(); ++r) {
+    const auto begin = rows.indices.begin() + std::ptrdiff_t(rows.indptr[r]);
+    const auto end = rows.indices.begin() + std::ptrdiff_t(rows.indptr[r + 1]);
+    for (auto f = begin; f != end; ++f) *f = mesh.sourceTriangle(*f);
+    std::sort(begin, end);
+  }
+}
+
 FaceVisibility faceVisibility(const Scene& scene, const std::vector<const Camera*>& cameras,
                               const FaceVisibilityOptions& options) {
   const Mesh& mesh = onlyMesh(scene, "faceVisibility");
@@ -467,6 +489,7 @@ FaceVisibility faceVisibility(const Scene& scene, const std::vector<const Camera
       if (options.progress) options.progress(c + 1, cameras.size());
     }
   }
+  putInLoadedOrder(mesh, out);
   out.faceCameras = transposeRows(out.cameraFaces, faces);
   return out;
 }

@@ -2,7 +2,8 @@
 // Which faces and which points each camera sees (`aperture visibility`, Python
 // Scene.face_visibility / point_visibility; docs/visibility.md).
 //
-// Faces are the triangles of the scene's one mesh (object 0), in the mesh's order. Camera c
+// Faces are the triangles of the scene's one mesh (object 0), in the order it was loaded in
+// (primID's; Mesh::sourceTriangles). Camera c
 // sees face f when
 //   1. f's centroid projects inside c's image, [0, W) x [0, H) in raster coordinates, through
 //      Camera::project (the model's full forward map, only where its inverse is exact), and
