@@ -319,10 +319,13 @@ MemoryEstimate estimateMemory(const std::vector<std::string>& meshSpecs, uint64_
     e.loadPeakBytes = std::max(e.loadPeakBytes, e.meshBytes + m.loaderBytes);
     e.meshBytes += m.meshBytes;
     e.triangles += m.triangles;
-    if (chunk > 0 && m.triangles > chunk && m.spatiallyOrdered)
+    if (chunk > 0 && m.triangles > chunk) {
       largestChunk = chunk;
-    else
+      // Unless known to be in order, it may be put in spatial order: Mesh::sourceTriangles.
+      if (!m.spatiallyOrdered) e.meshBytes += sizeof(uint32_t) * m.triangles;
+    } else {
       wholeTriangles += m.triangles;
+    }
   }
   const uint64_t bvh = build.compact ? kCompactBvhBytesPerTriangle : kBvhBytesPerTriangle;
   const uint64_t references =

@@ -21,9 +21,10 @@ struct MeshSizeEstimate {
   uint64_t meshBytes = 0;
   std::string how;  ///< "PLY header", "OBJ sample of N bytes", "procedural spec"
   /// True where the triangle order is known to keep neighbours together, so a large mesh is
-  /// built in chunks (kMaxChunksPerCell): the procedural generators make their shapes one
-  /// after the other. A file's order is known only once it is loaded, so its build is
-  /// estimated as one BVH, the larger of the two.
+  /// built in chunks as it is (kMaxChunksPerCell): the procedural generators make their shapes
+  /// one after the other. A file's order is known only once it is loaded: a large one is
+  /// estimated as put in spatial order first (orderTrianglesInSpace, core/triangle_order.h),
+  /// which keeps 4 more bytes per triangle (its loaded indices), then built in chunks.
   bool spatiallyOrdered = false;
 };
 
@@ -47,8 +48,9 @@ uint64_t framebufferBytesPerPixel(const AovSet& aovs);
 //   building   the kept mesh buffers (Embree reads them: they are shared, not copied) plus
 //              Embree's build peak: the finished BVH and, until the build ends, its array of
 //              32-byte primitive references, one per triangle of the BVH being built: a
-//              mesh built in chunks (BuildOptions::bvhChunkTriangles, for procedural meshes;
-//              see MeshSizeEstimate::spatiallyOrdered) holds one chunk's at a time, the other
+//              mesh built in chunks (BuildOptions::bvhChunkTriangles; a file first put in
+//              spatial order, see MeshSizeEstimate::spatiallyOrdered; the sort's 16 bytes per
+//              triangle are freed before the build) holds one chunk's at a time, the other
 //              meshes are built together in the top-level BVH;
 //   rendering  the mesh buffers, the BVH and the framebuffers (allocated after the build, in
 //              the pages the primitive references gave back).

@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "core/limits.h"
 #include "core/mesh.h"
+#include "core/ply_writer.h"
 #include "tests/support.h"
 
 namespace aperture {
@@ -156,6 +157,30 @@ TEST(LimitsEstimate, ThePeakIsTheLargestPhase) {
       {"procedural:spheres?tris=2000000", "procedural:spheres?tris=1000000"}, 1, 1, kAovDepth);
   EXPECT_EQ(two.loadPeakBytes, std::max(a.loaderBytes, a.meshBytes + b.loaderBytes));
   EXPECT_EQ(two.meshBytes, a.meshBytes + b.meshBytes);
+}
+
+// A file larger than a chunk may be scattered in space: it is estimated as put in spatial order
+// (4 more bytes per triangle kept) and built in chunks.
+TEST(LimitsEstimate, ALargeFileIsEstimatedInSpatialOrderAndInChunks) {
+  const std::string path = scratchDir() + "/spheres.ply";
+  writePlyWithFaceProperties(path, loadMesh("procedural:spheres?tris=20000"), {});
+  const MeshSizeEstimate m = estimateMeshSize(path);
+  ASSERT_FALSE(m.spatiallyOrdered);
+  BuildOptions chunks;
+  chunks.bvhChunkTriangles = 1024;
+  const MemoryEstimate e = estimateMemory({path}, 64, 64, kAovDepth, 0, chunks);
+  EXPECT_EQ(e.meshBytes, m.meshBytes + 4 * m.triangles);
+  const uint64_t references = kBvhBuildBytesPerTriangle - kBvhBytesPerTriangle;
+  EXPECT_EQ(e.bvhBuildBytes, kBvhBytesPerTriangle * m.triangles + references * 1024);
+  // The same triangles from the generator, known to be in order, keep no loaded indices.
+  EXPECT_EQ(
+      estimateMemory({"procedural:spheres?tris=20000"}, 64, 64, kAovDepth, 0, chunks).meshBytes,
+      estimateMeshSize("procedural:spheres?tris=20000").meshBytes);
+  // No larger than a chunk: built whole, nothing moved.
+  chunks.bvhChunkTriangles = m.triangles;
+  const MemoryEstimate whole = estimateMemory({path}, 64, 64, kAovDepth, 0, chunks);
+  EXPECT_EQ(whole.meshBytes, m.meshBytes);
+  EXPECT_EQ(whole.bvhBuildBytes, kBvhBuildBytesPerTriangle * m.triangles);
 }
 
 TEST(LimitsEstimate, SharedPlyCountsEqualTheLoaders) {
