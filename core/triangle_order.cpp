@@ -1,6 +1,6 @@
 #include "core/triangle_order.h"
 
-#include <array>
+#include <algorithm>
 #include <cmath>
 #include <utility>
 
@@ -11,28 +11,26 @@ namespace aperture {
 
 namespace {
 
-constexpr int kAxisBits = 10;  // 1024 cells per axis: 30-bit Morton codes
-constexpr uint32_t kNonFiniteKey = uint32_t(1) << (3 * kAxisBits);
-constexpr size_t kTrianglesPerTask = size_t(1) << 16;
+constexpr int kAxisBits = 5;  // 32 cells per axis: 15-bit Morton codes
+constexpr uint16_t kNonFiniteKey = uint16_t(1) << (3 * kAxisBits);  // sorts last
+constexpr size_t kBuckets = size_t(kNonFiniteKey) + 1;
+constexpr size_t kTrianglesPerBlock = size_t(1) << 22;
 
 /// The bits of `v` (kAxisBits of them) spread to every third bit.
 uint32_t spreadBits(uint32_t v) {
-  v &= 0x3FFu;
-  v = (v | (v << 16)) & 0x030000FFu;
-  v = (v | (v << 8)) & 0x0300F00Fu;
-  v = (v | (v << 4)) & 0x030C30C3u;
-  v = (v | (v << 2)) & 0x09249249u;
-  return v;
+  uint32_t spread = 0;
+  for (int b = 0; b < kAxisBits; ++b) spread |= ((v >> b) & 1u) << (3 * b);
+  return spread;
 }
 
 /// The Morton code of the grid cell holding each triangle's centroid.
-std::vector<uint32_t> cellKeys(const Mesh& m) {
+std::vector<uint16_t> cellKeys(const Mesh& m) {
   constexpr int kGrid = 1 << kAxisBits;
   glm::vec3 lo, hi;
   m.bounds(lo, hi);
   const glm::vec3 scale = float(kGrid) / glm::max(hi - lo, glm::vec3(1e-30f));
-  std::vector<uint32_t> keys(m.triangleCount());
-  parallelFor(keys.size(), kTrianglesPerTask, [&](size_t begin, size_t end) {
+  std::vector<uint16_t> keys(m.triangleCount());
+  parallelFor(keys.size(), kTrianglesPerBlock / 16, [&](size_t begin, size_t end) {
     for (size_t t = begin; t < end; ++t) {
       const uint32_t* corner = &m.indices[3 * t];
       const glm::vec3 centroid =
@@ -42,44 +40,34 @@ std::vector<uint32_t> cellKeys(const Mesh& m) {
         continue;
       }
       const glm::ivec3 cell = glm::clamp(glm::ivec3((centroid - lo) * scale), 0, kGrid - 1);
-      keys[t] = spreadBits(uint32_t(cell.x)) | spreadBits(uint32_t(cell.y)) << 1 |
-                spreadBits(uint32_t(cell.z)) << 2;
+      keys[t] = uint16_t(spreadBits(uint32_t(cell.x)) | spreadBits(uint32_t(cell.y)) << 1 |
+                         spreadBits(uint32_t(cell.z)) << 2);
     }
   });
   return keys;
 }
 
-/// The triangle indices in ascending order of `keys`, ties in index order: a least-significant
-/// digit radix sort, two stable passes of 16 bits.
-std::vector<uint32_t> stableOrderOf(std::vector<uint32_t> keys) {
-  constexpr size_t kBuckets = size_t(1) << 16;
-  const size_t n = keys.size();
-  std::vector<uint32_t> order(n), keysOut(n), orderOut(n);
-  for (size_t t = 0; t < n; ++t) order[t] = uint32_t(t);
-  for (int shift = 0; shift < 32; shift += 16) {
-    std::vector<size_t> next(kBuckets, 0);
-    for (uint32_t k : keys) ++next[(k >> shift) & (kBuckets - 1)];
-    size_t sum = 0;
-    for (size_t& c : next) sum += std::exchange(c, sum);
-    for (size_t t = 0; t < n; ++t) {
-      const size_t at = next[(keys[t] >> shift) & (kBuckets - 1)]++;
-      keysOut[at] = keys[t];
-      orderOut[at] = order[t];
-    }
-    keys.swap(keysOut);
-    order.swap(orderOut);
-  }
-  return order;
+/// Where each block of kTrianglesPerBlock triangles puts its first triangle of each key:
+/// [block · kBuckets + key]. Keys ascending, and within a key the blocks in order, so the
+/// counting sort that follows is stable.
+std::vector<size_t> firstDestinations(const std::vector<uint16_t>& keys) {
+  const size_t blocks = (keys.size() + kTrianglesPerBlock - 1) / kTrianglesPerBlock;
+  std::vector<size_t> first(blocks * kBuckets, 0);
+  parallelForChunks(keys.size(), kTrianglesPerBlock, [&](size_t b, size_t begin, size_t end) {
+    size_t* count = &first[b * kBuckets];
+    for (size_t t = begin; t < end; ++t) ++count[keys[t]];
+  });
+  size_t sum = 0;
+  for (size_t key = 0; key < kBuckets; ++key)
+    for (size_t b = 0; b < blocks; ++b) sum += std::exchange(first[b * kBuckets + key], sum);
+  return first;
 }
 
-/// values[order[k]] at k, in parallel; `stride` values per triangle.
-template <size_t kStride>
-void gather(std::vector<uint32_t>& values, const std::vector<uint32_t>& order) {
-  std::vector<uint32_t> moved;
-  resizeOnHugePages(moved, values.size());
-  parallelFor(order.size(), kTrianglesPerTask, [&](size_t begin, size_t end) {
-    for (size_t k = begin; k < end; ++k)
-      for (size_t c = 0; c < kStride; ++c) moved[kStride * k + c] = values[kStride * order[k] + c];
+/// values[from[k]] at k.
+void gather(std::vector<uint32_t>& values, const std::vector<uint32_t>& from) {
+  std::vector<uint32_t> moved(from.size());
+  parallelFor(from.size(), kTrianglesPerBlock / 16, [&](size_t begin, size_t end) {
+    for (size_t k = begin; k < end; ++k) moved[k] = values[from[k]];
   });
   values.swap(moved);
 }
@@ -94,14 +82,27 @@ bool scatteredForChunks(const Mesh& mesh, const BuildOptions& options) {
 }
 
 void orderTrianglesInSpace(Mesh& mesh) {
-  std::vector<uint32_t> order = stableOrderOf(cellKeys(mesh));
-  gather<3>(mesh.indices, order);
+  const size_t n = mesh.triangleCount();
+  const std::vector<uint16_t> keys = cellKeys(mesh);
+  std::vector<size_t> next = firstDestinations(keys);
+  // One counting-sort pass: each block moves its triangles to their destinations in order.
+  std::vector<uint32_t> indices, from(n);
+  resizeOnHugePages(indices, 3 * n);
+  parallelForChunks(n, kTrianglesPerBlock, [&](size_t b, size_t begin, size_t end) {
+    size_t* at = &next[b * kBuckets];
+    for (size_t t = begin; t < end; ++t) {
+      const size_t k = at[keys[t]]++;
+      std::copy_n(&mesh.indices[3 * t], 3, &indices[3 * k]);
+      from[k] = uint32_t(t);
+    }
+  });
+  mesh.indices.swap(indices);
   for (MeshProperty& p : mesh.properties)
-    if (p.domain == PropertyDomain::Face) gather<1>(p.values, order);
-  if (!mesh.sourceTriangles.empty())
-    gather<1>(mesh.sourceTriangles, order);
+    if (p.domain == PropertyDomain::Face) gather(p.values, from);
+  if (mesh.sourceTriangles.empty())
+    mesh.sourceTriangles = std::move(from);
   else
-    mesh.sourceTriangles = std::move(order);
+    gather(mesh.sourceTriangles, from);
 }
 
 std::vector<uint32_t> storedTriangles(const Mesh& mesh) {

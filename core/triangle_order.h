@@ -16,7 +16,7 @@ namespace aperture {
 /// above BuildOptions::maxChunksPerCell.
 bool scatteredForChunks(const Mesh& mesh, const BuildOptions& options);
 
-/// Moves the triangles of `mesh` into the Morton order of the cells of a 1024³ grid on the
+/// Moves the triangles of `mesh` into the Morton order of the cells of a 32³ grid on the
 /// mesh's box that hold their centroids (stable: triangles of one cell keep their order; a
 /// non-finite centroid sorts last). Indices and face properties move with their triangles;
 /// mesh.sourceTriangles gets each triangle's loaded index (composed with an earlier move).

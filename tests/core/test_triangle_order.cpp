@@ -93,6 +93,46 @@ TEST(TriangleOrder, MovesWholeTrianglesAndRecordsTheirLoadedIndex) {
   EXPECT_EQ(twice.sourceTriangles, ordered.sourceTriangles);
 }
 
+/// Bit k of `v` at bit 3k (an independent spelling of the Morton interleave).
+uint32_t everyThirdBit(uint32_t v) {
+  uint32_t out = 0;
+  for (uint32_t k = 0; k < 10; ++k)
+    if (v & (1u << k)) out += 1u << (3 * k);
+  return out;
+}
+
+// More triangles than one block of the parallel counting sort (2^22): the order is exactly a
+// stable sort by the Morton code of the 32³ cell of the centroid, computed here apart.
+TEST(TriangleOrder, TheOrderIsAStableSortByTheCentroidsMortonCell) {
+  Mesh m = loadMesh("procedural:spheres?tris=4500000");
+  const size_t n = m.triangleCount();
+  ASSERT_GT(n, size_t(1) << 22);
+  std::mt19937 random(7);
+  for (size_t k = n - 1; k > 0; --k) {
+    const size_t other = random() % (k + 1);
+    for (size_t c = 0; c < 3; ++c) std::swap(m.indices[3 * k + c], m.indices[3 * other + c]);
+  }
+  glm::vec3 lo, hi;
+  m.bounds(lo, hi);
+  std::vector<uint32_t> key(n);
+  for (size_t t = 0; t < n; ++t) {
+    const glm::vec3 g = (m.vertex(m.indices[3 * t]) + m.vertex(m.indices[3 * t + 1]) +
+                         m.vertex(m.indices[3 * t + 2])) /
+                        3.0f;
+    const glm::ivec3 cell =
+        glm::clamp(glm::ivec3((g - lo) * (32.0f / glm::max(hi - lo, glm::vec3(1e-30f)))), 0, 31);
+    key[t] = everyThirdBit(uint32_t(cell.x)) + 2 * everyThirdBit(uint32_t(cell.y)) +
+             4 * everyThirdBit(uint32_t(cell.z));
+  }
+  std::vector<uint32_t> want(n);
+  std::iota(want.begin(), want.end(), 0u);
+  std::stable_sort(want.begin(), want.end(),
+                   [&](uint32_t a, uint32_t b) { return key[a] < key[b]; });
+  const Mesh ordered = inSpatialOrder(m);
+  EXPECT_EQ(ordered.sourceTriangles, want);
+  EXPECT_LE(chunksPerCell(ordered, ordered.indices.data(), n, n / 6), kMaxChunksPerCell);
+}
+
 TEST(TriangleOrder, TheSpatialOrderKeepsChunksApart) {
   const Mesh loaded = scatteredSpheres();
   const Mesh ordered = inSpatialOrder(loaded);
