@@ -49,7 +49,7 @@ uint64_t framebufferBytesPerPixel(const AovSet& aovs);
 //              Embree's build peak: the finished BVH and, until the build ends, its array of
 //              32-byte primitive references, one per triangle of the BVH being built: a
 //              mesh built in chunks (BuildOptions::bvhChunkTriangles; a file first put in
-//              spatial order, see MeshSizeEstimate::spatiallyOrdered; the sort's 16 bytes per
+//              spatial order, see MeshSizeEstimate::spatiallyOrdered; the sort's 18 bytes per
 //              triangle are freed before the build) holds one chunk's at a time, the other
 //              meshes are built together in the top-level BVH;
 //   rendering  the mesh buffers, the BVH and the framebuffers (allocated after the build, in
