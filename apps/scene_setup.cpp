@@ -194,13 +194,12 @@ void logBuild(const SceneSpec& spec, const LoadedScene& s) {
 void orderScatteredMeshes(LoadedScene& s, const BuildOptions& build, bool quiet) {
   const std::vector<bool> direct = attachedDirectly(s.objects);
   for (size_t k = 0; k < s.objects.size(); ++k) {
-    if (!direct[k] || !scatteredForChunks(*s.objects[k].mesh, build)) continue;
+    if (!direct[k]) continue;
     // A directly attached mesh is placed once: this object is its only user.
     Mesh& m = *std::find_if(s.meshes.begin(), s.meshes.end(),
                             [&](const Mesh& mesh) { return &mesh == s.objects[k].mesh; });
     const auto start = std::chrono::steady_clock::now();
-    orderTrianglesInSpace(m);
-    if (!quiet)
+    if (orderIfScattered(m, build) && !quiet)
       std::fprintf(stderr,
                    "aperture: %s: %zu triangles scattered in space, put in spatial order for a "
                    "chunked build in %.3f s (primIDs keep the file's order)\n",

@@ -132,34 +132,49 @@ size_t checkedBvhChunkTriangles(long long triangles, const std::string& where) {
   return size_t(triangles);
 }
 
-double chunksPerCell(const Mesh& m, const uint32_t* indices, size_t triangles,
-                     size_t chunkTriangles) {
-  constexpr int kGrid = 64;
-  constexpr size_t kCells = size_t(kGrid) * kGrid * kGrid, kWords = kCells / 64;
+std::vector<uint32_t> centroidCells(const Mesh& m, const uint32_t* indices, size_t triangles) {
   glm::vec3 lo, hi;
   m.bounds(lo, hi);
-  const glm::vec3 scale = float(kGrid) / glm::max(hi - lo, glm::vec3(1e-30f));
-  std::vector<uint32_t> chunksIn(kCells, 0);  // per cell, the chunks with a centroid in it
-  std::mutex merge;
-  parallelForChunks(triangles, chunkTriangles, [&](size_t, size_t begin, size_t end) {
-    std::vector<uint64_t> bits(kWords, 0);  // this chunk's cells
+  const glm::vec3 scale = float(kCentroidGrid) / glm::max(hi - lo, glm::vec3(1e-30f));
+  std::vector<uint32_t> cells(triangles);
+  parallelFor(triangles, size_t(1) << 18, [&](size_t begin, size_t end) {
     for (size_t t = begin; t < end; ++t) {
       const uint32_t* corner = &indices[3 * t];
       const glm::vec3 centroid =
           (m.vertex(corner[0]) + m.vertex(corner[1]) + m.vertex(corner[2])) / 3.0f;
-      if (!std::isfinite(centroid.x + centroid.y + centroid.z)) continue;
-      const glm::ivec3 cell = glm::clamp(glm::ivec3((centroid - lo) * scale), 0, kGrid - 1);
-      const size_t at = (size_t(cell.z) * kGrid + size_t(cell.y)) * kGrid + size_t(cell.x);
-      bits[at / 64] |= uint64_t(1) << (at % 64);
+      if (!std::isfinite(centroid.x + centroid.y + centroid.z)) {
+        cells[t] = kNoCell;
+        continue;
+      }
+      const glm::ivec3 c = glm::clamp(glm::ivec3((centroid - lo) * scale), 0, kCentroidGrid - 1);
+      cells[t] = (uint32_t(c.z) * kCentroidGrid + uint32_t(c.y)) * kCentroidGrid + uint32_t(c.x);
     }
+  });
+  return cells;
+}
+
+double chunksPerCell(const std::vector<uint32_t>& cells, size_t chunkTriangles) {
+  constexpr size_t kCells = size_t(kCentroidGrid) * kCentroidGrid * kCentroidGrid;
+  constexpr size_t kWords = kCells / 64;
+  std::vector<uint32_t> chunksIn(kCells, 0);  // per cell, the chunks with a centroid in it
+  std::mutex merge;
+  parallelForChunks(cells.size(), chunkTriangles, [&](size_t, size_t begin, size_t end) {
+    std::vector<uint64_t> bits(kWords, 0);  // this chunk's cells
+    for (size_t t = begin; t < end; ++t)
+      if (cells[t] != kNoCell) bits[cells[t] / 64] |= uint64_t(1) << (cells[t] % 64);
     std::lock_guard<std::mutex> lock(merge);
     for (size_t w = 0; w < kWords; ++w)
       for (uint64_t b = bits[w]; b != 0; b &= b - 1)
         ++chunksIn[64 * w + size_t(__builtin_ctzll(b))];
   });
-  uint64_t cells = 0, memberships = 0;
-  for (uint32_t n : chunksIn) cells += n > 0, memberships += n;
-  return cells ? double(memberships) / double(cells) : 1.0;
+  uint64_t occupied = 0, memberships = 0;
+  for (uint32_t n : chunksIn) occupied += n > 0, memberships += n;
+  return occupied ? double(memberships) / double(occupied) : 1.0;
+}
+
+double chunksPerCell(const Mesh& m, const uint32_t* indices, size_t triangles,
+                     size_t chunkTriangles) {
+  return chunksPerCell(centroidCells(m, indices, triangles), chunkTriangles);
 }
 
 namespace {

@@ -99,10 +99,20 @@ struct BuildStats {
   double chunksPerCell = 0;
 };
 
-/// How far the runs of `chunkTriangles` consecutive triangles of `m` (`triangles` of them,
-/// from `indices`) share space: over the cells of a 64³ grid on the mesh's box that hold a
-/// triangle's centroid, the mean number of runs with a centroid in the cell. 1 when every run
-/// keeps to its own cells, up to the number of runs when they are interleaved everywhere.
+/// Cells per axis of the grid on a mesh's box that centroidCells and chunksPerCell use.
+inline constexpr int kCentroidGrid = 64;
+/// centroidCells' value for a triangle whose centroid is not finite.
+inline constexpr uint32_t kNoCell = 0xFFFFFFFFu;
+/// For each of the `triangles` triangles of `m` (from `indices`), the cell of a
+/// kCentroidGrid³ grid on the mesh's box that holds its centroid, (z · 64 + y) · 64 + x, or
+/// kNoCell.
+std::vector<uint32_t> centroidCells(const Mesh& m, const uint32_t* indices, size_t triangles);
+/// How far the runs of `chunkTriangles` consecutive triangles share space, from their
+/// centroidCells: over the cells that hold a centroid, the mean number of runs with a centroid
+/// in the cell. 1 when every run keeps to its own cells, up to the number of runs when they
+/// are interleaved everywhere.
+double chunksPerCell(const std::vector<uint32_t>& cells, size_t chunkTriangles);
+/// chunksPerCell of the centroidCells of `m`'s `triangles` triangles from `indices`.
 double chunksPerCell(const Mesh& m, const uint32_t* indices, size_t triangles,
                      size_t chunkTriangles);
 

@@ -23,25 +23,19 @@ uint32_t spreadBits(uint32_t v) {
   return spread;
 }
 
-/// The Morton code of the grid cell holding each triangle's centroid.
-std::vector<uint16_t> cellKeys(const Mesh& m) {
-  constexpr int kGrid = 1 << kAxisBits;
-  glm::vec3 lo, hi;
-  m.bounds(lo, hi);
-  const glm::vec3 scale = float(kGrid) / glm::max(hi - lo, glm::vec3(1e-30f));
-  std::vector<uint16_t> keys(m.triangleCount());
-  parallelFor(keys.size(), kTrianglesPerBlock / 16, [&](size_t begin, size_t end) {
+/// The Morton code of the 32³ cell holding each centroid, from its centroidCells cell (the
+/// 64³ grid's cells, two to a side in each of ours).
+std::vector<uint16_t> mortonKeys(const std::vector<uint32_t>& cells) {
+  static_assert(kCentroidGrid == 2 << kAxisBits, "a key's cell is 2x2x2 centroid cells");
+  constexpr uint32_t kG = kCentroidGrid;
+  std::vector<uint16_t> keys(cells.size());
+  parallelFor(cells.size(), kTrianglesPerBlock / 16, [&](size_t begin, size_t end) {
     for (size_t t = begin; t < end; ++t) {
-      const uint32_t* corner = &m.indices[3 * t];
-      const glm::vec3 centroid =
-          (m.vertex(corner[0]) + m.vertex(corner[1]) + m.vertex(corner[2])) / 3.0f;
-      if (!std::isfinite(centroid.x + centroid.y + centroid.z)) {
-        keys[t] = kNonFiniteKey;
-        continue;
-      }
-      const glm::ivec3 cell = glm::clamp(glm::ivec3((centroid - lo) * scale), 0, kGrid - 1);
-      keys[t] = uint16_t(spreadBits(uint32_t(cell.x)) | spreadBits(uint32_t(cell.y)) << 1 |
-                         spreadBits(uint32_t(cell.z)) << 2);
+      const uint32_t c = cells[t];
+      keys[t] = c == kNoCell
+                    ? kNonFiniteKey
+                    : uint16_t(spreadBits(c % kG >> 1) | spreadBits(c / kG % kG >> 1) << 1 |
+                               spreadBits(c / kG / kG >> 1) << 2);
     }
   });
   return keys;
@@ -72,18 +66,9 @@ void gather(std::vector<uint32_t>& values, const std::vector<uint32_t>& from) {
   values.swap(moved);
 }
 
-}  // namespace
-
-bool scatteredForChunks(const Mesh& mesh, const BuildOptions& options) {
-  const size_t chunk = options.effectiveChunkTriangles();
-  if (chunk == 0 || mesh.triangleCount() <= chunk) return false;
-  return chunksPerCell(mesh, mesh.indices.data(), mesh.triangleCount(), chunk) >
-         options.maxChunksPerCell;
-}
-
-void orderTrianglesInSpace(Mesh& mesh) {
+/// Moves the triangles of `mesh` into ascending order of `keys` (one per triangle), stably.
+void sortTriangles(Mesh& mesh, const std::vector<uint16_t>& keys) {
   const size_t n = mesh.triangleCount();
-  const std::vector<uint16_t> keys = cellKeys(mesh);
   std::vector<size_t> next = firstDestinations(keys);
   // One counting-sort pass: each block moves its triangles to their destinations in order.
   std::vector<uint32_t> indices, from(n);
@@ -103,6 +88,26 @@ void orderTrianglesInSpace(Mesh& mesh) {
     mesh.sourceTriangles = std::move(from);
   else
     gather(mesh.sourceTriangles, from);
+}
+
+}  // namespace
+
+bool orderIfScattered(Mesh& mesh, const BuildOptions& options) {
+  const size_t chunk = options.effectiveChunkTriangles();
+  if (chunk == 0 || mesh.triangleCount() <= chunk) return false;
+  std::vector<uint16_t> keys;
+  {
+    const std::vector<uint32_t> cells =
+        centroidCells(mesh, mesh.indices.data(), mesh.triangleCount());
+    if (chunksPerCell(cells, chunk) <= options.maxChunksPerCell) return false;
+    keys = mortonKeys(cells);
+  }  // the cells are freed before the sort allocates
+  sortTriangles(mesh, keys);
+  return true;
+}
+
+void orderTrianglesInSpace(Mesh& mesh) {
+  sortTriangles(mesh, mortonKeys(centroidCells(mesh, mesh.indices.data(), mesh.triangleCount())));
 }
 
 std::vector<uint32_t> storedTriangles(const Mesh& mesh) {

@@ -11,16 +11,17 @@
 
 namespace aperture {
 
-/// True when `options` would build `mesh`, attached directly, as one BVH only because of its
-/// triangle order: it has more triangles than the options' chunk, and its chunksPerCell is
-/// above BuildOptions::maxChunksPerCell.
-bool scatteredForChunks(const Mesh& mesh, const BuildOptions& options);
-
 /// Moves the triangles of `mesh` into the Morton order of the cells of a 32³ grid on the
 /// mesh's box that hold their centroids (stable: triangles of one cell keep their order; a
 /// non-finite centroid sorts last). Indices and face properties move with their triangles;
 /// mesh.sourceTriangles gets each triangle's loaded index (composed with an earlier move).
 void orderTrianglesInSpace(Mesh& mesh);
+
+/// orderTrianglesInSpace, when `options` would otherwise build `mesh`, attached directly, as
+/// one BVH only because of its triangle order: it has more triangles than the options' chunk,
+/// and its chunksPerCell is above BuildOptions::maxChunksPerCell. One pass over the centroids
+/// serves both the decision and the order. Returns whether the triangles moved.
+bool orderIfScattered(Mesh& mesh, const BuildOptions& options);
 
 /// The stored triangle of each loaded index (the inverse of mesh.sourceTriangles); empty when
 /// the triangles are in their loaded order.

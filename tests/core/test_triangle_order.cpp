@@ -141,13 +141,20 @@ TEST(TriangleOrder, TheSpatialOrderKeepsChunksApart) {
   const double after = chunksPerCell(ordered, ordered.indices.data(), n, kChunk);
   EXPECT_GT(before, 1.5);
   EXPECT_LE(after, kMaxChunksPerCell);
-  EXPECT_TRUE(scatteredForChunks(loaded, chunksOf(kChunk)));
-  EXPECT_FALSE(scatteredForChunks(ordered, chunksOf(kChunk)));
-  EXPECT_FALSE(scatteredForChunks(loaded, chunksOf(n))) << "no larger than a chunk";
-  EXPECT_FALSE(scatteredForChunks(loaded, chunksOf(0))) << "chunking off";
+  // orderIfScattered moves only what the chunk rule would build whole, as orderTrianglesInSpace.
+  Mesh copy = loaded;
+  EXPECT_TRUE(orderIfScattered(copy, chunksOf(kChunk)));
+  EXPECT_EQ(copy.indices, ordered.indices);
+  EXPECT_EQ(copy.sourceTriangles, ordered.sourceTriangles);
+  EXPECT_FALSE(orderIfScattered(copy, chunksOf(kChunk))) << "already in order";
   BuildOptions compact = chunksOf(kChunk);
   compact.compact = true;
-  EXPECT_FALSE(scatteredForChunks(loaded, compact)) << "the compact BVH never chunks";
+  for (const BuildOptions& keep : {chunksOf(n), chunksOf(0), compact}) {
+    Mesh same = loaded;
+    EXPECT_FALSE(orderIfScattered(same, keep)) << "no larger than a chunk, off, or compact";
+    EXPECT_EQ(same.indices, loaded.indices);
+    EXPECT_TRUE(same.sourceTriangles.empty());
+  }
   // The Scene's own rule agrees: the loaded order is built whole, the spatial one in chunks.
   EXPECT_EQ(Scene(test::numericsDevice(), {&loaded}, chunksOf(kChunk)).stats().chunks, 0u);
   EXPECT_EQ(Scene(test::numericsDevice(), {&ordered}, chunksOf(kChunk)).stats().chunks,
