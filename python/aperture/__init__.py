@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from ._aperture import (
+    _BVH_CHUNK_DEFAULT,
     Camera,
     __version__,
     _Scene,
@@ -105,7 +106,9 @@ class Scene:
     (``vertices`` (n, 3) float32/float64 world positions, ``faces`` (m, 3) integer indices).
     ``Scene()`` is the command line's default procedural scene. Options are the scene flags of
     the command line: ``robust`` (watertight traversal, ``--no-robust`` when False),
-    ``quality`` (``--bvh-quality``: low, medium, high), ``compact`` and ``world_space``.
+    ``quality`` (``--bvh-quality``: low, medium, high), ``compact``, ``world_space`` and
+    ``bvh_chunk`` (``--bvh-chunk``: a mesh of more triangles is built as BVHs of this many, put
+    in spatial order first when its order is scattered, primIDs unchanged; 0: one BVH).
     ``aovs``: the AOVs renders will ask for, so that the mesh data they read (face./vertex.
     properties, vertex normals for shading-normal) is loaded with the meshes; without it, the
     first render that needs more loads the files again with it (once)."""
@@ -120,9 +123,12 @@ class Scene:
         quality: str = "high",
         compact: bool = False,
         world_space: bool = False,
+        bvh_chunk: int = _BVH_CHUNK_DEFAULT,
         aovs: str | Iterable[str] = (),
     ) -> None:
-        options = dict(robust=robust, quality=quality, compact=compact, world_space=world_space)
+        options = dict(
+            robust=robust, quality=quality, compact=compact, world_space=world_space, bvh_chunk=bvh_chunk
+        )
         if vertices is not None or faces is not None:
             if path is not None:
                 raise ValueError("Scene: give a path or vertices= and faces=, not both")

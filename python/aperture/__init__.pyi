@@ -63,6 +63,7 @@ class Scene:
         quality: str = "high",
         compact: bool = False,
         world_space: bool = False,
+        bvh_chunk: int = ...,
         aovs: str | Iterable[str] = (),
     ) -> None: ...
     @property

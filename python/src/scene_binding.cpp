@@ -31,14 +31,16 @@ namespace aperture::python {
 
 namespace {
 
-/// The scene flags of the command line (--bvh-quality, --no-robust, --compact, --world-space).
+/// The scene flags of the command line (--bvh-quality, --no-robust, --compact, --world-space,
+/// --bvh-chunk, checked here under its Python name).
 app::SceneOptions sceneOptions(bool robust, const std::string& quality, bool compact,
-                               bool worldSpace) {
+                               bool worldSpace, long long bvhChunk) {
   app::SceneOptions o;
   o.robust = robust;
   o.quality = quality;
   o.compact = compact;
   o.worldSpace = worldSpace;
+  o.bvhChunk = (long long)checkedBvhChunkTriangles(bvhChunk, "Scene: bvh_chunk");
   return o;
 }
 
@@ -338,28 +340,31 @@ void bindArrayConstructor(nb::class_<PyScene>& c) {
       [](const nb::ndarray<const Real, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>& vertices,
          const nb::ndarray<const uint32_t, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>& faces,
          const std::string& name, bool robust, const std::string& quality, bool compact,
-         bool worldSpace) {
+         bool worldSpace, long long bvhChunk) {
+        const app::SceneOptions options =
+            sceneOptions(robust, quality, compact, worldSpace, bvhChunk);
         Mesh mesh = meshOfArrays<Real>(vertices, faces, name);
-        return std::make_unique<PyScene>(std::move(mesh),
-                                         sceneOptions(robust, quality, compact, worldSpace));
+        return std::make_unique<PyScene>(std::move(mesh), options);
       },
       nb::arg("vertices"), nb::arg("faces"), nb::arg("name"), nb::arg("robust"), nb::arg("quality"),
-      nb::arg("compact"), nb::arg("world_space"));
+      nb::arg("compact"), nb::arg("world_space"), nb::arg("bvh_chunk"));
 }
 
 }  // namespace
 
 void bindScene(nb::module_& m) {
+  m.attr("_BVH_CHUNK_DEFAULT") = kBvhChunkTriangles;  // Scene(bvh_chunk=...)'s default
   nb::class_<PyScene> scene(m, "_Scene", "The C++ scene behind aperture.Scene");
   scene.def_static(
       "_from_paths",
       [](const std::vector<std::string>& meshes, bool robust, const std::string& quality,
-         bool compact, bool worldSpace, const std::string& aovs) {
-        return std::make_unique<PyScene>(meshes, sceneOptions(robust, quality, compact, worldSpace),
-                                         aovs.empty() ? AovSet() : parseAovSet(aovs));
+         bool compact, bool worldSpace, long long bvhChunk, const std::string& aovs) {
+        return std::make_unique<PyScene>(
+            meshes, sceneOptions(robust, quality, compact, worldSpace, bvhChunk),
+            aovs.empty() ? AovSet() : parseAovSet(aovs));
       },
       nb::arg("meshes"), nb::arg("robust"), nb::arg("quality"), nb::arg("compact"),
-      nb::arg("world_space"), nb::arg("aovs"));
+      nb::arg("world_space"), nb::arg("bvh_chunk"), nb::arg("aovs"));
   bindArrayConstructor<float>(scene);
   bindArrayConstructor<double>(scene);
   scene
