@@ -189,25 +189,6 @@ void logBuild(const SceneSpec& spec, const LoadedScene& s) {
       b.triangles ? double(b.embreeBytes) / double(b.triangles) : 0.0);
 }
 
-/// Moves the triangles of each directly attached mesh that its triangle order alone keeps from
-/// a chunked build into spatial order (orderTrianglesInSpace); primIDs report the loaded order.
-void orderScatteredMeshes(LoadedScene& s, const BuildOptions& build, bool quiet) {
-  const std::vector<bool> direct = attachedDirectly(s.objects);
-  for (size_t k = 0; k < s.objects.size(); ++k) {
-    if (!direct[k]) continue;
-    // A directly attached mesh is placed once: this object is its only user.
-    Mesh& m = *std::find_if(s.meshes.begin(), s.meshes.end(),
-                            [&](const Mesh& mesh) { return &mesh == s.objects[k].mesh; });
-    const auto start = std::chrono::steady_clock::now();
-    if (orderIfScattered(m, build) && !quiet)
-      std::fprintf(stderr,
-                   "aperture: %s: %zu triangles scattered in space, put in spatial order for a "
-                   "chunked build in %.3f s (primIDs keep the file's order)\n",
-                   m.name.c_str(), m.triangleCount(),
-                   std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  }
-}
-
 }  // namespace
 
 LoadedScene loadSceneMeshes(const SceneSpec& spec, bool quiet) {
@@ -231,6 +212,23 @@ LoadedScene loadSceneMeshes(const SceneSpec& spec, bool quiet) {
     if (uses.at(name) == 1) moveAnchor(*mesh, s.renderOrigin);
   computeWorldBounds(s);
   return s;
+}
+
+void orderScatteredMeshes(LoadedScene& s, const BuildOptions& build, bool quiet) {
+  const std::vector<bool> direct = attachedDirectly(s.objects);
+  for (size_t k = 0; k < s.objects.size(); ++k) {
+    if (!direct[k]) continue;
+    // A directly attached mesh is placed once: this object is its only user.
+    Mesh& m = *std::find_if(s.meshes.begin(), s.meshes.end(),
+                            [&](const Mesh& mesh) { return &mesh == s.objects[k].mesh; });
+    const auto start = std::chrono::steady_clock::now();
+    if (orderIfScattered(m, build) && !quiet)
+      std::fprintf(stderr,
+                   "aperture: %s: %zu triangles scattered in space, put in spatial order for a "
+                   "chunked build in %.3f s (primIDs keep the file's order)\n",
+                   m.name.c_str(), m.triangleCount(),
+                   std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
 }
 
 void buildLoadedScene(const Device& device, LoadedScene& s, const SceneSpec& spec, bool quiet,

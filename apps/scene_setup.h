@@ -83,8 +83,15 @@ struct LoadedScene {
 /// first placement's anchor (one render space); a file used several times is loaded once and
 /// placed by instances. Computes the world bounds; builds no BVH.
 LoadedScene loadSceneMeshes(const SceneSpec& spec, bool quiet);
-/// Builds the BVH. With spec.cull, only the triangles the `cameras` may see go in (Error
-/// when `cameras` is empty); a panorama among them keeps everything.
+/// Moves the triangles of each directly attached mesh that its triangle order alone keeps from
+/// a chunked build under `build` into spatial order (orderIfScattered, core/triangle_order.h),
+/// logging what moved unless `quiet`; primIDs keep reporting the loaded order.
+/// buildLoadedScene calls it first; a command that builds its own Scenes from loadSceneMeshes
+/// (tradeoff) calls it once after loading.
+void orderScatteredMeshes(LoadedScene& s, const BuildOptions& build, bool quiet);
+/// Builds the BVH (after orderScatteredMeshes). With spec.cull, only the triangles the
+/// `cameras` may see go in (Error when `cameras` is empty); a panorama among them keeps
+/// everything.
 void buildLoadedScene(const Device& device, LoadedScene& s, const SceneSpec& spec, bool quiet,
                       const std::vector<CameraParams>& cameras = {});
 /// loadSceneMeshes then buildLoadedScene without culling.

@@ -78,6 +78,7 @@ class Study {
       SceneSpec spec = c_.scene.spec();
       spec.placement = p;
       slot = std::make_unique<LoadedScene>(loadSceneMeshes(spec, c_.quiet));
+      orderScatteredMeshes(*slot, spec.build, c_.quiet);
     }
     return *slot;
   }

@@ -256,6 +256,17 @@ TEST(TriangleOrderCli, AScatteredFileIsChunkedAndRendersAsLoaded) {
     EXPECT_EQ(out.find(" 0 chunks"), std::string::npos) << "built in chunks: " << out;
     test::expectIdentical(readExr(dir + "/chunks.exr"), readExr(dir + "/one.exr"), "cli" + cull);
   }
+  // tradeoff builds its own scenes from the loaded meshes: it orders them too.
+  ASSERT_EQ(test::runCommand(test::apertureBinary() +
+                                 " tradeoff --quick --reference-spp 4 --mesh " + ply +
+                                 " --eye 0,0.12,0.45 --at 0,0.12,0 --fov 50 --size 48,36 "
+                                 "--bvh-chunk 1024 --out-dir " +
+                                 dir + " --name t",
+                             &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("20000 triangles scattered in space, put in spatial order"), std::string::npos)
+      << out;
 }
 
 }  // namespace
