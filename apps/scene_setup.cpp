@@ -206,8 +206,7 @@ LoadedScene loadSceneMeshes(const SceneSpec& spec, bool quiet) {
   }
   // Meshes used once share the render origin (the first object's anchor), so they are
   // attached directly rather than instanced.
-  const SceneObject& first = s.objects[0];
-  s.renderOrigin = glm::dvec3(first.worldFromMesh * glm::dvec4(first.mesh->anchor, 1.0));
+  s.renderOrigin = renderOriginOf(s.objects);
   for (const auto& [name, mesh] : bySpec)
     if (uses.at(name) == 1) moveAnchor(*mesh, s.renderOrigin);
   computeWorldBounds(s);

@@ -228,11 +228,15 @@ void attachInstance(const Device& device, RTCScene scene, RTCScene sub, const gl
 
 }  // namespace
 
+glm::dvec3 renderOriginOf(const std::vector<SceneObject>& objects) {
+  const SceneObject& first = objects.front();
+  return glm::dvec3(first.worldFromMesh * glm::dvec4(first.mesh->anchor, 1.0));
+}
+
 std::vector<bool> attachedDirectly(const std::vector<SceneObject>& objects) {
   std::vector<bool> direct(objects.size(), false);
   if (objects.empty()) return direct;
-  const glm::dvec3 origin =
-      glm::dvec3(objects.front().worldFromMesh * glm::dvec4(objects.front().mesh->anchor, 1.0));
+  const glm::dvec3 origin = renderOriginOf(objects);
   std::map<const Mesh*, size_t> uses;
   for (const SceneObject& o : objects) ++uses[o.mesh];
   for (size_t k = 0; k < objects.size(); ++k) {
@@ -250,8 +254,7 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
              const BuildOptions& options)
     : device_(device), options_(options) {
   if (objects.empty()) throw Error("scene: no meshes");
-  renderOrigin_ =
-      glm::dvec3(objects.front().worldFromMesh * glm::dvec4(objects.front().mesh->anchor, 1.0));
+  renderOrigin_ = renderOriginOf(objects);
   const std::vector<bool> direct = attachedDirectly(objects);
 
   const long long bytesBefore = device.memoryBytes();
@@ -266,8 +269,10 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
   scene_ = newEmbreeScene(device, flags, quality);
   std::map<const Mesh*, RTCScene> built;  // sub-scene of each instanced mesh
   normalFromMesh_.assign(objects.size(), glm::mat3(1.0f));
-  for (const SceneObject& o : objects) objectMeshes_.push_back(o.mesh);
-  for (const SceneObject& o : objects) reordered_ = reordered_ || !o.mesh->sourceTriangles.empty();
+  for (const SceneObject& o : objects) {
+    objectMeshes_.push_back(o.mesh);
+    reordered_ = reordered_ || !o.mesh->sourceTriangles.empty();
+  }
   for (const SceneObject& o : objects)
     if (o.subset) primIdMaps_.assign(objects.size(), nullptr);
   for (size_t k = 0; k < objects.size(); ++k) {

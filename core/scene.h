@@ -133,9 +133,13 @@ struct SceneObject {
   const TriangleSubset* subset = nullptr;
 };
 
+/// The render origin of a Scene over `objects` (not empty): the first object's anchor, placed
+/// in world space.
+glm::dvec3 renderOriginOf(const std::vector<SceneObject>& objects);
+
 /// For each object, whether a Scene over `objects` attaches it directly rather than through an
-/// instance: its mesh is placed once, untransformed, and its anchor is the render origin (the
-/// first object's anchor, placed). Only such objects are built in chunks.
+/// instance: its mesh is placed once, untransformed, and its anchor is the render origin
+/// (renderOriginOf). Only such objects are built in chunks.
 std::vector<bool> attachedDirectly(const std::vector<SceneObject>& objects);
 
 /// An Embree scene over meshes that outlive it (their vertex and index buffers are shared

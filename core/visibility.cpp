@@ -448,11 +448,12 @@ SparseRows transposeRows(const SparseRows& rows, size_t columns) {
 /// orderTrianglesInSpace moved. `pixels`, bincounted from primID renders, is in it already.
 void putInLoadedOrder(const Mesh& mesh, FaceVisibility& out) {
   if (mesh.sourceTriangles.empty()) return;
+  const std::vector<uint32_t>& source = mesh.sourceTriangles;
   std::vector<uint32_t> viewCount(out.viewCount.size());
   std::vector<int32_t> bestView(out.bestView.size());
-  for (size_t t = 0; t < viewCount.size(); ++t) {
-    viewCount[mesh.sourceTriangle(t)] = out.viewCount[t];
-    bestView[mesh.sourceTriangle(t)] = out.bestView[t];
+  for (size_t t = 0; t < source.size(); ++t) {
+    viewCount[source[t]] = out.viewCount[t];
+    bestView[source[t]] = out.bestView[t];
   }
   out.viewCount.swap(viewCount);
   out.bestView.swap(bestView);
@@ -460,7 +461,7 @@ void putInLoadedOrder(const Mesh& mesh, FaceVisibility& out) {
   for (size_t r = 0; r < rows.rows(); ++r) {
     const auto begin = rows.indices.begin() + std::ptrdiff_t(rows.indptr[r]);
     const auto end = rows.indices.begin() + std::ptrdiff_t(rows.indptr[r + 1]);
-    for (auto f = begin; f != end; ++f) *f = mesh.sourceTriangle(*f);
+    for (auto f = begin; f != end; ++f) *f = source[*f];
     std::sort(begin, end);
   }
 }
