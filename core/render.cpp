@@ -91,7 +91,7 @@ std::vector<std::vector<const uint32_t*>> propertyTables(const Scene& scene,
 struct ImagePlan;
 
 struct TileCounters {
-  uint64_t traced = 0, skipped = 0, hits = 0;
+  uint64_t traced = 0, skipped = 0, outsideBox = 0, hits = 0;
 };
 
 /// Renders the tile of columns [x0, x1) and rows [y0, y1) of a plan's frame.
@@ -129,6 +129,8 @@ struct ImagePlan {
   bool anyGeometry;                 // any AOV filled from the centre ray
   bool instanced;                   // normals of instanced hits need the instance's normal matrix
   bool remapPrimIds;                // Scene::remapsPrimIds: culled or reordered, primID is mapped
+  /// The scene's box when RenderSettings::sceneBoxTest is on and the scene has one; else null.
+  const SceneBox* box;
   // The passes over each block: colour averages samples [0, colorSamples); the geometry AOVs
   // come from the centre ray, which at spp 1 is sample 0 itself (geometryFromSample) and
   // otherwise one extra ray per pixel, traced in pass colorSamples (the last of `passes`).
@@ -173,6 +175,7 @@ ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSet
                   !fb_.properties.empty() || layers),
       instanced(scene_.instanceCount() > 0),
       remapPrimIds(scene_.remapsPrimIds()),
+      box(settings_.sceneBoxTest && scene_.box() ? &*scene_.box() : nullptr),
       colorSamples(color ? settings_.spp : 0),
       geometryFromSample(anyGeometry && color && settings_.spp == 1),
       passes(colorSamples + (anyGeometry && !geometryFromSample ? 1 : 0)),
@@ -269,20 +272,42 @@ void fakeHits(const ImagePlan& plan, PacketState<N>& st) {
   }
 }
 
+/// The scene-box test (RenderSettings::sceneBoxTest) on the `active` lanes of `st`: clears
+/// the lanes whose rays miss the scene's box, which are misses, and counts them; returns the
+/// lanes left for Embree. The null trace runs the test, so its cost is in `bench --null`, on a
+/// copy of the lane mask: there every lane still fakes a hit.
+template <int N, bool kNull>
+int resolveLanesMissingBox(const ImagePlan& plan, PacketState<N>& st, int active,
+                           TileCounters& count) {
+  if (!plan.box) return active;
+  if constexpr (kNull) {
+    alignas(64) int copy[N];
+    std::memcpy(copy, st.valid, sizeof copy);
+    count.outsideBox += uint64_t(maskLanesMissingBox<N>(*plan.box, st.lanes, copy));
+    return active;
+  } else {
+    const int missed = maskLanesMissingBox<N>(*plan.box, st.lanes, st.valid);
+    count.outsideBox += uint64_t(missed);
+    return active - missed;
+  }
+}
+
 /// Intersects the packet of `req`, whose rays the camera has generated into `st` (kNull:
-/// fakeHits instead of Embree); false when no lane was traced.
+/// fakeHits instead of Embree); false when no lane can have hit (none was traced, or the
+/// scene-box test resolved every one as a miss).
 template <int N, bool kNull>
 bool tracePacket(const ImagePlan& plan, const PacketRequest& req, PacketState<N>& st,
                  TileCounters& count) {
   const int active = selectLanes<N>(plan, req, st, count);
   if (active == 0) return false;
+  count.traced += uint64_t(active);
+  if (resolveLanesMissingBox<N, kNull>(plan, st, active, count) == 0) return false;
   if constexpr (kNull) {
     fakeHits<N>(plan, st);
   } else {
     clearHits<N>(st.packet);
     intersectScene<N>(plan.scene, &st.ctx, st.valid, st.packet);
   }
-  count.traced += uint64_t(active);
   return true;
 }
 
@@ -694,7 +719,7 @@ namespace {
 
 /// Work counters of one frame, summed over its tiles.
 struct FrameProgress {
-  std::atomic<uint64_t> traced{0}, skipped{0}, hits{0};
+  std::atomic<uint64_t> traced{0}, skipped{0}, outsideBox{0}, hits{0};
   std::atomic<size_t> tilesLeft{0};
 };
 
@@ -733,6 +758,7 @@ std::vector<RenderStats> renderPlans(const std::deque<ImagePlan>& plans,
       FrameProgress& f = frames[k];
       f.traced += c.traced;
       f.skipped += c.skipped;
+      f.outsideBox += c.outsideBox;
       f.hits += c.hits;
       if (--f.tilesLeft != 0) continue;
       // The frame's last tile: its counters are complete (every other tile decremented
@@ -741,6 +767,7 @@ std::vector<RenderStats> renderPlans(const std::deque<ImagePlan>& plans,
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       stats[k].raysTraced = f.traced;
       stats[k].raysSkipped = f.skipped;
+      stats[k].raysOutsideBox = f.outsideBox;
       stats[k].hits = f.hits;
       if (!progress) continue;
       const std::lock_guard<std::mutex> lock(progressMutex);

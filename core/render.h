@@ -33,12 +33,20 @@ struct RenderSettings {
   /// generation and every requested AOV store run. Chosen once per frame; not available with
   /// layered hits or a culled scene; throws Error for a scene without objects.
   bool nullTrace = false;
+  /// Resolves a ray that misses the scene's box (Scene::box, core/scene_box.h) as a miss
+  /// without calling Embree. Conservative: the image is bit-identical either way. Off only to
+  /// measure what it saves (`aperture bench --no-scene-box`).
+  bool sceneBoxTest = true;
 };
 
 struct RenderStats {
-  double seconds = 0;        ///< wall time of the frame
-  uint64_t raysTraced = 0;   ///< rays passed to Embree with a valid lane
+  double seconds = 0;  ///< wall time of the frame
+  /// Rays with a valid lane: passed to Embree, or resolved as misses by the scene-box test.
+  uint64_t raysTraced = 0;
   uint64_t raysSkipped = 0;  ///< lanes masked because the camera gave no ray or it was non-finite
+  /// Of raysTraced, those the scene-box test resolved as misses without Embree (in the null
+  /// trace, those it would have resolved: every lane still fakes a hit there).
+  uint64_t raysOutsideBox = 0;
   uint64_t hits = 0;
   double mraysPerSecond() const { return seconds > 0 ? raysTraced / seconds * 1e-6 : 0; }
 };

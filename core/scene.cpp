@@ -322,6 +322,9 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
   }
   rtcCommitScene(scene_);
   device.check("rtcCommitScene (BVH build)");
+  RTCBounds b;
+  rtcGetSceneBounds(scene_, &b);
+  box_ = paddedSceneBox({b.lower_x, b.lower_y, b.lower_z}, {b.upper_x, b.upper_y, b.upper_z});
   stats_.buildSeconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   stats_.embreeBytes = device.memoryBytes() - bytesBefore;

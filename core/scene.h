@@ -5,10 +5,12 @@
 #include <cstddef>
 #include <glm/glm.hpp>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/mesh.h"
+#include "core/scene_box.h"
 
 namespace aperture {
 
@@ -176,6 +178,9 @@ class Scene {
   const Mesh& objectMesh(unsigned object) const { return *objectMeshes_[object]; }
   /// Number of objects (top-level geomIDs 0 .. objectCount() - 1).
   size_t objectCount() const { return objectMeshes_.size(); }
+  /// Render-space box that holds everything a ray can hit, padded (core/scene_box.h); nullopt
+  /// when Embree's bounds are empty or not finite.
+  const std::optional<SceneBox>& box() const { return box_; }
   /// True when some object was built from a TriangleSubset (view-volume culling).
   bool culled() const { return !primIdMaps_.empty(); }
   /// True when Embree's primID is not what the user numbers a triangle by: some object was
@@ -212,6 +217,7 @@ class Scene {
   std::vector<const Mesh*> objectMeshes_;    ///< per object
   std::vector<const uint32_t*> primIdMaps_;  ///< per object; empty when nothing is culled
   bool reordered_ = false;                   ///< some object's mesh has Mesh::sourceTriangles
+  std::optional<SceneBox> box_;
   std::vector<RTCScene> subScenes_;
   /// What a top-level geomID placing a chunk stands for: the chunk's object
   /// (RTC_INVALID_GEOMETRY_ID for a geomID that places no chunk) and its first triangle.
