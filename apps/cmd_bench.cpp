@@ -38,7 +38,8 @@ struct BenchArgs {
   bool baseline = false, quiet = false;
   bool scaling = false;  ///< --scaling: procedural sizes, each in a child bench (bench_scaling.h)
   std::string scalingSizes = kDefaultScalingSizes;
-  bool nullTrace = false;  ///< --null: the frame loop without Embree (RenderSettings::nullTrace)
+  bool nullTrace = false;   ///< --null: the frame loop without Embree (RenderSettings::nullTrace)
+  bool noSceneBox = false;  ///< --no-scene-box: RenderSettings::sceneBoxTest off
   std::string sweep, json, preset;
   std::string layersMethod;  ///< hidden --layers-method filter|retrace (bench/layers_methods.sh)
   std::string baselineApi = "packet16";  ///< --baseline-api (BaselineApi)
@@ -131,7 +132,8 @@ void reportConfig(const Bench& b, nlohmann::json& j) {
                  {"spp", b.params.spp},
                  {"frames", a.frames},
                  {"warmup", a.warmup},
-                 {"null", a.nullTrace}};
+                 {"null", a.nullTrace},
+                 {"scene_box_test", b.settings.sceneBoxTest}};
   std::printf(
       "config: %s, %zu triangles; %d threads, Embree ISA %s; packet %d, tile %d; BVH %s%s%s; "
       "AOVs %s; layers %d (%s); %s %dx%d, %d spp\n",
@@ -234,8 +236,10 @@ void measureAgainstBaseline(const Bench& b, nlohmann::json& j) {
                             parseBaselineApi(b.args.baselineApi, "--baseline-api"));
   Framebuffer fb(b.params.width, b.params.height, b.aovs);
   std::vector<double> render, bare, ratio;
+  RenderStats frame;
   for (int f = 0; f < b.args.warmup + b.args.frames; ++f) {
-    const double r = renderImage(*b.loaded.scene, *b.camera, b.settings, fb).mraysPerSecond();
+    frame = renderImage(*b.loaded.scene, *b.camera, b.settings, fb);
+    const double r = frame.mraysPerSecond();
     const double seconds = base.traceFrame(*b.loaded.scene);
     if (f < b.args.warmup) continue;
     render.push_back(r);
@@ -251,6 +255,10 @@ void measureAgainstBaseline(const Bench& b, nlohmann::json& j) {
   printSummary(label.c_str(), bareS, b.args.frames);
   std::printf("render / baseline: %.3f (median of %d frame pairs; baseline rays: %s)\n",
               ratioS.median, b.args.frames, base.rayGeneration().c_str());
+  const double outside = frame.raysTraced ? double(frame.raysOutsideBox) / frame.raysTraced : 0;
+  std::printf("scene-box test: %s; %.1f%% of the frame loop's rays resolved by it\n",
+              b.settings.sceneBoxTest ? "on" : "off (--no-scene-box)", 100 * outside);
+  j["rays_outside_box_fraction"] = outside;
   j["mrays_per_s"] = toJson(renderS);
   j["mrays_per_s_median"] = renderS.median;
   j["baseline_mrays_per_s"] = toJson(bareS);
@@ -388,6 +396,7 @@ int runBench(const BenchArgs& a) {
       resolveCommandCamera(given, a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0));
   RenderSettings settings = a.render.settings(unframed.spp);
   settings.nullTrace = a.nullTrace;
+  settings.sceneBoxTest = !a.noSceneBox;
   validateBenchArgs(a);
   checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs);
 
@@ -442,6 +451,9 @@ Command addBenchCommand(CLI::App& app) {
   sub->add_flag("--null", args->nullTrace,
                 "Measure the frame loop's overhead in ns/ray: rays generated and AOVs written, "
                 "every ray a fake hit, no Embree call");
+  sub->add_flag("--no-scene-box", args->noSceneBox,
+                "Call Embree for every ray, also those that miss the scene's bounding box (which "
+                "the frame loop otherwise resolves as misses itself): measures what that saves");
   sub->add_option("--sweep", args->sweep,
                   "Also sweep: packet, threads, quality or aovs (depth alone .. all AOVs, "
                   "interleaved frames)");
