@@ -3,7 +3,8 @@
 // a ray that misses it as a miss without calling Embree. Where much of the image is background
 // (a scan against an empty sky), most packets never reach Embree: an Embree call on a packet
 // that misses everything still sets up its traversal (reciprocal directions, the root node),
-// which costs more than this test (bench/RESULTS.md, "Issue 13: rays that miss the scene's box").
+// which costs more than this test (bench/RESULTS.md, "Issue 13, item 2: rays that miss the
+// scene's box skip Embree").
 //
 // Conservative by construction, so images are bit-identical with and without it:
 //  - the box is Embree's bounds of the committed scene (every vertex, instances placed), grown
@@ -33,8 +34,8 @@ struct SceneBox {
 /// Growth of the scene box, relative to the largest of its extent and its coordinates'
 /// magnitude: 2^-14, far above the float rounding (2^-24) of the vertices and of Embree's hits.
 inline constexpr float kSceneBoxPadding = 1.0f / 16384.0f;
-/// Relative widening of each end of a ray's interval through the box: 2^-18, sixteen times the
-/// worst rounding of the slab test's t (three operations of 2^-24 each).
+/// Relative widening of each end of a ray's interval through the box: 2^-18, about twenty times
+/// the worst rounding of the slab test's t (three operations of 2^-24 each).
 inline constexpr float kSlabSlack = 1.0f / 262144.0f;
 
 /// The box `lo`..`hi` (Embree's bounds of a committed scene) grown by kSceneBoxPadding; nullopt
