@@ -9,16 +9,11 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 B=${BIN:-build/apps/aperture}
-M=../shared/meshes
 OUT=${OUT:-/tmp/ceiling_trials}
 mkdir -p "$OUT"
 rm -f "$OUT"/*.json
-declare -A SCENES=(
-  [bunny]="--mesh $M/stanford/bun_zipper.ply --eye -0.02,0.11,0.35 --at -0.017,0.11,0 --up 0,1,0 --fov 30"
-  [dragon]="--mesh $M/stanford/dragon_vrip.ply --eye 0,0.12,0.45 --at 0,0.12,0 --up 0,1,0 --fov 30"
-  [crown]="--mesh $M/scenes/crown_flat.ply --eye 0,5.5,24 --at 0,11,-10 --up 0,1,0 --fov 47 --fov-axis x"
-  [bathroom]="--mesh $M/scenes/contemporary-bathroom_flat.ply --eye 0.00724,0.91240,-0.22758 --dir -0.751879,0.015471,-0.659119 --up 0.0116337,0.99988,0.0101985 --fov 55"
-)
+# shellcheck source=bench/reference_scenes.sh
+source bench/reference_scenes.sh
 read -r -a ORDER <<<"${SCENES_LIST:-bunny dragon crown bathroom}"
 common=(--size 1920,1080 --aov depth,normal --baseline --frames "${FRAMES:-10}" --warmup 3
         --builds 1 --quiet --threads "${THREADS:-2}")
