@@ -246,6 +246,7 @@ APERTURE_VECTOR_KERNEL void pinholeCentres(const CalibratedFrame& f, const Pinho
 
 class CalibratedCamera final : public CameraBase {
  public:
+  std::optional<glm::vec3> sharedRayOrigin() const override { return renderEye_; }
   CalibratedCamera(const CameraParams& p, const glm::dvec3& renderOrigin)
       : CameraBase(p, renderOrigin, "calibrated"), sensor_(calibratedSensorOf(p)) {
     rejectShift();

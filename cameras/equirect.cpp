@@ -55,6 +55,7 @@ APERTURE_VECTOR_KERNEL void equirectCentres(const EquirectCentres& c, const glm:
 
 class EquirectCamera final : public PacketCamera<EquirectCamera> {
  public:
+  std::optional<glm::vec3> sharedRayOrigin() const override { return renderEye_; }
   EquirectCamera(const CameraParams& p, const glm::dvec3& renderOrigin)
       : PacketCamera(p, renderOrigin, "equirect") {
     rejectShift();

@@ -101,6 +101,7 @@ APERTURE_VECTOR_KERNEL void fisheyeCentres(const FisheyeCentres& c, int x0, int 
 
 class FisheyeCamera final : public PacketCamera<FisheyeCamera> {
  public:
+  std::optional<glm::vec3> sharedRayOrigin() const override { return renderEye_; }
   FisheyeCamera(const CameraParams& p, const glm::dvec3& renderOrigin)
       : PacketCamera(p, renderOrigin, "fisheye") {
     rejectShift();

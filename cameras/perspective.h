@@ -47,6 +47,11 @@ class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
   void generate(const PacketRequest& req, RayLanes& out, int* valid) const override;
 
   bool stochastic() const override { return spp_ > 1 || lensRadius_ > 0; }
+  /// The eye, for a pinhole without clip planes (a lens spreads the origins, a clip sets tnear).
+  std::optional<glm::vec3> sharedRayOrigin() const override {
+    if (lensRadius_ > 0 || clip_) return std::nullopt;
+    return renderEye_;
+  }
   std::optional<glm::dvec2> project(const glm::dvec3& worldPoint) const override;
   ViewVolume viewVolume(double nearDist, double farDist) const override;
   double lensRadius() const { return lensRadius_; }

@@ -184,6 +184,11 @@ class Camera {
   /// (x, y), continuous: origin in render space and unit direction, in double, before any
   /// rounding. False where the position has no ray (outputs still finite).
   virtual bool centreRayAt(double x, double y, glm::dvec3& renderOrg, glm::dvec3& dir) const = 0;
+  /// The render-space point that every ray generate() gives starts from, each with tnear 0
+  /// (one centre of projection and no clip), or nothing (a lens, a parallel projection, clip
+  /// planes). Where it lies in the scene's box, no ray can miss the box, and the frame loop
+  /// skips its scene-box test (core/scene_box.h). Nothing is always a safe answer.
+  virtual std::optional<glm::vec3> sharedRayOrigin() const { return std::nullopt; }
 };
 
 }  // namespace aperture

@@ -88,6 +88,16 @@ std::vector<std::vector<const uint32_t*>> propertyTables(const Scene& scene,
   return tables;
 }
 
+/// The box the frame loop's scene-box test uses for `camera`: the scene's, or null when the
+/// test is off (RenderSettings::sceneBoxTest), the scene has no box, or every ray of the
+/// camera starts inside the box at tnear 0 (Camera::sharedRayOrigin), so none can miss it.
+const SceneBox* boxTestFor(const Scene& scene, const Camera& camera, const RenderSettings& s) {
+  if (!s.sceneBoxTest || !scene.box()) return nullptr;
+  const std::optional<glm::vec3> origin = camera.sharedRayOrigin();
+  if (origin && boxContains(*scene.box(), *origin)) return nullptr;
+  return &*scene.box();
+}
+
 struct ImagePlan;
 
 struct TileCounters {
@@ -129,7 +139,8 @@ struct ImagePlan {
   bool anyGeometry;                 // any AOV filled from the centre ray
   bool instanced;                   // normals of instanced hits need the instance's normal matrix
   bool remapPrimIds;                // Scene::remapsPrimIds: culled or reordered, primID is mapped
-  /// The scene's box when RenderSettings::sceneBoxTest is on and the scene has one; else null.
+  /// The scene's box for the scene-box test; null when the test is off or cannot resolve any
+  /// ray (boxTestFor).
   const SceneBox* box;
   // The passes over each block: colour averages samples [0, colorSamples); the geometry AOVs
   // come from the centre ray, which at spp 1 is sample 0 itself (geometryFromSample) and
@@ -175,7 +186,7 @@ ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSet
                   !fb_.properties.empty() || layers),
       instanced(scene_.instanceCount() > 0),
       remapPrimIds(scene_.remapsPrimIds()),
-      box(settings_.sceneBoxTest && scene_.box() ? &*scene_.box() : nullptr),
+      box(boxTestFor(scene_, camera_, settings_)),
       colorSamples(color ? settings_.spp : 0),
       geometryFromSample(anyGeometry && color && settings_.spp == 1),
       passes(colorSamples + (anyGeometry && !geometryFromSample ? 1 : 0)),

@@ -50,6 +50,12 @@ inline std::optional<SceneBox> paddedSceneBox(const glm::vec3& lo, const glm::ve
   return SceneBox{lo - pad, hi + pad};
 }
 
+/// Whether `p` lies in `box`, faces included. A ray that starts there with tnear 0 always
+/// reaches the box: maskLanesMissingBox keeps it.
+inline bool boxContains(const SceneBox& box, const glm::vec3& p) {
+  return glm::all(glm::lessThanEqual(box.lo, p)) && glm::all(glm::lessThanEqual(p, box.hi));
+}
+
 /// Clears valid[k] of every active lane whose ray, over [tnear, tfar], cannot reach `box`;
 /// returns how many it cleared. Branch-free over the lanes (a lane loop: vector compares).
 template <int N>

@@ -16,6 +16,7 @@
 
 #include "cameras/registry.h"
 #include "core/mesh.h"
+#include "core/packet.h"
 #include "core/render.h"
 #include "core/scene.h"
 #include "core/scene_box.h"
@@ -233,6 +234,52 @@ std::vector<CameraParams> cameraKinds() {
   return all;
 }
 
+/// A calibrated OPENCV camera (distorted) at the pose of `p`.
+CameraParams calibratedLike(const CameraParams& p) {
+  CameraParams c = p;
+  c.type = "calibrated";
+  c.fovDeg.reset();
+  c.intrinsics = std::vector<double>{50.0, 52.0, 30.0, 21.0};
+  c.lensModel = "OPENCV";
+  c.distortion = std::vector<double>{-0.1, 0.01, 1e-4, -1e-4};
+  return c;
+}
+
+TEST(SceneBoxCameras, ASharedRayOriginIsWhereEveryGeneratedRayStartsAtTnearZero) {
+  std::vector<CameraParams> kinds = cameraKinds();
+  kinds.push_back(calibratedLike(kinds.front()));
+  int shared = 0;
+  for (const CameraParams& p : kinds) {
+    const auto camera = makeCamera(p, glm::dvec3(1.0, 2.0, 3.0));
+    const std::optional<glm::vec3> origin = camera->sharedRayOrigin();
+    const std::string what = p.type + (p.clip ? " clipped" : "");
+    // The models with one centre of projection and no clip say so; the others must not.
+    const bool expected = (p.type == "perspective" && !p.clip) || p.type == "equirect" ||
+                          p.type == "fisheye" || p.type == "calibrated";
+    EXPECT_EQ(origin.has_value(), expected) << what;
+    if (!origin) continue;
+    ++shared;
+    PacketBuffers<16> packet;
+    int lanes = 0;
+    for (int sample = -1; sample < p.spp; ++sample)
+      for (int y0 = 0; y0 < p.height; y0 += 4)
+        for (int x0 = 0; x0 < p.width; x0 += 4) {
+          const PacketRequest req{x0, y0, 4, 4, sample < 0 ? PacketRequest::kCentreRay : sample};
+          camera->generate(req, packet.lanes, packet.valid);
+          for (int k = 0; k < 16; ++k) {
+            if (!packet.valid[k]) continue;
+            ++lanes;
+            ASSERT_EQ(packet.lanes.orgX[k], origin->x) << what;
+            ASSERT_EQ(packet.lanes.orgY[k], origin->y) << what;
+            ASSERT_EQ(packet.lanes.orgZ[k], origin->z) << what;
+            ASSERT_EQ(packet.lanes.tnear[k], 0.0f) << what;
+          }
+        }
+    EXPECT_GT(lanes, p.width * p.height / 3) << what;
+  }
+  EXPECT_EQ(shared, 5);  // perspective, both panoramas seen from two places, calibrated
+}
+
 /// renderImage of `p` with the scene-box test on or off, every AOV and two layers.
 Framebuffer renderWith(const Scene& scene, const CameraParams& p, bool boxTest, int packet,
                        RenderStats& stats) {
@@ -253,7 +300,9 @@ TEST(SceneBoxFrameLoop, EveryAovLayerAndCountIsBitIdenticalWithTheTestOnAndOff) 
   const Mesh mesh = loadMesh("procedural:spheres?tris=6000");
   const Scene scene(test::numericsDevice(), placedTwice(mesh, {40.0, -5.0, 12.0}));
   uint64_t resolved = 0;
-  for (const CameraParams& p : cameraKinds())
+  std::vector<CameraParams> kinds = cameraKinds();
+  kinds.push_back(calibratedLike(kinds.front()));
+  for (const CameraParams& p : kinds)
     for (int packet : {1, 4, 16}) {
       const std::string what = p.type + " eye z " + std::to_string(p.eye.z) + " packet " +
                                std::to_string(packet) + (p.clip ? " clipped" : "");
