@@ -246,7 +246,6 @@ APERTURE_VECTOR_KERNEL void pinholeCentres(const CalibratedFrame& f, const Pinho
 
 class CalibratedCamera final : public CameraBase {
  public:
-  std::optional<glm::vec3> sharedRayOrigin() const override { return renderEye_; }
   CalibratedCamera(const CameraParams& p, const glm::dvec3& renderOrigin)
       : CameraBase(p, renderOrigin, "calibrated"), sensor_(calibratedSensorOf(p)) {
     rejectShift();
@@ -265,6 +264,9 @@ class CalibratedCamera final : public CameraBase {
     else
       table_ = DirectionTable::of(sensor_);
   }
+
+  /// Every ray starts at the eye, at tnear 0.
+  std::optional<glm::vec3> sharedRayOrigin() const override { return renderEye_; }
 
   void generate(const PacketRequest& req, RayLanes& out, int* valid) const override {
     const bool centres = req.centreRay() || spp_ == 1;

@@ -55,7 +55,6 @@ APERTURE_VECTOR_KERNEL void equirectCentres(const EquirectCentres& c, const glm:
 
 class EquirectCamera final : public PacketCamera<EquirectCamera> {
  public:
-  std::optional<glm::vec3> sharedRayOrigin() const override { return renderEye_; }
   EquirectCamera(const CameraParams& p, const glm::dvec3& renderOrigin)
       : PacketCamera(p, renderOrigin, "equirect") {
     rejectShift();
@@ -87,6 +86,9 @@ class EquirectCamera final : public PacketCamera<EquirectCamera> {
 
   /// Rays through pixel centres (every sample at 1 spp, the centre ray at any spp) in the
   /// frame loop's block shapes take the tabulated kernel; everything else the packet loop.
+  /// Every ray starts at the eye, at tnear 0.
+  std::optional<glm::vec3> sharedRayOrigin() const override { return renderEye_; }
+
   void generate(const PacketRequest& req, RayLanes& out, int* valid) const override {
     if (spp_ == 1 || req.centreRay()) {
       const EquirectCentres c{sinLon_.data(), cosLon_.data(), sinLat_.data(),

@@ -101,7 +101,6 @@ APERTURE_VECTOR_KERNEL void fisheyeCentres(const FisheyeCentres& c, int x0, int 
 
 class FisheyeCamera final : public PacketCamera<FisheyeCamera> {
  public:
-  std::optional<glm::vec3> sharedRayOrigin() const override { return renderEye_; }
   FisheyeCamera(const CameraParams& p, const glm::dvec3& renderOrigin)
       : PacketCamera(p, renderOrigin, "fisheye") {
     rejectShift();
@@ -114,6 +113,9 @@ class FisheyeCamera final : public PacketCamera<FisheyeCamera> {
 
   /// Rays through pixel centres (every sample at 1 spp, the centre ray at any spp) in the
   /// frame loop's block shapes take the quadrant-table kernel; everything else the packet loop.
+  /// Every ray starts at the eye, at tnear 0.
+  std::optional<glm::vec3> sharedRayOrigin() const override { return renderEye_; }
+
   void generate(const PacketRequest& req, RayLanes& out, int* valid) const override {
     if (spp_ == 1 || req.centreRay()) {
       const FisheyeCentres c{quadrant_, cx_,         cy_,

@@ -199,6 +199,17 @@ TEST(SceneBoxScene, HoldsEveryPlacedVertexAndIsTightForAMeshAttachedDirectly) {
   }
 }
 
+/// A calibrated OPENCV camera (distorted) at the pose of `p`.
+CameraParams calibratedLike(const CameraParams& p) {
+  CameraParams c = p;
+  c.type = "calibrated";
+  c.fovDeg.reset();
+  c.intrinsics = std::vector<double>{50.0, 52.0, 30.0, 21.0};
+  c.lensModel = "OPENCV";
+  c.distortion = std::vector<double>{-0.1, 0.01, 1e-4, -1e-4};
+  return c;
+}
+
 /// Every camera kind, framed so that part of each image is background.
 std::vector<CameraParams> cameraKinds() {
   std::vector<CameraParams> all;
@@ -231,23 +242,12 @@ std::vector<CameraParams> cameraKinds() {
   fisheye.type = "fisheye";
   fisheye.fovDeg.reset();
   all.push_back(fisheye);
+  all.push_back(calibratedLike(p));
   return all;
 }
 
-/// A calibrated OPENCV camera (distorted) at the pose of `p`.
-CameraParams calibratedLike(const CameraParams& p) {
-  CameraParams c = p;
-  c.type = "calibrated";
-  c.fovDeg.reset();
-  c.intrinsics = std::vector<double>{50.0, 52.0, 30.0, 21.0};
-  c.lensModel = "OPENCV";
-  c.distortion = std::vector<double>{-0.1, 0.01, 1e-4, -1e-4};
-  return c;
-}
-
 TEST(SceneBoxCameras, ASharedRayOriginIsWhereEveryGeneratedRayStartsAtTnearZero) {
-  std::vector<CameraParams> kinds = cameraKinds();
-  kinds.push_back(calibratedLike(kinds.front()));
+  const std::vector<CameraParams> kinds = cameraKinds();
   int shared = 0;
   for (const CameraParams& p : kinds) {
     const auto camera = makeCamera(p, glm::dvec3(1.0, 2.0, 3.0));
@@ -300,8 +300,7 @@ TEST(SceneBoxFrameLoop, EveryAovLayerAndCountIsBitIdenticalWithTheTestOnAndOff) 
   const Mesh mesh = loadMesh("procedural:spheres?tris=6000");
   const Scene scene(test::numericsDevice(), placedTwice(mesh, {40.0, -5.0, 12.0}));
   uint64_t resolved = 0;
-  std::vector<CameraParams> kinds = cameraKinds();
-  kinds.push_back(calibratedLike(kinds.front()));
+  const std::vector<CameraParams> kinds = cameraKinds();
   for (const CameraParams& p : kinds)
     for (int packet : {1, 4, 16}) {
       const std::string what = p.type + " eye z " + std::to_string(p.eye.z) + " packet " +
