@@ -1,14 +1,39 @@
 #pragma once
-// One row of four pixels of an interleaved x y z float channel (normals), written from the
-// frame loop's per-component lanes with a mask: the pixels whose lane hit get the lane's
-// components, the others keep theirs. GCC's vectorisers emitted this transpose-and-blend as
-// one read-back and store per component; the normal store was a third of
-// `bench --null --aov depth,normal` (bench/RESULTS.md, issue 13). Here it is 4-wide shuffles
-// and selects, which every x86-64 level has (SSE2 and up) and which only move bits
-// (`__builtin_shufflevector`: GCC 12 and Clang both have it; the fuzz builds are Clang's).
+// One row of four pixels of a framebuffer channel, written from the frame loop's lanes with a
+// mask: the pixels whose lane hit get the lane's values, the others keep theirs. Both writers
+// read the old pixels back only for a row that is partly hit: a whole row of misses is left
+// alone, and a whole row of hits (the common case) is stored without reading the old pixels,
+// whose cache lines may not be loaded yet (a load that misses stalls the blend that needs it;
+// a store does not stall).
+//  - blendRow4: one 32-bit value a pixel (depth, distance, primID, geomID).
+//  - blendInterleavedRow4x3: interleaved x y z floats (normals, positions). GCC's vectorisers
+//    emitted this transpose-and-blend as one read-back and store per component; the normal
+//    store was a third of `bench --null --aov depth,normal` (bench/RESULTS.md, issue 13). Here
+//    it is 4-wide shuffles and selects, which every x86-64 level has (SSE2 and up) and which
+//    only move bits (`__builtin_shufflevector`: GCC 12 and Clang both have it; the fuzz builds
+//    are Clang's).
 #include <cstring>
 
 namespace aperture {
+
+/// How many of a row's four lanes hit (hit[j] != 0).
+inline int rowHits(const int* hit) {
+  return (hit[0] != 0) + (hit[1] != 0) + (hit[2] != 0) + (hit[3] != 0);
+}
+
+/// Writes pixel j (j = 0..3) of `row` as value[j] where hit[j] != 0, leaving the other pixels
+/// as they are. T is a 32-bit type (float or uint32_t); `row` needs no alignment.
+template <class T>
+inline void blendRow4(const T* value, const int* hit, T* row) {
+  static_assert(sizeof(T) == 4, "one 32-bit value a pixel");
+  const int hits = rowHits(hit);
+  if (hits == 0) return;
+  if (hits == 4) {
+    std::memcpy(row, value, 4 * sizeof(T));
+    return;
+  }
+  for (int j = 0; j < 4; ++j) row[j] = hit[j] ? value[j] : row[j];
+}
 
 /// Writes pixel j (j = 0..3) of `row` (3 floats per pixel) as (x[j], y[j], z[j]) where
 /// hit[j] != 0, leaving the other pixels as they are. `row` needs no alignment.
@@ -16,9 +41,7 @@ inline void blendInterleavedRow4x3(const float* x, const float* y, const float* 
                                    float* row) {
   using F4 = float __attribute__((vector_size(16)));
   using I4 = int __attribute__((vector_size(16)));
-  // A whole row of misses is left alone; a whole row of hits (the common case) is stored
-  // without reading the old pixels, whose cache lines may not be loaded yet.
-  const int hits = (hit[0] != 0) + (hit[1] != 0) + (hit[2] != 0) + (hit[3] != 0);
+  const int hits = rowHits(hit);
   if (hits == 0) return;
   F4 vx, vy, vz;
   std::memcpy(&vx, x, sizeof vx);

@@ -405,9 +405,9 @@ struct BlockPixels {
 
 /// Writes value[k] of every hit lane k to its pixel of a channel of kC interleaved components
 /// (value[c] holds component c), leaving the other pixels as they are. A block whose rows lie
-/// whole in the image writes each row as one load, blend and store of kBW·kC values (the
-/// tile is this thread's alone, so the read-back is safe); a block cut by the right edge
-/// stores lane by lane.
+/// whole in the image writes row by row, reading a row's old pixels back only when it is partly
+/// hit (core/interleaved_row.h; the tile is this thread's alone, so the read-back is safe); a
+/// block cut by the right edge stores lane by lane.
 template <int N, int kC, class T>
 void storeHitLanes(const BlockPixels<N>& px, const int* hit, const T* const (&value)[kC],
                    T* channel) {
@@ -416,9 +416,13 @@ void storeHitLanes(const BlockPixels<N>& px, const int* hit, const T* const (&va
   if (px.columns == kBW) {
     for (int r = 0; r < px.rows; ++r) {
       T* __restrict row = base + kC * size_t(r) * px.stride;
+      const int l = r * kBW;
       if constexpr (kBW == 4 && kC == 3 && std::is_same_v<T, float>) {
-        const int l = r * kBW;
         blendInterleavedRow4x3(value[0] + l, value[1] + l, value[2] + l, hit + l, row);
+        continue;
+      }
+      if constexpr (kBW == 4 && kC == 1) {
+        blendRow4<T>(value[0] + l, hit + l, row);
         continue;
       }
       for (int j = 0; j < kBW; ++j)

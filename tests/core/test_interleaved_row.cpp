@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cstdint>
 #include <random>
 
 #include "core/interleaved_row.h"
@@ -43,6 +44,33 @@ TEST(InterleavedRow, UnalignedRowsAreWrittenTheSame) {
   blendInterleavedRow4x3(x, y, z, hit, buffer.data() + 1);
   const std::array<float, 17> expected{0, 1, 5, 9, 0, 0, 0, 3, 7, 11, 4, 8, 12, 0, 0, 0, 0};
   EXPECT_EQ(buffer, expected);
+}
+
+// blendRow4, for every one of the 16 hit masks and both 32-bit types, against the per-pixel
+// definition: pixel j is value[j] where hit[j] != 0 and keeps its old value elsewhere; the
+// values after the row's four are never touched.
+template <class T>
+void checkEveryMaskOfBlendRow4() {
+  for (int mask = 0; mask < 16; ++mask) {
+    T value[4];
+    int hit[4];
+    for (int j = 0; j < 4; ++j) {
+      value[j] = T(10 + j);
+      hit[j] = (mask >> j) & 1 ? -1 - j : 0;  // any non-zero value is a hit
+    }
+    std::array<T, 6> row{}, expected{};
+    for (size_t k = 0; k < row.size(); ++k) row[k] = expected[k] = T(100 + k);
+    for (int j = 0; j < 4; ++j)
+      if (hit[j]) expected[size_t(j)] = value[j];
+    blendRow4<T>(value, hit, row.data());
+    for (size_t k = 0; k < row.size(); ++k)
+      EXPECT_EQ(row[k], expected[k]) << "mask " << mask << ", pixel " << k;
+  }
+}
+
+TEST(InterleavedRow, BlendRow4MatchesThePerPixelDefinitionForEveryMask) {
+  checkEveryMaskOfBlendRow4<float>();
+  checkEveryMaskOfBlendRow4<uint32_t>();
 }
 
 }  // namespace
