@@ -221,6 +221,7 @@ struct PacketHits {
   alignas(64) float nx[N] = {}, ny[N] = {}, nz[N] = {};
   alignas(64) int hit[N];
   int count = 0;
+  uint32_t bits = 0;  ///< bit k set where lane k hit: the AOV writers take it (storeHitLanes)
 };
 
 /// Colour sums of one block over its samples.
@@ -322,16 +323,19 @@ bool tracePacket(const ImagePlan& plan, const PacketRequest& req, PacketState<N>
   return true;
 }
 
-/// Marks the traced lanes that hit; returns their number.
+/// Marks the traced lanes that hit (1, else 0, and as bits); returns their number.
 template <int N>
 int findHits(const PacketState<N>& st, PacketHits<N>& out) {
   int count = 0;
+  uint32_t bits = 0;
   APERTURE_LANE_LOOP
   for (int k = 0; k < N; ++k) {  // & rather than &&: no branch, vector compares
     out.hit[k] = int(st.valid[k] != 0) & int(st.hits.geomID[k] != RTC_INVALID_GEOMETRY_ID);
     count += out.hit[k];
+    bits |= uint32_t(out.hit[k]) << k;
   }
   out.count = count;
+  out.bits = bits;
   return count;
 }
 
@@ -404,30 +408,32 @@ struct BlockPixels {
 };
 
 /// Writes value[k] of every hit lane k to its pixel of a channel of kC interleaved components
-/// (value[c] holds component c), leaving the other pixels as they are. A block whose rows lie
-/// whole in the image writes row by row, reading a row's old pixels back only when it is partly
-/// hit (core/interleaved_row.h; the tile is this thread's alone, so the read-back is safe); a
-/// block cut by the right edge stores lane by lane.
+/// (value[c] holds component c), leaving the other pixels as they are; bit k of `hitBits` is
+/// set where hit[k] != 0 (PacketHits::bits). A block whose rows lie whole in the image writes
+/// row by row, reading a row's old pixels back only when it is partly hit
+/// (core/interleaved_row.h; the tile is this thread's alone, so the read-back is safe); a block
+/// cut by the right edge stores lane by lane.
 template <int N, int kC, class T>
-void storeHitLanes(const BlockPixels<N>& px, const int* hit, const T* const (&value)[kC],
-                   T* channel) {
+void storeHitLanes(const BlockPixels<N>& px, const int* hit, uint32_t hitBits,
+                   const T* const (&value)[kC], T* channel) {
   constexpr int kBW = BlockPixels<N>::kBW;
   T* const base = channel + kC * px.first;
   if (px.columns == kBW) {
     for (int r = 0; r < px.rows; ++r) {
       T* __restrict row = base + kC * size_t(r) * px.stride;
       const int l = r * kBW;
-      if constexpr (kBW == 4 && kC == 3 && std::is_same_v<T, float>) {
-        blendInterleavedRow4x3(value[0] + l, value[1] + l, value[2] + l, hit + l, row);
+      const unsigned rowBits = (hitBits >> l) & ((1u << kBW) - 1u);
+      if constexpr (kBW == 4 && kC == 1) {
+        blendRow4<T>(value[0] + l, hit + l, rowBits, row);
         continue;
       }
-      if constexpr (kBW == 4 && kC == 1) {
-        blendRow4<T>(value[0] + l, hit + l, row);
+      if constexpr (kBW == 4 && kC == 3 && std::is_same_v<T, float>) {
+        blendInterleavedRow4x3(value[0] + l, value[1] + l, value[2] + l, hit + l, rowBits, row);
         continue;
       }
       for (int j = 0; j < kBW; ++j)
         for (int c = 0; c < kC; ++c)
-          row[kC * j + c] = hit[r * kBW + j] ? value[c][r * kBW + j] : row[kC * j + c];
+          row[kC * j + c] = hit[l + j] ? value[c][l + j] : row[kC * j + c];
     }
     return;
   }
@@ -473,25 +479,27 @@ void storeGeometryAovs(const ImagePlan& plan, const PacketRequest& req, const Pa
   if (plan.depth) {
     alignas(64) float z[N];
     planarDepths<N>(plan, st, z);
-    storeHitLanes<N, 1, float>(px, h.hit, {z}, fb.depth.data());
+    storeHitLanes<N, 1, float>(px, h.hit, h.bits, {z}, fb.depth.data());
   }
-  if (plan.distance) storeHitLanes<N, 1, float>(px, h.hit, {st.hits.tfar}, fb.distance.data());
-  if (plan.normal) storeHitLanes<N, 3, float>(px, h.hit, {h.nx, h.ny, h.nz}, fb.normal.data());
+  if (plan.distance)
+    storeHitLanes<N, 1, float>(px, h.hit, h.bits, {st.hits.tfar}, fb.distance.data());
+  if (plan.normal)
+    storeHitLanes<N, 3, float>(px, h.hit, h.bits, {h.nx, h.ny, h.nz}, fb.normal.data());
   if (plan.position) {
     alignas(64) float x[N], y[N], z[N];
     worldPositions<N>(plan, st, x, y, z);
-    storeHitLanes<N, 3, float>(px, h.hit, {x, y, z}, fb.position.data());
+    storeHitLanes<N, 3, float>(px, h.hit, h.bits, {x, y, z}, fb.position.data());
   }
   if (plan.primId) {
     alignas(64) uint32_t ids[N];
     primIds<N>(plan, st, h.hit, ids);
-    storeHitLanes<N, 1, uint32_t>(px, h.hit, {ids}, fb.primId.data());
+    storeHitLanes<N, 1, uint32_t>(px, h.hit, h.bits, {ids}, fb.primId.data());
   }
   if (plan.geomId) {
     alignas(64) uint32_t ids[N];
     APERTURE_LANE_LOOP
     for (int k = 0; k < N; ++k) ids[k] = objectId(st.hits, k);
-    storeHitLanes<N, 1, uint32_t>(px, h.hit, {ids}, fb.geomId.data());
+    storeHitLanes<N, 1, uint32_t>(px, h.hit, h.bits, {ids}, fb.geomId.data());
   }
 }
 
@@ -604,8 +612,8 @@ void storeColor(const ImagePlan& plan, const PacketRequest& req, const BlockColo
     cover[k] = color.cover[k] * inv;
     every[k] = 1;
   }
-  storeHitLanes<N, 4, float>(BlockPixels<N>(plan, req), every, {shade, shade, shade, cover},
-                             plan.fb.rgba.data());
+  storeHitLanes<N, 4, float>(BlockPixels<N>(plan, req), every, uint32_t((uint64_t(1) << N) - 1),
+                             {shade, shade, shade, cover}, plan.fb.rgba.data());
 }
 
 /// A tile's packets in render order, block by block (rows of blocks, left to right) and

@@ -9,31 +9,48 @@
 namespace aperture {
 namespace {
 
-// Every one of the 16 hit masks, against the per-pixel definition: pixel j of the row is
-// (x[j], y[j], z[j]) where hit[j] != 0 and keeps its old values elsewhere; the floats after
-// the row's 12 are never touched. Values are distinct, so any wrong shuffle index shows.
-TEST(InterleavedRow, EveryMaskMatchesThePerPixelDefinition) {
+// The per-pixel definition every row writer is checked against: pixel j of a row of kC floats
+// a pixel is (values[0][j], .., values[kC-1][j]) where hit[j] != 0 and keeps its old floats
+// elsewhere; the floats after the row's 4·kC are never touched.
+template <int kC, size_t kSize>
+std::array<float, kSize> expectedRow(const std::array<float, kSize>& old,
+                                     const float (&values)[kC][4], const int* hit) {
+  std::array<float, kSize> expected = old;
+  for (int j = 0; j < 4; ++j)
+    if (hit[j])
+      for (int c = 0; c < kC; ++c) expected[size_t(kC * j + c)] = values[c][j];
+  return expected;
+}
+
+// Every one of the 16 hit masks, for the x y z writer. Values are distinct, so
+// any wrong shuffle index shows; the old floats differ from every new one.
+template <int kC>
+void checkEveryMask() {
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> value(-1.0f, 1.0f);
   for (int mask = 0; mask < 16; ++mask) {
-    float x[4], y[4], z[4];
+    float values[kC][4];
     int hit[4];
     for (int j = 0; j < 4; ++j) {
-      x[j] = value(rng), y[j] = value(rng), z[j] = value(rng);
+      for (int c = 0; c < kC; ++c) values[c][j] = value(rng);
       hit[j] = (mask >> j) & 1 ? 1 + j : 0;  // any non-zero value is a hit
     }
-    std::array<float, 16> row{}, expected{};
-    for (size_t k = 0; k < row.size(); ++k) row[k] = expected[k] = 100.0f + float(k);
-    for (int j = 0; j < 4; ++j)
-      if (hit[j]) {
-        expected[size_t(3 * j)] = x[j];
-        expected[size_t(3 * j + 1)] = y[j];
-        expected[size_t(3 * j + 2)] = z[j];
-      }
-    blendInterleavedRow4x3(x, y, z, hit, row.data());
+    std::array<float, 4 * kC + 4> row{};
+    for (size_t k = 0; k < row.size(); ++k) row[k] = 100.0f + float(k);
+    const auto expected = expectedRow<kC>(row, values, hit);
+    blendInterleavedRow4x3(values[0], values[1], values[2], hit, rowHitBits(hit), row.data());
     for (size_t k = 0; k < row.size(); ++k)
-      EXPECT_EQ(row[k], expected[k]) << "mask " << mask << ", float " << k;
+      EXPECT_EQ(row[k], expected[k]) << kC << " components, mask " << mask << ", float " << k;
   }
+}
+
+TEST(InterleavedRow, EveryMaskMatchesThePerPixelDefinition) { checkEveryMask<3>(); }
+
+TEST(InterleavedRow, HitBitsMarkNonZeroLanes) {
+  const int none[4] = {0, 0, 0, 0}, some[4] = {-1, 0, 7, 0}, all[4] = {1, -1, 2, 3};
+  EXPECT_EQ(rowHitBits(none), 0u);
+  EXPECT_EQ(rowHitBits(some), 0b0101u);
+  EXPECT_EQ(rowHitBits(all), kWholeRow);
 }
 
 // The row needs no alignment: an odd offset into a buffer gives the same values.
@@ -41,7 +58,7 @@ TEST(InterleavedRow, UnalignedRowsAreWrittenTheSame) {
   const float x[4] = {1, 2, 3, 4}, y[4] = {5, 6, 7, 8}, z[4] = {9, 10, 11, 12};
   const int hit[4] = {1, 0, 1, 1};
   std::array<float, 17> buffer{};
-  blendInterleavedRow4x3(x, y, z, hit, buffer.data() + 1);
+  blendInterleavedRow4x3(x, y, z, hit, rowHitBits(hit), buffer.data() + 1);
   const std::array<float, 17> expected{0, 1, 5, 9, 0, 0, 0, 3, 7, 11, 4, 8, 12, 0, 0, 0, 0};
   EXPECT_EQ(buffer, expected);
 }
@@ -62,7 +79,7 @@ void checkEveryMaskOfBlendRow4() {
     for (size_t k = 0; k < row.size(); ++k) row[k] = expected[k] = T(100 + k);
     for (int j = 0; j < 4; ++j)
       if (hit[j]) expected[size_t(j)] = value[j];
-    blendRow4<T>(value, hit, row.data());
+    blendRow4<T>(value, hit, rowHitBits(hit), row.data());
     for (size_t k = 0; k < row.size(); ++k)
       EXPECT_EQ(row[k], expected[k]) << "mask " << mask << ", pixel " << k;
   }
