@@ -38,50 +38,18 @@ inline void blendRow4(const T* value, const int* hit, unsigned bits, T* row) {
   for (int j = 0; j < 4; ++j) row[j] = hit[j] ? value[j] : row[j];
 }
 
-namespace interleaved_row {
-using F4 = float __attribute__((vector_size(16)));
-using I4 = int __attribute__((vector_size(16)));
-
-inline F4 load(const float* p) {
-  F4 v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-
-/// Stores the kV vectors `out` to row[0 .. 4·kV).
-template <int kV>
-inline void store(const F4 (&out)[kV], float* row) {
-  for (int k = 0; k < kV; ++k) std::memcpy(row + 4 * k, &out[k], sizeof out[k]);
-}
-
-/// Writes float i of vector k of `out` to row[4k + i] where keep[k][i] is −1, keeping the
-/// row's old float where it is 0: one 16-byte load, select and store per vector (a block copy
-/// of the arrays would pass through the stack and stall on store forwarding).
-template <int kV>
-inline void blend(const F4 (&out)[kV], const I4 (&keep)[kV], float* row) {
-  for (int k = 0; k < kV; ++k) {
-    const F4 blended = keep[k] ? out[k] : load(row + 4 * k);
-    std::memcpy(row + 4 * k, &blended, sizeof blended);
-  }
-}
-
-/// −1 in lane j where hit[j] != 0, else 0.
-inline I4 hitMask(const int* hit) {
-  I4 h;
-  std::memcpy(&h, hit, sizeof h);
-  return h != I4{0, 0, 0, 0};
-}
-}  // namespace interleaved_row
-
 /// Writes pixel j (j = 0..3) of `row` (3 floats per pixel) as (x[j], y[j], z[j]) where
 /// hit[j] != 0, leaving the other pixels as they are; `bits` is rowHitBits(hit). `row` needs
 /// no alignment.
 inline void blendInterleavedRow4x3(const float* x, const float* y, const float* z, const int* hit,
                                    unsigned bits, float* row) {
-  using interleaved_row::F4;
+  using F4 = float __attribute__((vector_size(16)));
+  using I4 = int __attribute__((vector_size(16)));
   if (bits == 0) return;
-  const F4 vx = interleaved_row::load(x), vy = interleaved_row::load(y),
-           vz = interleaved_row::load(z);
+  F4 vx, vy, vz;
+  std::memcpy(&vx, x, sizeof vx);
+  std::memcpy(&vy, y, sizeof vy);
+  std::memcpy(&vz, z, sizeof vz);
   // Three vectors of four floats: x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3.
   const F4 xy01 = __builtin_shufflevector(vx, vy, 0, 4, 1, 5);  // x0 y0 x1 y1
   const F4 yz12 = __builtin_shufflevector(vy, vz, 1, 5, 2, 6);  // y1 z1 y2 z2
@@ -89,12 +57,24 @@ inline void blendInterleavedRow4x3(const float* x, const float* y, const float* 
   const F4 out[3] = {__builtin_shufflevector(xy01, vz, 0, 1, 4, 2),
                      __builtin_shufflevector(yz12, vx, 0, 1, 6, 2),
                      __builtin_shufflevector(xy33, vz, 6, 0, 1, 7)};
-  if (bits == kWholeRow) return interleaved_row::store(out, row);
-  const interleaved_row::I4 m = interleaved_row::hitMask(hit);
-  const interleaved_row::I4 keep[3] = {__builtin_shufflevector(m, m, 0, 0, 0, 1),
-                                       __builtin_shufflevector(m, m, 1, 1, 2, 2),
-                                       __builtin_shufflevector(m, m, 2, 3, 3, 3)};
-  interleaved_row::blend(out, keep, row);
+  if (bits == kWholeRow) {
+    for (int k = 0; k < 3; ++k) std::memcpy(row + 4 * k, &out[k], sizeof out[k]);
+    return;
+  }
+  I4 h;
+  std::memcpy(&h, hit, sizeof h);
+  const I4 m = h != I4{0, 0, 0, 0};  // −1 where the lane hit
+  const I4 mask[3] = {__builtin_shufflevector(m, m, 0, 0, 0, 1),
+                      __builtin_shufflevector(m, m, 1, 1, 2, 2),
+                      __builtin_shufflevector(m, m, 2, 3, 3, 3)};
+  // One 16-byte load, select and store per vector (a block copy of the arrays would pass
+  // through the stack and stall on store forwarding).
+  for (int k = 0; k < 3; ++k) {
+    F4 old;
+    std::memcpy(&old, row + 4 * k, sizeof old);
+    const F4 blended = mask[k] ? out[k] : old;
+    std::memcpy(row + 4 * k, &blended, sizeof blended);
+  }
 }
 
 }  // namespace aperture

@@ -9,42 +9,32 @@
 namespace aperture {
 namespace {
 
-// The per-pixel definition every row writer is checked against: pixel j of a row of kC floats
-// a pixel is (values[0][j], .., values[kC-1][j]) where hit[j] != 0 and keeps its old floats
-// elsewhere; the floats after the row's 4·kC are never touched.
-template <int kC, size_t kSize>
-std::array<float, kSize> expectedRow(const std::array<float, kSize>& old,
-                                     const float (&values)[kC][4], const int* hit) {
-  std::array<float, kSize> expected = old;
-  for (int j = 0; j < 4; ++j)
-    if (hit[j])
-      for (int c = 0; c < kC; ++c) expected[size_t(kC * j + c)] = values[c][j];
-  return expected;
-}
-
-// Every one of the 16 hit masks, for the x y z writer. Values are distinct, so
-// any wrong shuffle index shows; the old floats differ from every new one.
-template <int kC>
-void checkEveryMask() {
+// Every one of the 16 hit masks, against the per-pixel definition: pixel j of the row is
+// (x[j], y[j], z[j]) where hit[j] != 0 and keeps its old values elsewhere; the floats after
+// the row's 12 are never touched. Values are distinct, so any wrong shuffle index shows.
+TEST(InterleavedRow, EveryMaskMatchesThePerPixelDefinition) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> value(-1.0f, 1.0f);
   for (int mask = 0; mask < 16; ++mask) {
-    float values[kC][4];
+    float x[4], y[4], z[4];
     int hit[4];
     for (int j = 0; j < 4; ++j) {
-      for (int c = 0; c < kC; ++c) values[c][j] = value(rng);
+      x[j] = value(rng), y[j] = value(rng), z[j] = value(rng);
       hit[j] = (mask >> j) & 1 ? 1 + j : 0;  // any non-zero value is a hit
     }
-    std::array<float, 4 * kC + 4> row{};
-    for (size_t k = 0; k < row.size(); ++k) row[k] = 100.0f + float(k);
-    const auto expected = expectedRow<kC>(row, values, hit);
-    blendInterleavedRow4x3(values[0], values[1], values[2], hit, rowHitBits(hit), row.data());
+    std::array<float, 16> row{}, expected{};
+    for (size_t k = 0; k < row.size(); ++k) row[k] = expected[k] = 100.0f + float(k);
+    for (int j = 0; j < 4; ++j)
+      if (hit[j]) {
+        expected[size_t(3 * j)] = x[j];
+        expected[size_t(3 * j + 1)] = y[j];
+        expected[size_t(3 * j + 2)] = z[j];
+      }
+    blendInterleavedRow4x3(x, y, z, hit, rowHitBits(hit), row.data());
     for (size_t k = 0; k < row.size(); ++k)
-      EXPECT_EQ(row[k], expected[k]) << kC << " components, mask " << mask << ", float " << k;
+      EXPECT_EQ(row[k], expected[k]) << "mask " << mask << ", float " << k;
   }
 }
-
-TEST(InterleavedRow, EveryMaskMatchesThePerPixelDefinition) { checkEveryMask<3>(); }
 
 TEST(InterleavedRow, HitBitsMarkNonZeroLanes) {
   const int none[4] = {0, 0, 0, 0}, some[4] = {-1, 0, 7, 0}, all[4] = {1, -1, 2, 3};
