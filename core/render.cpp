@@ -215,19 +215,23 @@ struct PacketState : PacketBuffers<N> {
   }
 };
 
-/// Per-lane results of one traced packet: which lanes hit, and their unit normals.
+/// Per-lane results of one traced packet: which lanes hit, and their unit normals. The
+/// normals are set by unitNormals, which renderPass calls whenever an AOV reads them (colour,
+/// normal, shading normal), and are not read otherwise: left unset, no packet pays to clear
+/// them.
 template <int N>
 struct PacketHits {
-  alignas(64) float nx[N] = {}, ny[N] = {}, nz[N] = {};
+  alignas(64) float nx[N], ny[N], nz[N];
   alignas(64) int hit[N];
   int count = 0;
   uint32_t bits = 0;  ///< bit k set where lane k hit: the AOV writers take it (storeHitLanes)
 };
 
-/// Colour sums of one block over its samples.
+/// Colour sums of one block over its samples; renderBlock clears them when the frame has
+/// colour (nothing reads them otherwise).
 template <int N>
 struct BlockColor {
-  float shade[N] = {}, cover[N] = {};
+  float shade[N], cover[N];
 };
 
 /// Whether x is finite, as a comparison that vectorises (std::isfinite does not): false for
@@ -339,26 +343,34 @@ int findHits(const PacketState<N>& st, PacketHits<N>& out) {
   return count;
 }
 
+/// n = g / |g| for each of the N lanes; 0 where g has zero length. Restrict parameters: GCC
+/// honours them and needs no run-time alias checks (it does not honour restrict locals).
+template <int N>
+void normalizeLanes(const float* __restrict gx, const float* __restrict gy,
+                    const float* __restrict gz, float* __restrict nx, float* __restrict ny,
+                    float* __restrict nz) {
+  APERTURE_LANE_LOOP
+  for (int k = 0; k < N; ++k) {
+    const float len2 = gx[k] * gx[k] + gy[k] * gy[k] + gz[k] * gz[k];
+    const float inv = len2 > 0.0f ? 1.0f / std::sqrt(len2) : 0.0f;
+    nx[k] = gx[k] * inv, ny[k] = gy[k] * inv, nz[k] = gz[k] * inv;
+  }
+}
+
 /// Unit geometric normals in world space (instanced hits through the instance's normal
 /// matrix); 0 where Embree's normal has zero length.
 template <int N>
 void unitNormals(const ImagePlan& plan, const PacketState<N>& st, PacketHits<N>& out) {
   const HitLanes& h = st.hits;
-  APERTURE_LANE_LOOP
-  for (int k = 0; k < N; ++k) out.nx[k] = h.ngX[k], out.ny[k] = h.ngY[k], out.nz[k] = h.ngZ[k];
-  if (plan.instanced)
-    for (int k = 0; k < N; ++k)
-      if (out.hit[k] && h.instID[k] != RTC_INVALID_GEOMETRY_ID) {
-        const glm::vec3 n =
-            plan.scene.normalFromMesh(h.instID[k]) * glm::vec3(out.nx[k], out.ny[k], out.nz[k]);
-        out.nx[k] = n.x, out.ny[k] = n.y, out.nz[k] = n.z;
-      }
-  APERTURE_LANE_LOOP
+  if (!plan.instanced) return normalizeLanes<N>(h.ngX, h.ngY, h.ngZ, out.nx, out.ny, out.nz);
+  alignas(64) float gx[N], gy[N], gz[N];
   for (int k = 0; k < N; ++k) {
-    const float len2 = out.nx[k] * out.nx[k] + out.ny[k] * out.ny[k] + out.nz[k] * out.nz[k];
-    const float inv = len2 > 0.0f ? 1.0f / std::sqrt(len2) : 0.0f;
-    out.nx[k] *= inv, out.ny[k] *= inv, out.nz[k] *= inv;
+    glm::vec3 g(h.ngX[k], h.ngY[k], h.ngZ[k]);
+    if (out.hit[k] && h.instID[k] != RTC_INVALID_GEOMETRY_ID)
+      g = plan.scene.normalFromMesh(h.instID[k]) * g;
+    gx[k] = g.x, gy[k] = g.y, gz[k] = g.z;
   }
+  normalizeLanes<N>(gx, gy, gz, out.nx, out.ny, out.nz);
 }
 
 /// Adds the eye-light shading |N·D| and the coverage of the hit lanes to the block's sums.
@@ -534,9 +546,10 @@ void storeMeshDataLane(const ImagePlan& plan, const PacketState<N>& st, const Pa
   const Mesh& mesh = plan.scene.objectMesh(object);
   const uint32_t* corner = &mesh.indices[3 * size_t(prim)];
   const float u = st.hits.u[k], v = st.hits.v[k];
-  const glm::vec3 ng(h.nx[k], h.ny[k], h.nz[k]);  // unit, world space
+  // The unit geometric normal in world space; set (unitNormals) only where these AOVs need it.
+  const auto geometricNormal = [&] { return glm::vec3(h.nx[k], h.ny[k], h.nz[k]); };
   if (plan.shadingNormal) {
-    glm::vec3 ns = ng;
+    glm::vec3 ns = geometricNormal();
     if (!mesh.vertexNormals.empty()) {
       const float* vn = mesh.vertexNormals.data();
       const float w[3] = {1.0f - u - v, u, v};
@@ -546,13 +559,13 @@ void storeMeshDataLane(const ImagePlan& plan, const PacketState<N>& st, const Pa
                                 vn[3 * size_t(corner[c]) + 2]);
       if (st.hits.instID[k] != RTC_INVALID_GEOMETRY_ID)
         sum = plan.scene.normalFromMesh(st.hits.instID[k]) * sum;
-      ns = unitOr(sum, ng);
+      ns = unitOr(sum, geometricNormal());
     }
     if (plan.rotateNormals) ns = plan.frameFromWorld * ns;
     for (int a = 0; a < 3; ++a) fb.shadingNormal[3 * px + size_t(a)] = ns[a];
   }
   if (plan.normal && plan.rotateNormals) {
-    const glm::vec3 n = plan.frameFromWorld * ng;
+    const glm::vec3 n = plan.frameFromWorld * geometricNormal();
     for (int a = 0; a < 3; ++a) fb.normal[3 * px + size_t(a)] = n[a];
   }
   for (size_t j = 0; j < fb.properties.size(); ++j) {
@@ -681,6 +694,7 @@ class PacketPipeline {
 template <int N, bool kNull>
 void renderBlock(const ImagePlan& plan, PacketPipeline<N>& packets, TileCounters& count) {
   BlockColor<N> color;
+  if (plan.color) color = BlockColor<N>{};
   PacketRequest req;
   for (int pass = 0; pass < plan.passes; ++pass) {
     PacketState<N>& st = packets.advance(req);
