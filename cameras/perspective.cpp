@@ -22,6 +22,7 @@ PerspectiveCamera::PerspectiveCamera(const CameraParams& p, const glm::dvec3& re
       clip_(p.clip) {
   pinholeCentres_ = spp_ == 1 && lensRadius_ == 0;
   centres_ = PixelCentreTable(window());
+  pinhole_ = {frame_.u, frame_.v, d_ * frame_.w, renderEyeD_, width_, height_};
   if (clip_ && !(clip_->x >= 0 && clip_->x < clip_->y && std::isfinite(clip_->y)))
     throw Error(cat("camera: clip ", clip_->x, ",", clip_->y,
                     ": needs 0 <= near < far, both finite (planar depths, scene units)"));
@@ -29,25 +30,16 @@ PerspectiveCamera::PerspectiveCamera(const CameraParams& p, const glm::dvec3& re
 
 namespace {
 
-/// What the pinhole kernel reads: the frame and the pixel-centre plane coordinates, all
-/// precomputed in double by the camera.
-struct PinholeKernelInput {
-  const double* columnU;  ///< u of column j's centre, j in [0, width + 16)
-  const double* rowV;     ///< v of row i's centre, i in [0, height + 16)
-  glm::dvec3 u, v, dW;    ///< U, V and d·W
-  glm::dvec3 eye;         ///< render-space eye
-  int width, height;
-};
-
 /// The pinhole rays of the kBW x kBH block at (x0, y0): rayAt's pinhole branch term by term,
 /// (u·U + v·V) − d·W times 1 / its length, in double, rounded once. A per-ISA kernel
 /// (core/vector_kernel.h): no divide but the reciprocal, constant trip counts, vector stores.
 template <int kBW, int kBH>
-APERTURE_VECTOR_KERNEL void pinholeCentreRays(const PinholeKernelInput& in, int x0, int y0,
+APERTURE_VECTOR_KERNEL void pinholeCentreRays(const PinholeConstants& in,
+                                              const PixelCentreTable& centres, int x0, int y0,
                                               RayLanes& out, int* valid) {
   constexpr int kLanes = kBW * kBH;
-  const double* __restrict columnU = in.columnU + x0;
-  const double* __restrict rowV = in.rowV + y0;
+  const double* __restrict columnU = centres.u.data() + x0;
+  const double* __restrict rowV = centres.v.data() + y0;
   const glm::dvec3 U = in.u, V = in.v, dW = in.dW;
   alignas(64) double us[kLanes], vs[kLanes];
   spreadOverLanes<kBW, kBH>(columnU, rowV, us, vs);
@@ -78,10 +70,9 @@ void PerspectiveCamera::generateUnclipped(const PacketRequest& req, RayLanes& ou
                                           int* valid) const {
   // Pinhole rays through pixel centres: every sample at spp 1, the centre ray at any spp.
   if (pinholeCentres_ || (req.centreRay() && lensRadius_ == 0)) {
-    const PinholeKernelInput in{centres_.u.data(), centres_.v.data(), frame_.u, frame_.v,
-                                d_ * frame_.w,     renderEyeD_,       width_,   height_};
     const bool done = withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
-      pinholeCentreRays<decltype(bw)::value, decltype(bh)::value>(in, req.x0, req.y0, out, valid);
+      pinholeCentreRays<decltype(bw)::value, decltype(bh)::value>(pinhole_, centres_, req.x0,
+                                                                  req.y0, out, valid);
     });
     if (done) return;
   }

@@ -6,6 +6,14 @@
 
 namespace aperture {
 
+/// What the pinhole kernel reads besides the pixel-centre table, taken once in double by the
+/// camera (perspective.cpp).
+struct PinholeConstants {
+  glm::dvec3 u, v, dW;  ///< U, V and d·W
+  glm::dvec3 eye;       ///< render-space eye
+  int width = 0, height = 0;
+};
+
 /// Pinhole: origin e, direction normalize(u·U + v·V − d·W).
 /// Thin lens (lensRadius > 0): lens point L = r·(a·U + b·V) with (a, b) the concentric map
 /// of the lens sample; origin e + L, direction normalize((f / d)·(u·U + v·V − d·W) − L), i.e.
@@ -71,6 +79,7 @@ class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
   /// 1 spp without a lens: rays through pixel centres, the vectorised path.
   bool pinholeCentres_ = false;
   PixelCentreTable centres_;  ///< u, v of the pixel centres: the pinhole and thin-lens kernels'
+  PinholeConstants pinhole_;  ///< the pinhole kernel's frame, eye and image size
 };
 
 }  // namespace aperture
