@@ -20,15 +20,17 @@ for round in $(seq 1 "${ROUNDS:-3}"); do
       >"$out/$side-$round.md"
   done
 done
+SIZE=${SIZE:-1920,1080}
+source bench/null_cameras.sh  # NULL_CAMERA_ORDER, the table's row order
 python3 - "$out" <<'PY'
-import glob, json, statistics, sys
+import glob, json, os, statistics, sys
 rows = {}
 for f in glob.glob(f'{sys.argv[1]}/*-*/*.json'):
     side = f.split('/')[-2].split('-')[0]
     name, aovs, _ = f.rsplit('/', 1)[1][:-5].split('+')
     rows.setdefault((name, aovs), {}).setdefault(side, []).append(
         json.load(open(f))['null_ns_per_ray_median'])
-order = ['perspective', 'thinlens', 'equirect', 'fisheye', 'calibrated-pinhole', 'calibrated-opencv']
+order = os.environ['NULL_CAMERA_ORDER'].split()
 print('| camera | AOVs | before ns/ray | after ns/ray | after / before |')
 print('|---|---|---:|---:|---:|')
 for (name, aovs), d in sorted(rows.items(), key=lambda r: (order.index(r[0][0]), r[0][1])):

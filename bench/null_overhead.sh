@@ -1,8 +1,7 @@
 #!/usr/bin/env bash
 # Issue 13: the frame loop's own cost, `aperture bench --null` (rays generated, every ray a fake
 # hit, every requested AOV written, no Embree call), in ns/ray, for each camera model and the
-# calibrated cameras of issue 11 (same K and OPENCV distortion as bench/issue11_calibrated.sh:
-# 1920x1080, vertical fov 30°, fy = 540 / tan 15°). Target: <= 1 ns/ray at 2 threads.
+# calibrated cameras of issue 11 (bench/null_cameras.sh). Target: <= 1 ns/ray at 2 threads.
 # Prints a table: camera, AOVs, median ns/ray (median over frames, then over rounds).
 #   bash bench/null_overhead.sh   (THREADS=2 ROUNDS=3 FRAMES=20 SIZE=1920,1080
 #                                  AOVS='depth,normal color' by default)
@@ -11,23 +10,13 @@ BIN=${BIN:-build/apps/aperture}
 # The geometry is never traced; a small procedural mesh keeps loading out of the way.
 MESH=${MESH:-procedural:spheres?tris=100000}
 SIZE=${SIZE:-1920,1080}
-W=${SIZE%,*}
-H=${SIZE#*,}
-F=$(python3 -c "import math; print(repr(($H / 2) / math.tan(math.radians(15))))")
-K="--intrinsics $F,$F,$((W / 2)),$((H / 2))"
-POSE="--eye 0,0.12,0.45 --at 0,0.12,0 --up 0,1,0 --size $SIZE"
+source "$(dirname "$0")/null_cameras.sh"
 out=${OUT:-/tmp/null_overhead}
 mkdir -p "$out"
 rm -f "$out"/*.json
-cameras=("perspective:--fov 30"
-         "thinlens:--camera thinlens --fov 30 --aperture 0.01 --focus 0.45"
-         "equirect:--camera equirect"
-         "fisheye:--camera fisheye"
-         "calibrated-pinhole:$K --lens-model PINHOLE"
-         "calibrated-opencv:$K --lens-model OPENCV --distortion -0.1,0.01,1e-4,-1e-4")
 read -r -a aovsets <<<"${AOVS:-depth,normal color}" # AOV sets, space-separated
 for round in $(seq 1 "${ROUNDS:-3}"); do
-  for cfg in "${cameras[@]}"; do
+  for cfg in "${NULL_CAMERAS[@]}"; do
     name=${cfg%%:*}
     flags=${cfg#*:}
     for aovs in "${aovsets[@]}"; do
@@ -39,7 +28,7 @@ for round in $(seq 1 "${ROUNDS:-3}"); do
   done
 done
 python3 - "$out" <<'PY'
-import glob, json, statistics, sys
+import glob, json, os, statistics, sys
 rows = {}
 for f in sorted(glob.glob(f'{sys.argv[1]}/*.json')):
     j = json.load(open(f))
@@ -50,7 +39,7 @@ print(f"threads {cfg['threads']}, ISA {cfg['isa']}, packet {cfg['packet_width']}
       f"tile {cfg['tile_size']}, {cfg['width']}x{cfg['height']}")
 print('| camera | AOVs | ns/ray (median) | rounds |')
 print('|---|---|---|---|')
-order = ['perspective', 'thinlens', 'equirect', 'fisheye', 'calibrated-pinhole', 'calibrated-opencv']
+order = os.environ['NULL_CAMERA_ORDER'].split()
 for (name, aovs), vals in sorted(rows.items(), key=lambda r: (order.index(r[0][0]), r[0][1])):
     print(f"| {name} | {aovs} | {statistics.median(vals):.3f} | {[round(v, 3) for v in vals]} |")
 PY
