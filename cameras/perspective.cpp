@@ -81,7 +81,7 @@ void PerspectiveCamera::generateUnclipped(const PacketRequest& req, RayLanes& ou
     const glm::dvec3 lens = lensRadius_ * (0.0 * frame_.u + 0.0 * frame_.v);  // rayAt's L
     const ThinLensCentres c{
         centres_.u.data(), centres_.v.data(), width_,      height_, frame_.u,
-        frame_.v,          d_ * frame_.w,     focusOverD_, lens,    renderEyeD_ + lens};
+        frame_.v,          pinhole_.dW,       focusOverD_, lens,    renderEyeD_ + lens};
     if (generateThinLensCentres(c, req, out, valid)) return;
   }
   PacketCamera::generate(req, out, valid);

@@ -79,7 +79,8 @@ class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
   /// 1 spp without a lens: rays through pixel centres, the vectorised path.
   bool pinholeCentres_ = false;
   PixelCentreTable centres_;  ///< u, v of the pixel centres: the pinhole and thin-lens kernels'
-  PinholeConstants pinhole_;  ///< the pinhole kernel's frame, eye and image size
+  PinholeConstants
+      pinhole_;  ///< the pinhole kernel's frame, eye and size; d·W also the thin lens's
 };
 
 }  // namespace aperture

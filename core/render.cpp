@@ -223,7 +223,6 @@ template <int N>
 struct PacketHits {
   alignas(64) float nx[N], ny[N], nz[N];
   alignas(64) int hit[N];
-  int count = 0;
   uint32_t bits = 0;  ///< bit k set where lane k hit: the AOV writers take it (storeHitLanes)
 };
 
@@ -327,20 +326,18 @@ bool tracePacket(const ImagePlan& plan, const PacketRequest& req, PacketState<N>
   return true;
 }
 
-/// Marks the traced lanes that hit (1, else 0, and as bits); returns their number.
+/// Marks the traced lanes that hit (1, else 0, and as bits); returns their number (one count
+/// of the bits, not a second reduction over the lanes).
 template <int N>
 int findHits(const PacketState<N>& st, PacketHits<N>& out) {
-  int count = 0;
   uint32_t bits = 0;
   APERTURE_LANE_LOOP
   for (int k = 0; k < N; ++k) {  // & rather than &&: no branch, vector compares
     out.hit[k] = int(st.valid[k] != 0) & int(st.hits.geomID[k] != RTC_INVALID_GEOMETRY_ID);
-    count += out.hit[k];
     bits |= uint32_t(out.hit[k]) << k;
   }
-  out.count = count;
   out.bits = bits;
-  return count;
+  return __builtin_popcount(bits);
 }
 
 /// n = g / |g| for each of the N lanes; 0 where g has zero length. Restrict parameters: GCC
@@ -604,8 +601,9 @@ void renderPass(const ImagePlan& plan, const PacketRequest& req, PacketState<N>&
                 BlockColor<N>* color, bool geometry, TileCounters& count) {
   if (!tracePacket<N, kNull>(plan, req, st, count)) return;
   PacketHits<N> hits;
-  if (findHits<N>(st, hits) == 0) return;
-  count.hits += uint64_t(hits.count);
+  const int hitLanes = findHits<N>(st, hits);
+  if (hitLanes == 0) return;
+  count.hits += uint64_t(hitLanes);
   if (color || (geometry && (plan.normal || plan.shadingNormal))) unitNormals<N>(plan, st, hits);
   if (color) accumulateColor<N>(st, hits, *color);
   if (geometry) storeGeometry<N>(plan, req, st, hits);
