@@ -28,12 +28,47 @@ std::string sharedMesh(const std::string& relative) {
   return fs::exists(p) ? p.string() : std::string();
 }
 
-std::string scratchDir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+namespace {
+
+/// This test process's folder of scratch directories, one per test.
+fs::path processScratchRoot() {
+  return fs::temp_directory_path() / ("aperture-test-" + std::to_string(::getpid()));
+}
+
+fs::path scratchDirOf(const ::testing::TestInfo* info) {
   std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "misc";
   for (char& c : name)
     if (c == '/') c = '_';
-  fs::path dir = fs::temp_directory_path() / ("aperture-test-" + std::to_string(::getpid())) / name;
+  return processScratchRoot() / name;
+}
+
+/// Removes a test's scratch directory when the test passes, and the process's folder when the
+/// whole run passed; a failure keeps its files and names where they are.
+class ScratchCleaner : public ::testing::EmptyTestEventListener {
+  void OnTestEnd(const ::testing::TestInfo& info) override {
+    const fs::path dir = scratchDirOf(&info);
+    std::error_code ignored;
+    if (info.result()->Passed())
+      fs::remove_all(dir, ignored);
+    else if (fs::exists(dir, ignored))
+      std::fprintf(stderr, "scratch files of %s.%s kept in %s\n", info.test_suite_name(),
+                   info.name(), dir.c_str());
+  }
+  void OnTestProgramEnd(const ::testing::UnitTest& unit) override {
+    std::error_code ignored;
+    if (unit.Passed()) fs::remove_all(processScratchRoot(), ignored);
+  }
+};
+
+const bool kScratchCleanerInstalled = [] {
+  ::testing::UnitTest::GetInstance()->listeners().Append(new ScratchCleaner);
+  return true;
+}();
+
+}  // namespace
+
+std::string scratchDir() {
+  fs::path dir = scratchDirOf(::testing::UnitTest::GetInstance()->current_test_info());
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir.string();

@@ -16,7 +16,8 @@ namespace aperture::test {
 std::string sharedDir();
 /// Path of a mesh under ../shared/meshes, or "" when ../shared is absent.
 std::string sharedMesh(const std::string& relative);
-/// A fresh empty directory under the build tree's temp area, unique per test.
+/// A fresh empty directory under $TMPDIR, unique per test and process; removed when the test
+/// passes, kept (and named on stderr) when it fails.
 std::string scratchDir();
 /// Path of the built `aperture` executable.
 std::string apertureBinary();

@@ -2,7 +2,7 @@
 // 0 COLMAP text, 1 COLMAP binary, 2 transforms.json, 3 OpenCV JSON, 4 OpenCV YAML. The rest
 // is the file; for COLMAP it is split at the first "\n--images--\n" into cameras.* and
 // images.* (no separator: all cameras, an empty images file). Files go to a folder made once
-// per process under $TMPDIR.
+// per process under $TMPDIR and removed when the process exits.
 #include <unistd.h>
 
 #include <cstddef>
@@ -19,10 +19,20 @@ namespace {
 
 namespace fs = std::filesystem;
 
+fs::path scratchPath() {
+  return fs::temp_directory_path() / ("aperture-fuzz-cameras-" + std::to_string(getpid()));
+}
+
+void removeScratch() {
+  std::error_code ignored;
+  fs::remove_all(scratchPath(), ignored);
+}
+
 const fs::path& scratch() {
   static const fs::path dir = [] {
-    fs::path d = fs::temp_directory_path() / ("aperture-fuzz-cameras-" + std::to_string(getpid()));
+    fs::path d = scratchPath();
     fs::create_directories(d);
+    std::atexit(removeScratch);
     return d;
   }();
   return dir;
