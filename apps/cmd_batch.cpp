@@ -26,6 +26,7 @@
 #include "apps/view.h"
 #include "cameras/calibrated.h"
 #include "cameras/camera_file.h"
+#include "core/dataset_image.h"
 #include "core/error.h"
 #include "core/limits.h"
 
@@ -80,6 +81,7 @@ struct SceneImages {
 struct SceneFootprint {
   std::vector<std::string> specs;
   uint64_t pixels = 0, bytesPerPixel = 0;
+  bool imageCodec = false;  ///< previews or dataset files written through the image codec
 };
 
 SceneFootprint footprintOf(const Job& job) {
@@ -91,6 +93,11 @@ SceneFootprint footprintOf(const Job& job) {
     f.pixels = std::max(f.pixels, uint64_t(image.params.width) * uint64_t(image.params.height));
   // Two framebuffers live at once: the image being rendered and the one being written.
   f.bytesPerPixel = framebufferBytesPerPixel(job.aovs) * 2 + (job.previewPattern.empty() ? 0 : 4);
+  f.imageCodec = !job.previewPattern.empty();
+  for (const JobDatasetOutput& d : job.datasets) {
+    const std::optional<DatasetFormat> format = datasetFormatOf(d.pattern);
+    f.imageCodec = f.imageCodec || (format && encodedByImageCodec(*format));
+  }
   return f;
 }
 
@@ -104,22 +111,29 @@ MemoryEstimate pairEstimate(const SceneFootprint& a, const SceneFootprint& b) {
 
 /// --max-memory: refuses the job before anything is loaded when its estimate is too large. With
 /// "scenes", two consecutive scenes are alive at once (one rendering, the next loading): the
-/// estimate is that of the largest consecutive pair.
+/// estimate is that of the largest consecutive pair. The image codec, once a scene loads it,
+/// stays: it counts in every estimate when any scene writes through it.
 void checkJobMemory(const JobFile& jobs, const std::string& maxMemory) {
   const uint64_t limit = parseMemoryLimit("--max-memory", maxMemory);
   if (!limit) return;
   std::vector<SceneFootprint> footprints;
   for (const Job& job : jobs.scenes) footprints.push_back(footprintOf(job));
+  const uint64_t codecBytes = std::any_of(footprints.begin(), footprints.end(),
+                                          [](const SceneFootprint& f) { return f.imageCodec; })
+                                  ? kImageCodecBytes
+                                  : 0;
   if (footprints.size() == 1) {
     const SceneFootprint& f = footprints.front();
-    checkMemoryLimit(estimateMemory(f.specs, f.pixels, 1, 0, f.bytesPerPixel), limit,
-                     "--max-memory", maxMemory);
+    MemoryEstimate e = estimateMemory(f.specs, f.pixels, 1, 0, f.bytesPerPixel);
+    e.imageCodecBytes = codecBytes;
+    checkMemoryLimit(e, limit, "--max-memory", maxMemory);
     return;
   }
   size_t worst = 0;
   MemoryEstimate largest;
   for (size_t k = 0; k + 1 < footprints.size(); ++k) {
-    const MemoryEstimate e = pairEstimate(footprints[k], footprints[k + 1]);
+    MemoryEstimate e = pairEstimate(footprints[k], footprints[k + 1]);
+    e.imageCodecBytes = codecBytes;
     if (e.total() > largest.total()) {
       largest = e;
       worst = k;

@@ -398,7 +398,7 @@ int runBench(const BenchArgs& a) {
   settings.nullTrace = a.nullTrace;
   settings.sceneBoxTest = !a.noSceneBox;
   validateBenchArgs(a);
-  checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs);
+  checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs, 0, false);
 
   const MemoryEstimate estimate =
       benchMemoryEstimate(sceneOptions, unframed.width, unframed.height, aovs);

@@ -1,5 +1,6 @@
 // `aperture render`: one frame of a mesh from one camera into a multi-channel EXR, or one AOV
 // into a dataset file (16-bit PNG depth, PFM, NPY, float TIFF) when --out has that extension.
+#include <algorithm>
 #include <cstdio>
 #include <vector>
 
@@ -78,8 +79,13 @@ int runRender(const RenderArgs& a) {
   const CameraParams unframed =
       resolveCommandCamera(given, a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0));
   const RenderSettings settings = a.render.settings(unframed.spp);
-  checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs, a.preview.empty() ? 0 : 4);
   const std::vector<DatasetOutput> datasets = datasetOutputsOf(a, aovs);
+  const bool imageCodec = !a.preview.empty() ||
+                          std::any_of(datasets.begin(), datasets.end(), [](const DatasetOutput& d) {
+                            return encodedByImageCodec(d.format());
+                          });
+  checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs, a.preview.empty() ? 0 : 4,
+                    imageCodec);
   const PreviewOptions preview = checkRenderOutputs(a, aovs);
   if (given.has("eye") || unframed.worldToCamera || unframed.cameraToWorld) makeCamera(unframed);
 

@@ -1,6 +1,5 @@
 #include "apps/resume.h"
 
-#include <OpenImageIO/imageio.h>
 #include <signal.h>
 
 #include <algorithm>
@@ -15,6 +14,7 @@
 #include "core/error.h"
 #include "core/exr.h"
 #include "core/exr_deep.h"
+#include "core/image_codec.h"
 
 namespace aperture::app {
 
@@ -92,15 +92,16 @@ std::string headerMismatch(const Job& job, const JobImage& image) {
 std::string previewMismatch(const JobImage& image) {
   const std::string& path = image.preview;
   if (!fs::exists(path)) return cat("preview ", path, " is missing");
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) return cat("preview ", path, " is unreadable (", OIIO::geterror(), ")");
-  const OIIO::ImageSpec spec = in->spec();
-  if (spec.width != image.params.width || spec.height != image.params.height)
-    return cat("preview size ", spec.width, "x", spec.height, ", job wants ", image.params.width,
+  ImageFileInfo info;
+  std::vector<unsigned char> pixels;
+  std::string error;
+  if (!imageCodec().read(path, SampleType::UInt8, info, nullptr, error))
+    return cat("preview ", path, " is unreadable (", error, ")");
+  if (info.width != image.params.width || info.height != image.params.height)
+    return cat("preview size ", info.width, "x", info.height, ", job wants ", image.params.width,
                "x", image.params.height);
-  std::vector<unsigned char> pixels(spec.image_pixels() * size_t(spec.nchannels));
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT8, pixels.data()))
-    return cat("preview ", path, " does not decode (", in->geterror(), ")");
+  if (!imageCodec().read(path, SampleType::UInt8, info, &pixels, error))
+    return cat("preview ", path, " does not decode (", error, ")");
   return "";
 }
 

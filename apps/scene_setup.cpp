@@ -15,13 +15,14 @@
 namespace aperture::app {
 
 void checkMemoryBudget(const SceneOptions& o, glm::ivec2 size, const AovSet& aovs,
-                       uint64_t extraBytesPerPixel) {
+                       uint64_t extraBytesPerPixel, bool imageCodec) {
   const uint64_t limit = parseMemoryLimit("--max-memory", o.maxMemory);
   if (limit == 0) return;
   std::vector<std::string> specs = o.meshes;
   if (specs.empty()) specs.push_back("procedural:default");
-  const MemoryEstimate e = estimateMemory(specs, uint64_t(size.x), uint64_t(size.y), aovs,
-                                          extraBytesPerPixel, o.buildOptions());
+  MemoryEstimate e = estimateMemory(specs, uint64_t(size.x), uint64_t(size.y), aovs,
+                                    extraBytesPerPixel, o.buildOptions());
+  if (imageCodec) e.imageCodecBytes = kImageCodecBytes;
   checkMemoryLimit(e, limit, "--max-memory", o.maxMemory);
 }
 

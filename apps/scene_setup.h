@@ -61,9 +61,10 @@ struct SceneOptions {
 void addSceneOptions(CLI::App& app, SceneOptions& o);
 
 /// Refuses, before anything is loaded, a job whose meshes, BVH and framebuffers (estimated
-/// from the files' headers and the image size) exceed --max-memory. No-op without the flag.
+/// from the files' headers and the image size), and the image codec when it writes through it
+/// (kImageCodecBytes), exceed --max-memory. No-op without the flag.
 void checkMemoryBudget(const SceneOptions& o, glm::ivec2 size, const AovSet& aovs,
-                       uint64_t extraBytesPerPixel = 0);
+                       uint64_t extraBytesPerPixel, bool imageCodec);
 
 /// Loaded meshes and the Embree scene over them, logged as they are made.
 struct LoadedScene {

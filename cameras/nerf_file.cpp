@@ -35,7 +35,6 @@
 // Values read back bit-exact through the writer, except the translation of a pose: the file
 // holds camera-to-world, and inverting a rigid transform twice rounds its translation (the
 // rotation part is exact).
-#include <OpenImageIO/imageio.h>
 
 #include <cmath>
 #include <filesystem>
@@ -44,6 +43,7 @@
 #include "cameras/camera_file_formats.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/image_codec.h"
 #include "core/spelling.h"
 #include "core/units.h"
 
@@ -88,11 +88,10 @@ std::optional<glm::ivec2> imageFileSize(const fs::path& path) {
     std::error_code ec;
     // Never a device, a folder or a /proc file (size 0), which could block a read.
     if (!fs::is_regular_file(p, ec) || fs::file_size(p, ec) == 0 || ec) continue;
-    auto in = OIIO::ImageInput::open(p.string());
-    if (!in) continue;
-    const glm::ivec2 size(in->spec().width, in->spec().height);
-    in->close();
-    return size;
+    ImageFileInfo info;
+    std::string error;
+    if (!imageCodec().read(p.string(), SampleType::UInt8, info, nullptr, error)) continue;
+    return glm::ivec2(info.width, info.height);
   }
   return std::nullopt;
 }

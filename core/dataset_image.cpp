@@ -1,8 +1,5 @@
 #include "core/dataset_image.h"
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <bitset>
 #include <cctype>
@@ -14,6 +11,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/image_codec.h"
 #include "core/little_endian.h"
 #include "core/mesh.h"
 #include "core/npy.h"
@@ -27,18 +25,20 @@ struct FormatEntry {
   const char* name;
   const char* takes;  ///< what the format holds, for refusals
   std::vector<std::string> extensions;
+  bool imageCodec;  ///< encoded by the image codec (encodedByImageCodec)
 };
 
 const std::vector<FormatEntry>& formatTable() {
   static const std::vector<FormatEntry> table = {
-      {DatasetFormat::Png16, "16-bit PNG", "one float channel: depth, distance", {".png"}},
+      {DatasetFormat::Png16, "16-bit PNG", "one float channel: depth, distance", {".png"}, true},
       {DatasetFormat::Pfm,
        "PFM",
        "float AOVs of 1 or 3 channels: depth, distance, normal, "
        "position, shading-normal",
-       {".pfm"}},
-      {DatasetFormat::Npy, "NumPy .npy", "every AOV (float32 or uint32)", {".npy"}},
-      {DatasetFormat::Tiff, "float TIFF", "every AOV (float32 or uint32)", {".tif", ".tiff"}},
+       {".pfm"},
+       false},
+      {DatasetFormat::Npy, "NumPy .npy", "every AOV (float32 or uint32)", {".npy"}, false},
+      {DatasetFormat::Tiff, "float TIFF", "every AOV (float32 or uint32)", {".tif", ".tiff"}, true},
   };
   return table;
 }
@@ -101,28 +101,14 @@ std::string encodeNpy(const ImageView& image) {
   return out;
 }
 
-// --- Through OpenImageIO (PNG16, TIFF), encoded in memory -------------------------------------
+// --- Through the image codec (PNG16, TIFF), encoded in memory ------------------------------
 
-/// The bytes of the file `path` would hold, encoded by OpenImageIO's writer for its extension
-/// (then written by writeBytesAtomically, which checks every write: OpenImageIO's PNG writer
-/// does not report a full disk).
-std::vector<unsigned char> encodeWithOiio(const std::string& path, OIIO::ImageSpec spec,
-                                          const void* pixels) {
-  auto out = OIIO::ImageOutput::create(path);
-  if (!out) throw Error(cat("no image writer for this extension: ", OIIO::geterror()));
+/// The bytes of the file `path` would hold, encoded by the image codec for its extension (then
+/// written by writeBytesAtomically, which checks every write).
+std::vector<unsigned char> encodeWithCodec(const std::string& path, const ImageToEncode& image) {
   std::vector<unsigned char> bytes;
-  OIIO::Filesystem::IOVecOutput memory(bytes);
-  OIIO::Filesystem::IOProxy* proxy = &memory;
-  spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
-  // libtiff cannot write the Exif directory into memory (core/image.cpp); none is needed.
-  spec.attribute("tiff:write_exif", 0);
-  if (!out->open(path, spec)) throw Error(out->geterror());
-  if (!out->write_image(spec.format, pixels)) {
-    const std::string message = out->geterror();
-    out->close();
-    throw Error(message);
-  }
-  if (!out->close()) throw Error(out->geterror());
+  std::string error;
+  if (!imageCodec().encode(path, image, bytes, error)) throw Error(error);
   return bytes;
 }
 
@@ -146,19 +132,21 @@ std::vector<uint16_t> depthToUint16(const ImageView& image, double scale, size_t
 std::vector<unsigned char> encodePng16(const std::string& path, const ImageView& image,
                                        double scale, size_t* outOfRange) {
   const std::vector<uint16_t> values = depthToUint16(image, scale, outOfRange);
-  OIIO::ImageSpec spec(image.width, image.height, 1, OIIO::TypeDesc::UINT16);
-  spec.attribute("ImageDescription",
-                 cat("aperture depth: round(value * ", scale, "), 0 = no valid value"));
-  return encodeWithOiio(path, spec, values.data());
+  ImageToEncode png{image.width, image.height, 1, SampleType::UInt16, values.data(), {}};
+  png.attributes = {
+      {"ImageDescription", cat("aperture depth: round(value * ", scale, "), 0 = no valid value")}};
+  return encodeWithCodec(path, png);
 }
 
 std::vector<unsigned char> encodeTiff(const std::string& path, const ImageView& image) {
-  OIIO::ImageSpec spec(image.width, image.height, image.channels,
-                       image.u32 ? OIIO::TypeDesc::UINT32 : OIIO::TypeDesc::FLOAT);
-  spec.attribute("compression", "zip");
-  return encodeWithOiio(
-      path, spec,
-      image.u32 ? static_cast<const void*>(image.u32) : static_cast<const void*>(image.f32));
+  ImageToEncode tiff{
+      image.width,
+      image.height,
+      image.channels,
+      image.u32 ? SampleType::UInt32 : SampleType::Float,
+      image.u32 ? static_cast<const void*>(image.u32) : static_cast<const void*>(image.f32),
+      {{"compression", "zip"}}};
+  return encodeWithCodec(path, tiff);
 }
 
 // --- Reading back PFM and NPY ---------------------------------------------------------------
@@ -276,6 +264,8 @@ std::optional<DatasetFormat> datasetFormatOf(const std::string& path) {
 }
 
 const char* datasetFormatName(DatasetFormat format) { return entryOf(format).name; }
+
+bool encodedByImageCodec(DatasetFormat format) { return entryOf(format).imageCodec; }
 
 const std::vector<std::string>& datasetExtensions() {
   static const std::vector<std::string> extensions = [] {

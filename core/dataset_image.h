@@ -23,6 +23,9 @@ enum class DatasetFormat {
 /// (.exr and unknown extensions).
 std::optional<DatasetFormat> datasetFormatOf(const std::string& path);
 const char* datasetFormatName(DatasetFormat format);  ///< "16-bit PNG", "PFM", ...
+/// Whether the format is written through the image codec (core/image_codec.h), which a job
+/// then loads: PNG and TIFF are, PFM and NPY are written here.
+bool encodedByImageCodec(DatasetFormat format);
 /// The extensions (lower case, with the dot) datasetFormatOf knows.
 const std::vector<std::string>& datasetExtensions();
 

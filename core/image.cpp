@@ -1,10 +1,5 @@
 #include "core/image.h"
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imagebuf.h>
-#include <OpenImageIO/imagebufalgo.h>
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -14,6 +9,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/image_codec.h"
 #include "core/sampling.h"
 
 namespace aperture {
@@ -155,32 +151,18 @@ PreviewImage previewPixels(const Framebuffer& fb, const PreviewOptions& options,
   throw Error(cat("cannot write preview '", path, "': the framebuffer's buffers are incomplete"));
 }
 
-/// The file `path` would hold, encoded in memory by the OpenImageIO writer of its extension.
-/// (OpenImageIO's PNG, BMP and Targa writers do not report a full disk, and libjpeg exits the
-/// process on one, so the bytes are written by writeBytesAtomically, which checks every step.)
+/// The file `path` would hold, encoded by the image codec for its extension.
 std::vector<unsigned char> encodeRgb8(const std::string& path, int width, int height,
                                       const PreviewImage& image) {
-  auto out = OIIO::ImageOutput::create(path);
-  if (!out) throw Error(cat("no image writer for this extension: ", OIIO::geterror()));
-  if (!out->supports("ioproxy"))
-    throw Error(cat("the ", out->format_name(), " writer cannot encode to memory"));
+  ImageToEncode rgb;
+  rgb.width = width, rgb.height = height, rgb.channels = 3;
+  rgb.type = SampleType::UInt8;
+  rgb.pixels = image.rgb.data();
+  rgb.attributes = {{"oiio:ColorSpace", "sRGB"},
+                    {"ImageDescription", "aperture preview: " + image.description}};
   std::vector<unsigned char> bytes;
-  OIIO::Filesystem::IOVecOutput memory(bytes);
-  OIIO::Filesystem::IOProxy* proxy = &memory;
-  OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-  spec.attribute("oiio:ColorSpace", "sRGB");
-  spec.attribute("ImageDescription", "aperture preview: " + image.description);
-  spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
-  // libtiff fails to write the Exif directory into memory and, with a colour space set, the
-  // file is left without its ImageLength tag; a preview needs no Exif data.
-  spec.attribute("tiff:write_exif", 0);
-  if (!out->open(path, spec)) throw Error(out->geterror());
-  if (!out->write_image(OIIO::TypeDesc::UINT8, image.rgb.data())) {
-    const std::string message = out->geterror();
-    out->close();
-    throw Error(message);
-  }
-  if (!out->close()) throw Error(out->geterror());
+  std::string error;
+  if (!imageCodec().encode(path, rgb, bytes, error)) throw Error(error);
   return bytes;
 }
 
@@ -234,12 +216,11 @@ ImageDiff compareFramebuffers(const Framebuffer& test, const Framebuffer& refere
   if (!color && !depth)
     throw Error("cannot compare images: they share neither a color nor a depth AOV");
 
-  OIIO::ImageSpec spec(test.width, test.height, color ? 4 : 1, OIIO::TypeDesc::FLOAT);
-  // The color AOVs are wrapped in place (compare only reads); depth is copied so that misses
-  // (+inf in both) compare equal instead of giving inf − inf = NaN.
+  // Depth is copied so that misses (+inf in both) compare equal instead of giving
+  // inf − inf = NaN.
   std::vector<float> a, b;
-  float* pa = const_cast<float*>(test.rgba.data());
-  float* pb = const_cast<float*>(reference.rgba.data());
+  const float* pa = test.rgba.data();
+  const float* pb = reference.rgba.data();
   if (!color) {
     a = test.depth;
     b = reference.depth;
@@ -248,18 +229,15 @@ ImageDiff compareFramebuffers(const Framebuffer& test, const Framebuffer& refere
     pa = a.data();
     pb = b.data();
   }
-  const OIIO::ImageBuf bufA(spec, pa);
-  const OIIO::ImageBuf bufB(spec, pb);
-  // Thresholds at the float maximum: only the statistics are wanted, and OpenImageIO reports
-  // values beyond the failure threshold through the error flag.
-  const float never = std::numeric_limits<float>::max();
-  const auto result = OIIO::ImageBufAlgo::compare(bufA, bufB, never, never);
-  if (result.error) throw Error(cat("image comparison failed: ", OIIO::geterror()));
+  SampleDifference d;
+  std::string error;
+  if (!imageCodec().compare(test.width, test.height, color ? 4 : 1, pa, pb, d, error))
+    throw Error(cat("image comparison failed: ", error));
 
   ImageDiff diff;
-  diff.rmse = result.rms_error;
-  diff.maxError = result.maxerror;
-  diff.meanError = result.meanerror;
+  diff.rmse = d.rms;
+  diff.maxError = d.max;
+  diff.meanError = d.mean;
   diff.psnr =
       diff.rmse > 0 ? 20.0 * std::log10(peak / diff.rmse) : std::numeric_limits<double>::infinity();
   if (test.has(kAovPrimId) && reference.has(kAovPrimId) && test.primId.size() == n &&

@@ -1,5 +1,5 @@
 #pragma once
-// Previews and image comparison through OpenImageIO.
+// Previews and image comparison through OpenImageIO (the image codec, core/image_codec.h).
 #include <array>
 #include <cstdint>
 #include <glm/glm.hpp>

@@ -294,7 +294,8 @@ std::string formatBytes(uint64_t bytes) {
 }
 
 uint64_t MemoryEstimate::total() const {
-  return runtimeBytes + std::max({loadPeakBytes, buildPhaseBytes(), renderPhaseBytes()});
+  return runtimeBytes + imageCodecBytes +
+         std::max({loadPeakBytes, buildPhaseBytes(), renderPhaseBytes()});
 }
 
 std::string MemoryEstimate::describe() const {
@@ -303,6 +304,7 @@ std::string MemoryEstimate::describe() const {
              formatBytes(bvhBytes), " (", formatBytes(bvhBuildBytes),
              " while building), framebuffers ", formatBytes(framebufferBytes), ", runtime ",
              formatBytes(runtimeBytes),
+             imageCodecBytes ? cat(", image codec ", formatBytes(imageCodecBytes)) : "",
              "; the peak is the runtime and the largest of loading, building and rendering)");
 }
 

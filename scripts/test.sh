@@ -30,6 +30,12 @@ import aperture, numpy as np
 out = aperture.Scene("procedural:sphere").render(
     aperture.Camera(eye=(0, 0, 5), at=(0, 0, 0), size=(32, 32)), aovs="depth")
 assert abs(out["depth"][16, 16] - 4.0) < 0.01, out["depth"][16, 16]
+import os, tempfile  # a 16-bit PNG: the OpenImageIO plugin installed beside the module loads
+plugin = os.path.join(os.path.dirname(aperture._aperture.__file__), "libaperture_oiio.so")
+assert os.path.isfile(plugin), plugin + " is not installed"
+with tempfile.TemporaryDirectory() as d:
+    aperture.write(os.path.join(d, "depth.png"), out["depth"], depth_scale=1000)
+    assert open(os.path.join(d, "depth.png"), "rb").read(4) == b"\x89PNG"
 print("pip install . check: aperture", aperture.__version__, "from", aperture.__file__)')
   echo "pip install . check: $((SECONDS - t0)) s"
   ccache --show-stats | grep -E 'Hits|Misses' || true

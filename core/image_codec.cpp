@@ -1,0 +1,69 @@
+#include "core/image_codec.h"
+
+#include <dlfcn.h>
+
+#include <filesystem>
+#include <mutex>
+
+#include "core/error.h"
+
+namespace aperture {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kPluginFile = "libaperture_oiio.so";
+
+/// Where the plugin may be: beside the object that holds this code (the Python module, or the
+/// program), beside the running program, and where the build put it.
+std::vector<std::string> pluginCandidates() {
+  std::vector<std::string> paths;
+  Dl_info info{};
+  if (dladdr(reinterpret_cast<const void*>(&pluginCandidates), &info) && info.dli_fname &&
+      fs::path(info.dli_fname).is_absolute())
+    paths.push_back((fs::path(info.dli_fname).parent_path() / kPluginFile).string());
+  std::error_code ec;
+  const fs::path program = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) paths.push_back((program.parent_path() / kPluginFile).string());
+#ifdef APERTURE_IMAGE_CODEC_BUILD_PATH
+  paths.push_back(APERTURE_IMAGE_CODEC_BUILD_PATH);
+#endif
+  return paths;
+}
+
+const ImageCodec* loadImageCodec() {
+  std::string tried;
+  for (const std::string& path : pluginCandidates()) {
+    if (!fs::exists(path)) {
+      tried += cat("\n  ", path, ": no such file");
+      continue;
+    }
+    void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (!handle) {
+      tried += cat("\n  ", path, ": ", dlerror());
+      continue;
+    }
+    using Entry = const ImageCodec* (*)();
+    const auto entry = reinterpret_cast<Entry>(dlsym(handle, kImageCodecEntry));
+    if (!entry) {
+      tried += cat("\n  ", path, ": no ", kImageCodecEntry, " (a plugin of another version)");
+      dlclose(handle);
+      continue;
+    }
+    return entry();  // the plugin stays loaded for the life of the process
+  }
+  throw Error(cat("cannot load ", kPluginFile,
+                  ", aperture's OpenImageIO plugin for PNG, JPEG and TIFF files; tried:", tried));
+}
+
+}  // namespace
+
+const ImageCodec& imageCodec() {
+  static std::mutex mutex;
+  static const ImageCodec* codec = nullptr;
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (!codec) codec = loadImageCodec();
+  return *codec;
+}
+
+}  // namespace aperture
