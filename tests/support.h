@@ -3,12 +3,17 @@
 #include <Imath/ImathVec.h>
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <cstring>
 #include <functional>
 #include <nlohmann/json_fwd.hpp>
 #include <string>
+#include <type_traits>
+#include <vector>
 
 #include "cameras/params.h"
 #include "core/framebuffer.h"
+#include "core/image_codec.h"
 
 namespace aperture::test {
 
@@ -38,6 +43,34 @@ struct Measured {
 };
 /// Runs `command` through /bin/sh with `exec`, so the resource figures are the command's own.
 Measured runMeasured(const std::string& command);
+
+/// An image file read through the image codec (OpenImageIO), its samples converted to T.
+template <class T>
+struct DecodedImage {
+  ImageFileInfo info;
+  std::vector<T> samples;  ///< interleaved; empty when the file could not be read
+};
+/// Reads `path` (T: uint8_t, uint16_t, uint32_t or float), adding a test failure when it
+/// cannot.
+template <class T>
+DecodedImage<T> readImageFile(const std::string& path) {
+  static_assert(std::is_same_v<T, uint8_t> || std::is_same_v<T, uint16_t> ||
+                std::is_same_v<T, uint32_t> || std::is_same_v<T, float>);
+  const SampleType as = std::is_same_v<T, uint8_t>    ? SampleType::UInt8
+                        : std::is_same_v<T, uint16_t> ? SampleType::UInt16
+                        : std::is_same_v<T, uint32_t> ? SampleType::UInt32
+                                                      : SampleType::Float;
+  DecodedImage<T> image;
+  std::vector<unsigned char> bytes;
+  std::string error;
+  if (!imageCodec().read(path, as, image.info, &bytes, error)) {
+    ADD_FAILURE() << path << ": " << error;
+    return image;
+  }
+  image.samples.resize(bytes.size() / sizeof(T));
+  std::memcpy(image.samples.data(), bytes.data(), image.samples.size() * sizeof(T));
+  return image;
+}
 
 /// The whole content of a file ("" when it cannot be read).
 std::string readFile(const std::string& path);

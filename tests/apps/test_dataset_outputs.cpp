@@ -2,7 +2,6 @@
 // AOV, "outputs" in jobs (several AOVs in several formats per image), refusals before
 // rendering, and --resume over every file of an image. Values are checked against the EXR of
 // the same camera, read by the EXR reader, through the documented formulas.
-#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -29,13 +28,10 @@ const std::string kCamera =
     "--mesh procedural:sphere --eye 0,0,4 --at 0,0,0 --fov 40 --size 40,30 --quiet";
 
 std::vector<uint16_t> readPng16(const std::string& path) {
-  auto in = OIIO::ImageInput::open(path);
-  EXPECT_TRUE(in) << OIIO::geterror();
-  if (!in) return {};
-  EXPECT_EQ(in->spec().format, OIIO::TypeDesc::UINT16);
-  std::vector<uint16_t> v(size_t(in->spec().width) * size_t(in->spec().height));
-  EXPECT_TRUE(in->read_image(0, 0, 0, 1, OIIO::TypeDesc::UINT16, v.data()));
-  return v;
+  const test::DecodedImage<uint16_t> png = test::readImageFile<uint16_t>(path);
+  EXPECT_EQ(png.info.type, SampleType::UInt16) << path;
+  EXPECT_EQ(png.info.channels, 1) << path;
+  return png.samples;
 }
 
 /// The 16-bit PNG rule applied to an EXR's Z: round(Z · scale) in [1, 65535], else 0.
@@ -159,11 +155,10 @@ TEST(DatasetJob, SeveralOutputsInSeveralFormatsAndResume) {
     const DatasetImage normal = readDatasetImage(dir + "/normal/" + camera + ".npy");
     ASSERT_EQ(normal.f32.size(), exr.normal.size());
     EXPECT_EQ(std::memcmp(normal.f32.data(), exr.normal.data(), 4 * exr.normal.size()), 0);
-    auto tif = OIIO::ImageInput::open(dir + "/id/" + camera + ".tif");
-    ASSERT_TRUE(tif);
-    std::vector<uint32_t> ids(exr.primId.size());
-    ASSERT_TRUE(tif->read_image(0, 0, 0, 1, OIIO::TypeDesc::UINT32, ids.data()));
-    EXPECT_EQ(ids, exr.primId);
+    const test::DecodedImage<uint32_t> ids =
+        test::readImageFile<uint32_t>(dir + "/id/" + camera + ".tif");
+    EXPECT_EQ(ids.info.type, SampleType::UInt32);
+    EXPECT_EQ(ids.samples, exr.primId);
   }
   // The summary lists every file of an image in writing order, the EXR last.
   const json summary = json::parse(test::readFile(dir + "/exr/summary.json"));

@@ -1,6 +1,5 @@
 // Output paths checked before any work (apps/outputs.h), the order in which a view's files are
 // written (writeViewOutputs, apps/view.h), and the depth range a batch's previews share.
-#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -123,15 +122,11 @@ TEST(Outputs, PreviewRangesAndPreviewableAovs) {
 
 /// The 8-bit RGB pixels of an image file, read by OpenImageIO (empty when unreadable).
 std::vector<uint8_t> readRgb8(const std::string& path, int width, int height) {
-  auto in = OIIO::ImageInput::open(path);
-  EXPECT_TRUE(in) << path << ": " << OIIO::geterror();
-  if (!in) return {};
-  EXPECT_EQ(in->spec().width, width) << path;
-  EXPECT_EQ(in->spec().height, height) << path;
-  EXPECT_EQ(in->spec().nchannels, 3) << path;
-  std::vector<uint8_t> rgb(size_t(width) * size_t(height) * 3);
-  EXPECT_TRUE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, rgb.data())) << path;
-  return rgb;
+  const test::DecodedImage<uint8_t> image = test::readImageFile<uint8_t>(path);
+  EXPECT_EQ(image.info.width, width) << path;
+  EXPECT_EQ(image.info.height, height) << path;
+  EXPECT_EQ(image.info.channels, 3) << path;
+  return image.info.channels == 3 ? image.samples : std::vector<uint8_t>{};
 }
 
 /// Every supported preview extension is one OpenImageIO writes here, as 3 8-bit channels, with

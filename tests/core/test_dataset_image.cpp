@@ -2,7 +2,6 @@
 // Every file is read back by a reader independent of the writer: OpenImageIO and a hand
 // parse of the PNG header for PNG16 (written through OpenImageIO), byte-level parses of the
 // PFM and NPY layouts written here from the format descriptions, OpenImageIO for TIFF.
-#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -153,17 +152,12 @@ uint16_t expectedPng16(float z, double scale, size_t* outOfRange) {
 }
 
 std::vector<uint16_t> readUint16WithOiio(const std::string& path, int* w, int* h) {
-  auto in = OIIO::ImageInput::open(path);
-  EXPECT_TRUE(in) << OIIO::geterror();
-  if (!in) return {};
-  const OIIO::ImageSpec& spec = in->spec();
-  *w = spec.width;
-  *h = spec.height;
-  EXPECT_EQ(spec.nchannels, 1);
-  EXPECT_EQ(spec.format, OIIO::TypeDesc::UINT16);
-  std::vector<uint16_t> values(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
-  EXPECT_TRUE(in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT16, values.data()));
-  return values;
+  const test::DecodedImage<uint16_t> png = test::readImageFile<uint16_t>(path);
+  *w = png.info.width;
+  *h = png.info.height;
+  EXPECT_EQ(png.info.channels, 1);
+  EXPECT_EQ(png.info.type, SampleType::UInt16);
+  return png.samples;
 }
 
 TEST(DatasetPng16, MillimetresWithZeroForMissesAndOutOfRange) {
@@ -356,22 +350,17 @@ TEST(DatasetTiff, FloatAndIdsReadBackByOpenImageIo) {
   writeDatasetImage(dir + "/ids.tiff", DatasetFormat::Tiff, {3, 2, 1, nullptr, ids.data()},
                     "face.object_id");
 
-  auto in = OIIO::ImageInput::open(dir + "/n.tif");
-  ASSERT_TRUE(in) << OIIO::geterror();
-  EXPECT_EQ(in->spec().width, 4);
-  EXPECT_EQ(in->spec().height, 3);
-  EXPECT_EQ(in->spec().nchannels, 3);
-  EXPECT_EQ(in->spec().format, OIIO::TypeDesc::FLOAT);
-  std::vector<float> back(normal.size());
-  ASSERT_TRUE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::FLOAT, back.data()));
-  expectSameBits(back, normal);
+  const test::DecodedImage<float> back = test::readImageFile<float>(dir + "/n.tif");
+  EXPECT_EQ(back.info.width, 4);
+  EXPECT_EQ(back.info.height, 3);
+  EXPECT_EQ(back.info.channels, 3);
+  EXPECT_EQ(back.info.type, SampleType::Float);
+  ASSERT_EQ(back.samples.size(), normal.size());
+  expectSameBits(back.samples, normal);
 
-  auto inIds = OIIO::ImageInput::open(dir + "/ids.tiff");
-  ASSERT_TRUE(inIds) << OIIO::geterror();
-  EXPECT_EQ(inIds->spec().format, OIIO::TypeDesc::UINT32);
-  std::vector<uint32_t> backIds(ids.size());
-  ASSERT_TRUE(inIds->read_image(0, 0, 0, 1, OIIO::TypeDesc::UINT32, backIds.data()));
-  EXPECT_EQ(backIds, ids);
+  const test::DecodedImage<uint32_t> backIds = test::readImageFile<uint32_t>(dir + "/ids.tiff");
+  EXPECT_EQ(backIds.info.type, SampleType::UInt32);
+  EXPECT_EQ(backIds.samples, ids);
 }
 
 // --- Failures leave no file -----------------------------------------------------------------

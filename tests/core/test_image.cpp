@@ -1,5 +1,4 @@
 // PNG previews and framebuffer comparison.
-#include <OpenImageIO/imageio.h>
 
 #include <array>
 #include <cmath>
@@ -20,7 +19,7 @@ namespace fs = std::filesystem;
 
 struct Png {
   int width = 0, height = 0, channels = 0;
-  OIIO::TypeDesc format;
+  std::optional<SampleType> type;
   std::string description;  ///< ImageDescription
   std::vector<uint8_t> pixels;
   const uint8_t* at(int row, int col) const {
@@ -33,22 +32,10 @@ struct Png {
 };
 
 Png readPng(const std::string& path) {
-  Png png;
-  auto in = OIIO::ImageInput::open(path);
-  EXPECT_TRUE(in) << OIIO::geterror();
-  if (!in) return png;
-  const OIIO::ImageSpec& spec = in->spec();
-  png.width = spec.width;
-  png.height = spec.height;
-  png.channels = spec.nchannels;
-  png.format = spec.format;
-  png.description = spec.get_string_attribute("ImageDescription");
-  EXPECT_EQ(std::string(in->format_name()), "png");
-  png.pixels.resize(size_t(png.width) * png.height * png.channels);
-  EXPECT_TRUE(in->read_image(0, 0, 0, -1, OIIO::TypeDesc::UINT8, png.pixels.data()))
-      << in->geterror();
-  in->close();
-  return png;
+  const test::DecodedImage<uint8_t> file = test::readImageFile<uint8_t>(path);
+  EXPECT_EQ(file.info.format, "png") << path;
+  return {file.info.width, file.info.height,      file.info.channels,
+          file.info.type,  file.info.description, file.samples};
 }
 
 /// sRGB byte of a linear value, written out independently of core/image.cpp.
@@ -92,7 +79,7 @@ TEST(Preview, ColorIsOpaqueSrgbOverTheBackground) {
   EXPECT_EQ(png.width, 7);
   EXPECT_EQ(png.height, 5);
   ASSERT_EQ(png.channels, 3) << "an opaque preview has no alpha channel";
-  EXPECT_EQ(png.format, OIIO::TypeDesc::UINT8);
+  EXPECT_EQ(png.type, SampleType::UInt8);
   // The color AOV is premultiplied by coverage: c + (1 - A) * background, in linear light.
   for (int c = 0; c < 3; ++c) {
     const int composite = srgbByte(values[c] + 0.25 * linearOfByte(kBackground[size_t(c)]));
