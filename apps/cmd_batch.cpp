@@ -28,6 +28,7 @@
 #include "cameras/camera_file.h"
 #include "core/dataset_image.h"
 #include "core/error.h"
+#include "core/image_codec.h"
 #include "core/limits.h"
 
 namespace aperture::app {
@@ -81,8 +82,22 @@ struct SceneImages {
 struct SceneFootprint {
   std::vector<std::string> specs;
   uint64_t pixels = 0, bytesPerPixel = 0;
-  bool imageCodec = false;  ///< previews or dataset files written through the image codec
 };
+
+/// Whether the job writes files through the image codec (previews, 16-bit PNG, TIFF).
+bool writesThroughImageCodec(const Job& job) {
+  if (!job.previewPattern.empty()) return true;
+  for (const JobDatasetOutput& d : job.datasets) {
+    const std::optional<DatasetFormat> format = datasetFormatOf(d.pattern);
+    if (format && encodedByImageCodec(*format)) return true;
+  }
+  return false;
+}
+
+/// Whether any scene of the job file writes through the image codec.
+bool anyWritesThroughImageCodec(const JobFile& jobs) {
+  return std::any_of(jobs.scenes.begin(), jobs.scenes.end(), writesThroughImageCodec);
+}
 
 SceneFootprint footprintOf(const Job& job) {
   SceneFootprint f;
@@ -93,11 +108,6 @@ SceneFootprint footprintOf(const Job& job) {
     f.pixels = std::max(f.pixels, uint64_t(image.params.width) * uint64_t(image.params.height));
   // Two framebuffers live at once: the image being rendered and the one being written.
   f.bytesPerPixel = framebufferBytesPerPixel(job.aovs) * 2 + (job.previewPattern.empty() ? 0 : 4);
-  f.imageCodec = !job.previewPattern.empty();
-  for (const JobDatasetOutput& d : job.datasets) {
-    const std::optional<DatasetFormat> format = datasetFormatOf(d.pattern);
-    f.imageCodec = f.imageCodec || (format && encodedByImageCodec(*format));
-  }
   return f;
 }
 
@@ -118,10 +128,7 @@ void checkJobMemory(const JobFile& jobs, const std::string& maxMemory) {
   if (!limit) return;
   std::vector<SceneFootprint> footprints;
   for (const Job& job : jobs.scenes) footprints.push_back(footprintOf(job));
-  const uint64_t codecBytes = std::any_of(footprints.begin(), footprints.end(),
-                                          [](const SceneFootprint& f) { return f.imageCodec; })
-                                  ? kImageCodecBytes
-                                  : 0;
+  const uint64_t codecBytes = anyWritesThroughImageCodec(jobs) ? kImageCodecBytes : 0;
   if (footprints.size() == 1) {
     const SceneFootprint& f = footprints.front();
     MemoryEstimate e = estimateMemory(f.specs, f.pixels, 1, 0, f.bytesPerPixel);
@@ -219,6 +226,8 @@ BatchPlan planBatch(const BatchArgs& a) {
   if (a.files.empty()) checkDeepHasLayers(a.cameraFile.deep, a.cameraFile.layers);
   plan.jobs = a.files.empty() ? cameraFileJobFile(a.cameraFile) : readJobFile(a.files.front());
   checkJobMemory(plan.jobs, a.maxMemory);
+  // A missing image codec plugin fails here, before anything is loaded or rendered.
+  if (anyWritesThroughImageCodec(plan.jobs)) imageCodec();
   if (!a.quiet && !plan.shard.origin.empty())
     std::fprintf(stderr, "aperture: shard %zu of %zu from %s\n", plan.shard.k, plan.shard.n,
                  plan.shard.origin.c_str());

@@ -16,6 +16,7 @@
 #include "core/error.h"
 #include "core/exr.h"
 #include "core/image.h"
+#include "core/image_codec.h"
 #include "core/layers.h"
 
 namespace aperture::app {
@@ -86,6 +87,7 @@ int runRender(const RenderArgs& a) {
                           });
   checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs, a.preview.empty() ? 0 : 4,
                     imageCodec);
+  if (imageCodec) aperture::imageCodec();  // a missing plugin fails before the mesh loads
   const PreviewOptions preview = checkRenderOutputs(a, aovs);
   if (given.has("eye") || unframed.worldToCamera || unframed.cameraToWorld) makeCamera(unframed);
 

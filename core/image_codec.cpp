@@ -2,6 +2,8 @@
 
 #include <dlfcn.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <mutex>
 
@@ -14,19 +16,25 @@ namespace fs = std::filesystem;
 
 constexpr const char* kPluginFile = "libaperture_oiio.so";
 
-/// Where the plugin may be: beside the object that holds this code (the Python module, or the
-/// program), beside the running program, and where the build put it.
+/// Where the plugin may be: $APERTURE_IMAGE_CODEC alone when set; else beside the object that
+/// holds this code (the Python module, or the program), beside the running program, and where
+/// the build put it.
 std::vector<std::string> pluginCandidates() {
+  if (const char* chosen = std::getenv("APERTURE_IMAGE_CODEC"); chosen && *chosen) return {chosen};
   std::vector<std::string> paths;
+  const auto add = [&paths](const fs::path& path) {
+    if (std::find(paths.begin(), paths.end(), path.string()) == paths.end())
+      paths.push_back(path.string());
+  };
   Dl_info info{};
   if (dladdr(reinterpret_cast<const void*>(&pluginCandidates), &info) && info.dli_fname &&
       fs::path(info.dli_fname).is_absolute())
-    paths.push_back((fs::path(info.dli_fname).parent_path() / kPluginFile).string());
+    add(fs::path(info.dli_fname).parent_path() / kPluginFile);
   std::error_code ec;
   const fs::path program = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) paths.push_back((program.parent_path() / kPluginFile).string());
+  if (!ec) add(program.parent_path() / kPluginFile);
 #ifdef APERTURE_IMAGE_CODEC_BUILD_PATH
-  paths.push_back(APERTURE_IMAGE_CODEC_BUILD_PATH);
+  add(APERTURE_IMAGE_CODEC_BUILD_PATH);
 #endif
   return paths;
 }

@@ -63,8 +63,9 @@ class ImageCodec {
 inline constexpr const char* kImageCodecEntry = "aperture_image_codec_v1";
 
 /// The codec, loaded at the first call: libaperture_oiio.so from the folder of the program
-/// or Python module that holds aperture, else from the build tree it was built in. Throws
-/// Error, naming the paths tried, when neither loads.
+/// or Python module that holds aperture, else from the build tree it was built in, or only
+/// the file $APERTURE_IMAGE_CODEC names when it is set. Throws Error, naming the paths tried,
+/// when none loads.
 const ImageCodec& imageCodec();
 
 }  // namespace aperture

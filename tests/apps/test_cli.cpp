@@ -95,6 +95,29 @@ TEST(Cli, OpenImageIoLoadsOnlyForTheFilesThatNeedIt) {
   EXPECT_TRUE(test::fileExists(withPng + "/d.png"));
 }
 
+TEST(Cli, AMissingImageCodecFailsBeforeTheMeshLoadsAndNamesTheFile) {
+  const std::string dir = scratchDir();
+  const std::string missing = dir + "/no-such-plugin.so";
+  std::string out;
+  EXPECT_EQ(runCommand("APERTURE_IMAGE_CODEC=" + quote(missing) + " " + apertureBinary() +
+                           " render --size 64,48 --out " + quote(dir + "/d.exr") + " --preview " +
+                           quote(dir + "/d.png"),
+                       &out),
+            1)
+      << out;
+  EXPECT_NE(out.find("cannot load libaperture_oiio.so"), std::string::npos) << out;
+  EXPECT_NE(out.find(missing + ": no such file"), std::string::npos) << out;
+  EXPECT_EQ(out.find("loaded procedural"), std::string::npos) << "failed after loading: " << out;
+  EXPECT_FALSE(test::fileExists(dir + "/d.exr"));
+  EXPECT_FALSE(test::fileExists(dir + "/d.png"));
+  // Without a file the codec writes, the variable is never read.
+  EXPECT_EQ(runCommand("APERTURE_IMAGE_CODEC=" + quote(missing) + " " + apertureBinary() +
+                           " render --size 64,48 --quiet --out " + quote(dir + "/d.exr"),
+                       &out),
+            0)
+      << out;
+}
+
 TEST(Cli, BadFlagValuesNameTheFlagAndValueAndWriteNothing) {
   const std::string dir = scratchDir(), exr = dir + "/x.exr";
   struct Case {
