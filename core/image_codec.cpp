@@ -1,5 +1,13 @@
 #include "core/image_codec.h"
 
+#ifdef APERTURE_IMAGE_CODEC_LINKED
+// Sanitizer and fuzz builds: the codec is linked in (core/CMakeLists.txt says why).
+extern "C" const aperture::ImageCodec* aperture_image_codec_v1();
+
+const aperture::ImageCodec& aperture::imageCodec() { return *aperture_image_codec_v1(); }
+
+#else
+
 #include <dlfcn.h>
 
 #include <algorithm>
@@ -75,3 +83,5 @@ const ImageCodec& imageCodec() {
 }
 
 }  // namespace aperture
+
+#endif  // APERTURE_IMAGE_CODEC_LINKED
