@@ -102,15 +102,7 @@ std::string encodeNpy(const ImageView& image) {
 }
 
 // --- Through the image codec (PNG16, TIFF), encoded in memory ------------------------------
-
-/// The bytes of the file `path` would hold, encoded by the image codec for its extension (then
-/// written by writeBytesAtomically, which checks every write).
-std::vector<unsigned char> encodeWithCodec(const std::string& path, const ImageToEncode& image) {
-  std::vector<unsigned char> bytes;
-  std::string error;
-  if (!imageCodec().encode(path, image, bytes, error)) throw Error(error);
-  return bytes;
-}
+// (then written by writeBytesAtomically, which checks every write)
 
 /// round(value · scale) when it lies in [1, 65535]; 0 otherwise (+inf misses, and the
 /// out-of-range values, NaN included, which are also counted).
@@ -135,7 +127,7 @@ std::vector<unsigned char> encodePng16(const std::string& path, const ImageView&
   ImageToEncode png{image.width, image.height, 1, SampleType::UInt16, values.data(), {}};
   png.attributes = {
       {"ImageDescription", cat("aperture depth: round(value * ", scale, "), 0 = no valid value")}};
-  return encodeWithCodec(path, png);
+  return encodeImage(path, png);
 }
 
 std::vector<unsigned char> encodeTiff(const std::string& path, const ImageView& image) {
@@ -146,7 +138,7 @@ std::vector<unsigned char> encodeTiff(const std::string& path, const ImageView& 
       image.u32 ? SampleType::UInt32 : SampleType::Float,
       image.u32 ? static_cast<const void*>(image.u32) : static_cast<const void*>(image.f32),
       {{"compression", "zip"}}};
-  return encodeWithCodec(path, tiff);
+  return encodeImage(path, tiff);
 }
 
 // --- Reading back PFM and NPY ---------------------------------------------------------------

@@ -160,10 +160,7 @@ std::vector<unsigned char> encodeRgb8(const std::string& path, int width, int he
   rgb.pixels = image.rgb.data();
   rgb.attributes = {{"oiio:ColorSpace", "sRGB"},
                     {"ImageDescription", "aperture preview: " + image.description}};
-  std::vector<unsigned char> bytes;
-  std::string error;
-  if (!imageCodec().encode(path, rgb, bytes, error)) throw Error(error);
-  return bytes;
+  return encodeImage(path, rgb);
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "core/image_codec.h"
 
+#include "core/error.h"
+
 #ifdef APERTURE_IMAGE_CODEC_LINKED
 // Sanitizer and fuzz builds: the codec is linked in (core/CMakeLists.txt says why).
 extern "C" const aperture::ImageCodec* aperture_image_codec_v1();
@@ -14,8 +16,6 @@ const aperture::ImageCodec& aperture::imageCodec() { return *aperture_image_code
 #include <cstdlib>
 #include <filesystem>
 #include <mutex>
-
-#include "core/error.h"
 
 namespace aperture {
 namespace {
@@ -85,3 +85,11 @@ const ImageCodec& imageCodec() {
 }  // namespace aperture
 
 #endif  // APERTURE_IMAGE_CODEC_LINKED
+
+std::vector<unsigned char> aperture::encodeImage(const std::string& path,
+                                                 const ImageToEncode& image) {
+  std::vector<unsigned char> bytes;
+  std::string error;
+  if (!imageCodec().encode(path, image, bytes, error)) throw Error(error);
+  return bytes;
+}

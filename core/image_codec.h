@@ -68,4 +68,7 @@ inline constexpr const char* kImageCodecEntry = "aperture_image_codec_v1";
 /// when none loads.
 const ImageCodec& imageCodec();
 
+/// imageCodec().encode, throwing Error with the codec's message when it fails.
+std::vector<unsigned char> encodeImage(const std::string& path, const ImageToEncode& image);
+
 }  // namespace aperture

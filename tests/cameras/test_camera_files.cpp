@@ -444,11 +444,8 @@ TEST(CameraFileNerf, ImageSizeComesFromTheImageFile) {
   fs::create_directories(dir + "/train");
   {
     const std::vector<unsigned char> pixels(7 * 5 * 3, 128);
-    std::vector<unsigned char> png;
-    std::string error;
-    ASSERT_TRUE(
-        imageCodec().encode("r_0.png", {7, 5, 3, SampleType::UInt8, pixels.data(), {}}, png, error))
-        << error;
+    const std::vector<unsigned char> png =
+        encodeImage("r_0.png", {7, 5, 3, SampleType::UInt8, pixels.data(), {}});
     writeFile(dir + "/train/r_0.png", std::string(png.begin(), png.end()));
   }
   const std::string identity = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
