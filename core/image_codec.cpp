@@ -54,7 +54,7 @@ const ImageCodec* loadImageCodec() {
       tried += cat("\n  ", path, ": no such file");
       continue;
     }
-    void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+    void* handle = dlopen(path.c_str(), RTLD_LAZY | RTLD_LOCAL);
     if (!handle) {
       tried += cat("\n  ", path, ": ", dlerror());
       continue;
