@@ -12,6 +12,7 @@
 #include "cameras/registry.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/image_codec.h"
 
 namespace aperture::app {
 
@@ -106,6 +107,7 @@ void writeReports(const TradeoffArgs& a, const TradeoffConfig& c, int threads,
 
 int runTradeoff(const TradeoffArgs& a) {
   TradeoffConfig c = tradeoffConfig(a);
+  imageCodec();  // it compares images: a missing plugin fails before the first render
   ThreadLimit threads(a.render.threads);
   c.camera = framedCamera(a);
   const std::vector<TradeoffRow> rows = runWithTempDir(c, a.outDir);

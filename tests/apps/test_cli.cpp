@@ -111,6 +111,14 @@ TEST(Cli, AMissingImageCodecFailsBeforeTheMeshLoadsAndNamesTheFile) {
   EXPECT_EQ(out.find("loaded procedural"), std::string::npos) << "failed after loading: " << out;
   EXPECT_FALSE(test::fileExists(dir + "/d.exr"));
   EXPECT_FALSE(test::fileExists(dir + "/d.png"));
+  // tradeoff compares images through the codec: it fails before its first render.
+  EXPECT_EQ(runCommand("APERTURE_IMAGE_CODEC=" + quote(missing) + " " + apertureBinary() +
+                           " tradeoff --size 32,24 --out-dir " + quote(dir + "/t"),
+                       &out),
+            1)
+      << out;
+  EXPECT_NE(out.find(missing + ": no such file"), std::string::npos) << out;
+  EXPECT_FALSE(test::fileExists(dir + "/t"));
   // Without a file the codec writes, the variable is never read.
   EXPECT_EQ(runCommand("APERTURE_IMAGE_CODEC=" + quote(missing) + " " + apertureBinary() +
                            " render --size 64,48 --quiet --out " + quote(dir + "/d.exr"),
