@@ -26,7 +26,6 @@
 #include "apps/view.h"
 #include "cameras/calibrated.h"
 #include "cameras/camera_file.h"
-#include "core/dataset_image.h"
 #include "core/error.h"
 #include "core/image_codec.h"
 #include "core/limits.h"
@@ -84,19 +83,13 @@ struct SceneFootprint {
   uint64_t pixels = 0, bytesPerPixel = 0;
 };
 
-/// Whether the job writes files through the image codec (previews, 16-bit PNG, TIFF).
-bool writesThroughImageCodec(const Job& job) {
-  if (!job.previewPattern.empty()) return true;
-  for (const JobDatasetOutput& d : job.datasets) {
-    const std::optional<DatasetFormat> format = datasetFormatOf(d.pattern);
-    if (format && encodedByImageCodec(*format)) return true;
-  }
-  return false;
-}
-
 /// Whether any scene of the job file writes through the image codec.
 bool anyWritesThroughImageCodec(const JobFile& jobs) {
-  return std::any_of(jobs.scenes.begin(), jobs.scenes.end(), writesThroughImageCodec);
+  return std::any_of(jobs.scenes.begin(), jobs.scenes.end(), [](const Job& job) {
+    std::vector<std::string> patterns;
+    for (const JobDatasetOutput& d : job.datasets) patterns.push_back(d.pattern);
+    return writesThroughImageCodec(!job.previewPattern.empty(), patterns);
+  });
 }
 
 SceneFootprint footprintOf(const Job& job) {

@@ -1,6 +1,5 @@
 // `aperture render`: one frame of a mesh from one camera into a multi-channel EXR, or one AOV
 // into a dataset file (16-bit PNG depth, PFM, NPY, float TIFF) when --out has that extension.
-#include <algorithm>
 #include <cstdio>
 #include <vector>
 
@@ -81,10 +80,7 @@ int runRender(const RenderArgs& a) {
       resolveCommandCamera(given, a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0));
   const RenderSettings settings = a.render.settings(unframed.spp);
   const std::vector<DatasetOutput> datasets = datasetOutputsOf(a, aovs);
-  const bool imageCodec = !a.preview.empty() ||
-                          std::any_of(datasets.begin(), datasets.end(), [](const DatasetOutput& d) {
-                            return encodedByImageCodec(d.format());
-                          });
+  const bool imageCodec = writesThroughImageCodec(!a.preview.empty(), {a.out});
   checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs, a.preview.empty() ? 0 : 4,
                     imageCodec);
   if (imageCodec) aperture::imageCodec();  // a missing plugin fails before the mesh loads

@@ -208,4 +208,11 @@ PreviewOptions batchPreviewOptions(const Job& job, const glm::dvec3& lo, const g
   return options;
 }
 
+bool writesThroughImageCodec(bool preview, const std::vector<std::string>& datasetPaths) {
+  return preview || std::any_of(datasetPaths.begin(), datasetPaths.end(), [](const std::string& p) {
+           const std::optional<DatasetFormat> format = datasetFormatOf(p);
+           return format && encodedByImageCodec(*format);
+         });
+}
+
 }  // namespace aperture::app

@@ -66,6 +66,10 @@ void checkJobOutputs(const Job& job, const std::string& outputDirectory,
 /// Throws Error("NAME: 'PATH': AOV ... cannot be written as ...").
 void checkDatasetOutput(const std::string& name, const std::string& path, const std::string& aov);
 
+/// Whether a view's files go through the image codec (core/image_codec.h), which must then be
+/// loaded: any preview, or a dataset file (path or pattern) in a format the codec encodes.
+bool writesThroughImageCodec(bool preview, const std::vector<std::string>& datasetPaths);
+
 /// Checks a 16-bit PNG depth scale (`name` is the flag or key): positive and finite.
 void checkDepthScale(const std::string& name, double scale);
 

@@ -95,13 +95,12 @@ std::string previewMismatch(const JobImage& image) {
   ImageFileInfo info;
   std::vector<unsigned char> pixels;
   std::string error;
-  if (!imageCodec().read(path, SampleType::UInt8, info, nullptr, error))
-    return cat("preview ", path, " is unreadable (", error, ")");
+  const bool decoded = imageCodec().read(path, SampleType::UInt8, info, &pixels, error);
+  if (info.width == 0) return cat("preview ", path, " is unreadable (", error, ")");
   if (info.width != image.params.width || info.height != image.params.height)
     return cat("preview size ", info.width, "x", info.height, ", job wants ", image.params.width,
                "x", image.params.height);
-  if (!imageCodec().read(path, SampleType::UInt8, info, &pixels, error))
-    return cat("preview ", path, " does not decode (", error, ")");
+  if (!decoded) return cat("preview ", path, " does not decode (", error, ")");
   return "";
 }
 

@@ -4,9 +4,7 @@
 
 #ifdef APERTURE_IMAGE_CODEC_LINKED
 // Sanitizer and fuzz builds: the codec is linked in (core/CMakeLists.txt says why).
-extern "C" const aperture::ImageCodec* aperture_image_codec_v1();
-
-const aperture::ImageCodec& aperture::imageCodec() { return *aperture_image_codec_v1(); }
+const aperture::ImageCodec& aperture::imageCodec() { return *APERTURE_IMAGE_CODEC_ENTRY(); }
 
 #else
 
@@ -59,7 +57,7 @@ const ImageCodec* loadImageCodec() {
       tried += cat("\n  ", path, ": ", dlerror());
       continue;
     }
-    using Entry = const ImageCodec* (*)();
+    using Entry = decltype(&APERTURE_IMAGE_CODEC_ENTRY);
     const auto entry = reinterpret_cast<Entry>(dlsym(handle, kImageCodecEntry));
     if (!entry) {
       tried += cat("\n  ", path, ": no ", kImageCodecEntry, " (a plugin of another version)");

@@ -50,7 +50,8 @@ class ImageCodec {
                       std::vector<unsigned char>& bytes, std::string& error) const = 0;
   /// Opens the image file `path`: its size, channels and sample type, and when `pixels` is
   /// given, all of its pixels, interleaved, converted to samples of `as` (OpenImageIO's
-  /// conversion) and held as bytes.
+  /// conversion) and held as bytes. `info` is filled once the file opens, even when decoding
+  /// its pixels then fails (and stays as it was when the file does not open).
   virtual bool read(const std::string& path, SampleType as, ImageFileInfo& info,
                     std::vector<unsigned char>* pixels, std::string& error) const = 0;
   /// Compares two float images of width x height pixels of `channels` samples.
@@ -58,9 +59,13 @@ class ImageCodec {
                        SampleDifference& difference, std::string& error) const = 0;
 };
 
-/// The plugin's entry point, extern "C" in libaperture_oiio.so; the version changes with any
-/// change to ImageCodec.
-inline constexpr const char* kImageCodecEntry = "aperture_image_codec_v1";
+/// The plugin's entry point, extern "C" in libaperture_oiio.so (declared below the
+/// namespace); the version in its name changes with any change to ImageCodec.
+#define APERTURE_IMAGE_CODEC_ENTRY aperture_image_codec_v1
+#define APERTURE_IMAGE_CODEC_NAME_OF(entry) #entry
+#define APERTURE_IMAGE_CODEC_NAME(entry) APERTURE_IMAGE_CODEC_NAME_OF(entry)
+inline constexpr const char* kImageCodecEntry =
+    APERTURE_IMAGE_CODEC_NAME(APERTURE_IMAGE_CODEC_ENTRY);
 
 /// The codec, loaded at the first call: libaperture_oiio.so from the folder of the program
 /// or Python module that holds aperture, else from the build tree it was built in, or only
@@ -72,3 +77,5 @@ const ImageCodec& imageCodec();
 std::vector<unsigned char> encodeImage(const std::string& path, const ImageToEncode& image);
 
 }  // namespace aperture
+
+extern "C" const aperture::ImageCodec* APERTURE_IMAGE_CODEC_ENTRY();

@@ -105,7 +105,7 @@ class OiioCodec final : public ImageCodec {
 }  // namespace aperture
 
 extern "C" __attribute__((visibility("default"))) const aperture::ImageCodec*
-aperture_image_codec_v1() {
+APERTURE_IMAGE_CODEC_ENTRY() {
   static const aperture::OiioCodec codec;
   return &codec;
 }
