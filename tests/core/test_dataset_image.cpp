@@ -15,7 +15,7 @@
 #include "tests/support.h"
 
 namespace aperture {
-namespace {
+namespace dataset_image_test {
 
 using test::fileExists;
 using test::readFile;
@@ -414,5 +414,5 @@ TEST(DatasetRead, BadFilesNameThePath) {
   }
 }
 
-}  // namespace
+}  // namespace dataset_image_test
 }  // namespace aperture
