@@ -40,6 +40,7 @@ struct BenchArgs {
   std::string scalingSizes = kDefaultScalingSizes;
   bool nullTrace = false;   ///< --null: the frame loop without Embree (RenderSettings::nullTrace)
   bool noSceneBox = false;  ///< --no-scene-box: RenderSettings::sceneBoxTest off
+  bool noCoverageMask = false;  ///< --no-coverage-mask: RenderSettings::coverageMask off
   std::string sweep, json, preset;
   std::string layersMethod;  ///< hidden --layers-method filter|retrace (bench/layers_methods.sh)
   std::string baselineApi = "packet16";  ///< --baseline-api (BaselineApi)
@@ -133,7 +134,8 @@ void reportConfig(const Bench& b, nlohmann::json& j) {
                  {"frames", a.frames},
                  {"warmup", a.warmup},
                  {"null", a.nullTrace},
-                 {"scene_box_test", b.settings.sceneBoxTest}};
+                 {"scene_box_test", b.settings.sceneBoxTest},
+                 {"coverage_mask", b.settings.coverageMask}};
   std::printf(
       "config: %s, %zu triangles; %d threads, Embree ISA %s; packet %d, tile %d; BVH %s%s%s; "
       "AOVs %s; layers %d (%s); %s %dx%d, %d spp\n",
@@ -256,9 +258,17 @@ void measureAgainstBaseline(const Bench& b, nlohmann::json& j) {
   std::printf("render / baseline: %.3f (median of %d frame pairs; baseline rays: %s)\n",
               ratioS.median, b.args.frames, base.rayGeneration().c_str());
   const double outside = frame.raysTraced ? double(frame.raysOutsideBox) / frame.raysTraced : 0;
-  std::printf("scene-box test: %s; %.1f%% of the frame loop's rays resolved by it\n",
-              b.settings.sceneBoxTest ? "on" : "off (--no-scene-box)", 100 * outside);
+  if (frame.maskCovered >= 0)
+    std::printf(
+        "misses resolved without Embree: %.1f%% of the frame loop's rays, by the coverage "
+        "mask (%.1f%% of the image's blocks covered)\n",
+        100 * outside, 100 * frame.maskCovered);
+  else
+    std::printf("misses resolved without Embree: %.1f%% of the frame loop's rays, by %s\n",
+                100 * outside,
+                b.settings.sceneBoxTest ? "the scene-box test" : "nothing (--no-scene-box)");
   j["rays_outside_box_fraction"] = outside;
+  j["coverage_mask_covered"] = frame.maskCovered;
   j["mrays_per_s"] = toJson(renderS);
   j["mrays_per_s_median"] = renderS.median;
   j["baseline_mrays_per_s"] = toJson(bareS);
@@ -397,6 +407,7 @@ int runBench(const BenchArgs& a) {
   RenderSettings settings = a.render.settings(unframed.spp);
   settings.nullTrace = a.nullTrace;
   settings.sceneBoxTest = !a.noSceneBox;
+  settings.coverageMask = !a.noCoverageMask;
   validateBenchArgs(a);
   checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs, 0, false);
 
@@ -454,6 +465,9 @@ Command addBenchCommand(CLI::App& app) {
   sub->add_flag("--no-scene-box", args->noSceneBox,
                 "Call Embree for every ray, also those that miss the scene's bounding box (which "
                 "the frame loop otherwise resolves as misses itself): measures what that saves");
+  sub->add_flag("--no-coverage-mask", args->noCoverageMask,
+                "Resolve misses by the scene-box test alone, without the coverage mask of the "
+                "blocks that see the scene (pinhole cameras): measures what the mask saves");
   sub->add_option("--sweep", args->sweep,
                   "Also sweep: packet, threads, quality or aovs (depth alone .. all AOVs, "
                   "interleaved frames)");

@@ -15,6 +15,7 @@
 #include <optional>
 #include <type_traits>
 
+#include "core/coverage_mask.h"
 #include "core/error.h"
 #include "core/interleaved_row.h"
 #include "core/intersect_scene.h"
@@ -98,6 +99,19 @@ const SceneBox* boxTestFor(const Scene& scene, const Camera& camera, const Rende
   return &*scene.box();
 }
 
+/// The coverage mask (core/coverage_mask.h) of `camera` when RenderSettings::coverageMask
+/// applies and the camera has a projective map from one eye; it then replaces the box test.
+std::optional<CoverageMask> coverageFor(const Scene& scene, const Camera& camera,
+                                        const RenderSettings& s) {
+  if (!s.sceneBoxTest || !s.coverageMask || !scene.box()) return std::nullopt;
+  const std::optional<CentralProjection> projection =
+      centralProjectionOf(camera, scene.renderOrigin());
+  if (!projection) return std::nullopt;
+  const OccupancyGrid* grid = scene.occupancy();
+  if (!grid) return std::nullopt;
+  return coverageMaskOf(*grid, *projection);
+}
+
 struct ImagePlan;
 
 struct TileCounters {
@@ -139,8 +153,10 @@ struct ImagePlan {
   bool anyGeometry;                 // any AOV filled from the centre ray
   bool instanced;                   // normals of instanced hits need the instance's normal matrix
   bool remapPrimIds;                // Scene::remapsPrimIds: culled or reordered, primID is mapped
+  /// The blocks that may see the scene (coverageFor); packets outside are misses.
+  std::optional<CoverageMask> coverage;
   /// The scene's box for the scene-box test; null when the test is off or cannot resolve any
-  /// ray (boxTestFor).
+  /// ray (boxTestFor), or the coverage mask replaces it.
   const SceneBox* box;
   // The passes over each block: colour averages samples [0, colorSamples); the geometry AOVs
   // come from the centre ray, which at spp 1 is sample 0 itself (geometryFromSample) and
@@ -186,7 +202,8 @@ ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSet
                   !fb_.properties.empty() || layers),
       instanced(scene_.instanceCount() > 0),
       remapPrimIds(scene_.remapsPrimIds()),
-      box(boxTestFor(scene_, camera_, settings_)),
+      coverage(coverageFor(scene_, camera_, settings_)),
+      box(coverage ? nullptr : boxTestFor(scene_, camera_, settings_)),
       colorSamples(color ? settings_.spp : 0),
       geometryFromSample(anyGeometry && color && settings_.spp == 1),
       passes(colorSamples + (anyGeometry && !geometryFromSample ? 1 : 0)),
@@ -316,6 +333,10 @@ bool tracePacket(const ImagePlan& plan, const PacketRequest& req, PacketState<N>
   const int active = selectLanes<N>(plan, req, st, count);
   if (active == 0) return false;
   count.traced += uint64_t(active);
+  if (plan.coverage && !plan.coverage->covers(req.y0, req.x0)) {
+    count.outsideBox += uint64_t(active);
+    if constexpr (!kNull) return false;  // the null trace still fakes every hit
+  }
   if (resolveLanesMissingBox<N, kNull>(plan, st, active, count) == 0) return false;
   if constexpr (kNull) {
     fakeHits<N>(plan, st);
@@ -803,6 +824,7 @@ std::vector<RenderStats> renderPlans(const std::deque<ImagePlan>& plans,
       stats[k].raysTraced = f.traced;
       stats[k].raysSkipped = f.skipped;
       stats[k].raysOutsideBox = f.outsideBox;
+      if (plan.coverage) stats[k].maskCovered = plan.coverage->coveredFraction();
       stats[k].hits = f.hits;
       if (!progress) continue;
       const std::lock_guard<std::mutex> lock(progressMutex);

@@ -37,16 +37,27 @@ struct RenderSettings {
   /// without calling Embree. Conservative: the image is bit-identical either way. Off only to
   /// measure what it saves (`aperture bench --no-scene-box`).
   bool sceneBoxTest = true;
+  /// With sceneBoxTest: for a camera with a projective map from one eye (pinhole perspective,
+  /// undistorted calibrated), the packets whose 4x4 block sees no occupied cell of the scene
+  /// (core/coverage_mask.h) are misses without calling Embree; the mask replaces the box test
+  /// there. Conservative: the image is bit-identical either way. Off only to measure what it
+  /// saves (`aperture bench --no-coverage-mask`).
+  bool coverageMask = true;
 };
 
 struct RenderStats {
   double seconds = 0;  ///< wall time of the frame
-  /// Rays with a valid lane: passed to Embree, or resolved as misses by the scene-box test.
+  /// Rays with a valid lane: passed to Embree, or resolved as misses by the scene-box test or
+  /// the coverage mask.
   uint64_t raysTraced = 0;
   uint64_t raysSkipped = 0;  ///< lanes masked because the camera gave no ray or it was non-finite
-  /// Of raysTraced, those the scene-box test resolved as misses without Embree (in the null
-  /// trace, those it would have resolved: every lane still fakes a hit there).
+  /// Of raysTraced, those the scene-box test or the coverage mask resolved as misses without
+  /// Embree (in the null trace, those they would have resolved: every lane still fakes a hit
+  /// there).
   uint64_t raysOutsideBox = 0;
+  /// Fraction of the image's blocks the frame's coverage mask covered; −1 when the frame had
+  /// none (RenderSettings::coverageMask).
+  double maskCovered = -1;
   uint64_t hits = 0;
   double mraysPerSecond() const { return seconds > 0 ? raysTraced / seconds * 1e-6 : 0; }
 };

@@ -255,6 +255,7 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
     : device_(device), options_(options) {
   if (objects.empty()) throw Error("scene: no meshes");
   renderOrigin_ = renderOriginOf(objects);
+  objects_ = objects;
   const std::vector<bool> direct = attachedDirectly(objects);
 
   const long long bytesBefore = device.memoryBytes();
@@ -328,6 +329,13 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
   stats_.buildSeconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   stats_.embreeBytes = device.memoryBytes() - bytesBefore;
+}
+
+const OccupancyGrid* Scene::occupancy() const {
+  std::call_once(occupancyOnce_, [this] {
+    if (box_) occupancy_ = occupancyOf(objects_, renderOrigin_, *box_);
+  });
+  return occupancy_ ? &*occupancy_ : nullptr;
 }
 
 RTCScene Scene::buildSubScene(const Mesh& m, const uint32_t* indices, size_t triangles,

@@ -5,11 +5,13 @@
 #include <cstddef>
 #include <glm/glm.hpp>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "core/mesh.h"
+#include "core/occupancy.h"
 #include "core/scene_box.h"
 
 namespace aperture {
@@ -181,6 +183,10 @@ class Scene {
   /// Render-space box that holds everything a ray can hit, padded (core/scene_box.h); nullopt
   /// when Embree's bounds are empty or not finite.
   const std::optional<SceneBox>& box() const { return box_; }
+  /// Where in the box there is anything to hit (core/occupancy.h), built at the first call
+  /// (thread-safe: cameras that cannot use it never pay for it); null without a box or
+  /// above kOccupancyMaxTriangles placed triangles.
+  const OccupancyGrid* occupancy() const;
   /// True when some object was built from a TriangleSubset (view-volume culling).
   bool culled() const { return !primIdMaps_.empty(); }
   /// True when Embree's primID is not what the user numbers a triangle by: some object was
@@ -218,6 +224,9 @@ class Scene {
   std::vector<const uint32_t*> primIdMaps_;  ///< per object; empty when nothing is culled
   bool reordered_ = false;                   ///< some object's mesh has Mesh::sourceTriangles
   std::optional<SceneBox> box_;
+  std::vector<SceneObject> objects_;  ///< as given: occupancy() reads their triangles
+  mutable std::once_flag occupancyOnce_;
+  mutable std::optional<OccupancyGrid> occupancy_;
   std::vector<RTCScene> subScenes_;
   /// What a top-level geomID placing a chunk stands for: the chunk's object
   /// (RTC_INVALID_GEOMETRY_ID for a geomID that places no chunk) and its first triangle.

@@ -1,0 +1,75 @@
+#pragma once
+// The blocks of a camera's image that can see anything: the scene's occupied cells
+// (core/occupancy.h) projected through the camera's projective map. A packet whose block no
+// cell covers is a miss without calling Embree, like the rays the scene-box test resolves,
+// but the mask follows the shape of the geometry rather than its box: around a scan the
+// background inside its box is resolved too.
+//
+// For cameras whose rays all start at one point (Camera::sharedRayOrigin) and follow a
+// projective map (CameraDescription::ndcFromWorld): pinhole perspective cameras and
+// undistorted calibrated ones. Conservative by construction, so images are bit-identical with
+// and without it. For a ray of pixel (i, j) from the float eye o' along the float direction
+// d' that hits P = o' + t·d':
+//  - Q = e + t·d' (e the exact eye) lies within |o' − e| of P, so in an occupied cell grown by
+//    that much (every cell is grown by it);
+//  - Q seen from e lies along d', whose raster position is within rounding of the sample's,
+//    which lies in pixel (i, j): the projected rectangle of the grown cell, widened by two
+//    pixels, holds the pixel;
+//  - every hit has planar depth at least (distance from e to the cell) · (the smallest cosine
+//    of a ray of the image with the view axis), so each cell is clipped to that depth before
+//    it is projected: a cell beside or behind the eye covers only what it can.
+// A frame whose eye lies in an occupied cell gets no mask.
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <optional>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/occupancy.h"
+
+namespace aperture {
+
+/// Pixels per side of a mask block: a packet's block (at most 4x4, aligned) lies in one.
+inline constexpr int kCoverageBlock = 4;
+
+/// A camera's projective map from render space, as the coverage mask needs it.
+struct CentralProjection {
+  /// Homogeneous raster from render space (GLM column vectors): raster x = row 0 / row 3,
+  /// y = row 1 / row 3, pixel (i, j) centre at (j + ½, i + ½); row 3 is positive in front.
+  glm::dmat4 rasterFromRender{1.0};
+  glm::dvec3 eye{0.0};        ///< exact eye, render space
+  glm::vec3 rayOrigin{0.0f};  ///< the rays' float origin (Camera::sharedRayOrigin)
+  int width = 0, height = 0;
+  /// The smallest value of row 3's linear part · d over the unit directions d of the
+  /// image's rays (its corners widened by two pixels); positive.
+  double minDepthRate = 0;
+};
+
+/// The projection of `camera` in a scene whose render origin is `renderOrigin`, or nothing when
+/// the camera has no shared ray origin or no projective map (CameraDescription::ndcFromWorld).
+std::optional<CentralProjection> centralProjectionOf(const Camera& camera,
+                                                     const glm::dvec3& renderOrigin);
+
+class CoverageMask {
+ public:
+  CoverageMask(int width, int height);
+  /// Whether the block holding pixel (row, column) may see an occupied cell.
+  bool covers(int row, int column) const {
+    return covered_[size_t(row / kCoverageBlock) * size_t(blocksX_) +
+                    size_t(column / kCoverageBlock)] != 0;
+  }
+  /// Fraction of the image's blocks covered.
+  double coveredFraction() const;
+
+ private:
+  friend std::optional<CoverageMask> coverageMaskOf(const OccupancyGrid&, const CentralProjection&);
+  int blocksX_, blocksY_;
+  std::vector<uint8_t> covered_;
+};
+
+/// The mask of `grid` seen through `projection`; nothing when the eye lies in an occupied cell
+/// or a projection is not finite (then every ray is traced).
+std::optional<CoverageMask> coverageMaskOf(const OccupancyGrid& grid,
+                                           const CentralProjection& projection);
+
+}  // namespace aperture

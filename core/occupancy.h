@@ -1,0 +1,52 @@
+#pragma once
+// Where in the scene's box there is anything to hit: a coarse grid of cubic cells, a cell
+// occupied when some triangle's box (grown by kSceneBoxPadding of the scene's size, as the
+// scene box is) overlaps it. Built once per Scene; a camera projects its occupied cells to
+// find the pixels whose rays cannot hit anything (core/coverage_mask.h).
+//
+// Conservative by construction: every point Embree can report as a hit lies in an occupied
+// cell. Triangles with a non-finite vertex are left out (Embree ignores them too).
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <optional>
+#include <vector>
+
+#include "core/scene_box.h"
+
+namespace aperture {
+
+struct SceneObject;
+
+/// Cells along the longest axis of the box; the others get as many as their length needs.
+inline constexpr int kOccupancyCells = 128;
+/// A scene with more placed triangles than this gets no grid (its one pass over every placed
+/// triangle would cost more than the rays it saves: instances multiply the count).
+inline constexpr size_t kOccupancyMaxTriangles = size_t(1) << 28;
+
+/// Cells in a run at most: a long run seen obliquely would cover the corner of its rectangle.
+inline constexpr int kOccupancyMaxRun = 8;
+
+/// Occupied cells as runs along x: cells [x0, x1] of row (y, z).
+struct OccupiedRun {
+  uint16_t x0, x1, y, z;
+};
+
+struct OccupancyGrid {
+  glm::dvec3 lo{0.0};  ///< render space: the grid's corner
+  double cell = 0;     ///< edge of a cell, scene units
+  glm::ivec3 dims{0};  ///< cells per axis, each in [1, kOccupancyCells]
+  std::vector<OccupiedRun> runs;
+
+  /// The render-space box of a run.
+  SceneBox runBox(const OccupiedRun& r) const;
+  /// Occupied cells in all (the runs' lengths summed).
+  size_t occupiedCells() const;
+};
+
+/// The grid of `objects` (placed as a Scene places them, with render origin `renderOrigin`)
+/// on `box`, the Scene's padded box; nothing when the box is degenerate or the scene has more
+/// than kOccupancyMaxTriangles placed triangles. Parallel over triangles.
+std::optional<OccupancyGrid> occupancyOf(const std::vector<SceneObject>& objects,
+                                         const glm::dvec3& renderOrigin, const SceneBox& box);
+
+}  // namespace aperture

@@ -1,0 +1,310 @@
+// The coverage mask (core/occupancy.h, core/coverage_mask.h, RenderSettings::coverageMask): the
+// frame loop resolves the packets whose block sees no occupied cell as misses without Embree.
+// Checked four ways: every placed triangle lies in occupied cells; the rays the cameras
+// generate project into their own pixel through the projection the mask uses (and a flipped
+// convention is caught); every pixel the unmasked frame loop hits lies in a covered block,
+// over many random poses, while far blocks are left uncovered (and a mask built with the rows
+// flipped is caught); and every AOV and count is bit-identical with the mask on and off.
+#include <gtest/gtest.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "cameras/registry.h"
+#include "core/coverage_mask.h"
+#include "core/mesh.h"
+#include "core/occupancy.h"
+#include "core/packet.h"
+#include "core/render.h"
+#include "core/scene.h"
+#include "tests/numerics_support.h"
+#include "tests/support.h"
+
+namespace aperture {
+namespace coverage_mask_test {
+
+/// The mesh placed once as loaded and once turned and moved (an Embree instance).
+std::vector<SceneObject> placedTwice(const Mesh& mesh) {
+  SceneObject first{&mesh}, second{&mesh};
+  second.worldFromMesh = glm::translate(glm::dmat4(1.0), glm::dvec3(40.0, -5.0, 12.0)) *
+                         glm::rotate(glm::dmat4(1.0), 0.7, glm::dvec3(0.3, 1.0, 0.2));
+  return {first, second};
+}
+
+/// Whether the render-space point `p` lies in a run's box of `grid`.
+bool inOccupiedCell(const OccupancyGrid& grid, const glm::dvec3& p) {
+  for (const OccupiedRun& r : grid.runs) {
+    const SceneBox b = grid.runBox(r);
+    if (glm::all(glm::lessThanEqual(glm::dvec3(b.lo), p)) &&
+        glm::all(glm::lessThanEqual(p, glm::dvec3(b.hi))))
+      return true;
+  }
+  return false;
+}
+
+TEST(Occupancy, EveryPlacedTriangleLiesInOccupiedCellsAndEmptySpaceIsNotOccupied) {
+  const Mesh mesh = loadMesh("procedural:spheres?tris=3000");
+  const std::vector<SceneObject> objects = placedTwice(mesh);
+  const Scene scene(test::numericsDevice(), objects);
+  const OccupancyGrid* grid = scene.occupancy();
+  ASSERT_NE(grid, nullptr);
+  EXPECT_EQ(std::max({grid->dims.x, grid->dims.y, grid->dims.z}), kOccupancyCells);
+  for (const SceneObject& o : objects) {
+    const glm::dmat4 renderFromLocal = glm::translate(glm::dmat4(1.0), -scene.renderOrigin()) *
+                                       o.worldFromMesh *
+                                       glm::translate(glm::dmat4(1.0), o.mesh->anchor);
+    for (size_t t = 0; t < mesh.triangleCount(); t += 7) {
+      glm::dvec3 corner[3];
+      for (int c = 0; c < 3; ++c)
+        corner[c] = glm::dvec3(renderFromLocal *
+                               glm::dvec4(glm::dvec3(mesh.vertex(mesh.indices[3 * t + c])), 1.0));
+      // The corners and points inside the triangle.
+      for (const glm::dvec3& b : {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1),
+                                  glm::dvec3(1.0 / 3), glm::dvec3(0.6, 0.3, 0.1)})
+        ASSERT_TRUE(inOccupiedCell(*grid, b.x * corner[0] + b.y * corner[1] + b.z * corner[2]))
+            << "triangle " << t;
+    }
+  }
+  // The spheres fill a small part of their box: most cells are empty, and the corner of the
+  // box far from both placements is.
+  const size_t cells = size_t(grid->dims.x) * size_t(grid->dims.y) * size_t(grid->dims.z);
+  EXPECT_LT(grid->occupiedCells(), cells / 4);
+  EXPECT_GT(grid->occupiedCells(), 100u);
+}
+
+/// Perspective cameras of every variant the mask serves, and calibrated pinholes in both
+/// pixel-centre conventions.
+std::vector<CameraParams> projectiveCameras() {
+  std::vector<CameraParams> all;
+  CameraParams p = test::lookAt({30.0, 12.0, 60.0}, {20.0, 0.0, 5.0}, 61, 43);
+  all.push_back(p);
+  CameraParams samples = p;
+  samples.spp = 4;
+  all.push_back(samples);
+  CameraParams shifted = p;
+  shifted.shift = glm::dvec2(0.3, -0.2);
+  all.push_back(shifted);
+  CameraParams architectural = p;
+  architectural.architectural = true;
+  all.push_back(architectural);
+  CameraParams close = p;  // cells beside and behind the eye: clipped before projection
+  close.eye = {22.0, 3.0, 14.0};
+  close.fovDeg = 100;
+  all.push_back(close);
+  for (const char* centre : {"half-integer", "integer"}) {
+    CameraParams c = p;
+    c.type = "calibrated";
+    c.fovDeg.reset();
+    c.intrinsics = std::vector<double>{50.0, 52.0, 30.0, 21.0};
+    c.lensModel = "PINHOLE";
+    c.pixelCentre = centre;
+    all.push_back(c);
+  }
+  return all;
+}
+
+/// How far (in pixels, beyond its own) the rays of every pixel and sample of `camera` land
+/// from their pixel through `p`, the largest over the image.
+double largestPixelEscape(const Camera& camera, const CentralProjection& p, int spp) {
+  double worst = 0;
+  PacketBuffers<16> packet;
+  for (int sample = 0; sample < spp; ++sample)
+    for (int y0 = 0; y0 < p.height; y0 += 4)
+      for (int x0 = 0; x0 < p.width; x0 += 4) {
+        const PacketRequest req{x0, y0, 4, 4, spp == 1 ? 0 : sample};
+        camera.generate(req, packet.lanes, packet.valid);
+        for (int k = 0; k < 16; ++k) {
+          const LanePixel px = req.pixel(k);
+          if (!packet.valid[k] || !px.inImage(p.width, p.height)) continue;
+          const glm::dvec3 o(packet.lanes.orgX[k], packet.lanes.orgY[k], packet.lanes.orgZ[k]);
+          const glm::dvec3 d(packet.lanes.dirX[k], packet.lanes.dirY[k], packet.lanes.dirZ[k]);
+          const glm::dvec4 h = p.rasterFromRender * glm::dvec4(o + 10.0 * d, 1.0);
+          const double x = h.x / h.w, y = h.y / h.w;
+          worst =
+              std::max({worst, px.column - x, x - (px.column + 1), px.row - y, y - (px.row + 1)});
+        }
+      }
+  return worst;
+}
+
+TEST(CentralProjection, EveryRayProjectsIntoItsOwnPixelAndAFlippedRowConventionIsCaught) {
+  const glm::dvec3 origin(1.0, 2.0, 3.0);
+  for (const CameraParams& p : projectiveCameras()) {
+    const std::string what = p.type + " " + p.pixelCentre;
+    const auto camera = makeCamera(p, origin);
+    const std::optional<CentralProjection> projection = centralProjectionOf(*camera, origin);
+    ASSERT_TRUE(projection.has_value()) << what;
+    EXPECT_GT(projection->minDepthRate, 0.0) << what;
+    EXPECT_LT(largestPixelEscape(*camera, *projection, p.spp), 1e-4) << what;
+    // Rows counted from the bottom (OpenGL's window convention) put the rays far from their
+    // pixels: the check above would fail.
+    CentralProjection flipped = *projection;
+    const glm::dmat4 flipRows(glm::dvec4(1, 0, 0, 0), glm::dvec4(0, -1, 0, 0),
+                              glm::dvec4(0, 0, 1, 0), glm::dvec4(0, p.height, 0, 1));
+    flipped.rasterFromRender = flipRows * flipped.rasterFromRender;
+    EXPECT_GT(largestPixelEscape(*camera, flipped, p.spp), 1.0) << what;
+  }
+}
+
+TEST(CentralProjection, OnlyProjectiveCamerasFromOneEyeHaveOne) {
+  const glm::dvec3 origin(0.0);
+  CameraParams p = test::lookAt({30.0, 12.0, 60.0}, {20.0, 0.0, 5.0}, 61, 43);
+  EXPECT_TRUE(centralProjectionOf(*makeCamera(p, origin), origin).has_value());
+  CameraParams lens = p;
+  lens.type = "thinlens";
+  lens.apertureRadius = 1.5;
+  lens.focusDistance = 60.0;
+  EXPECT_FALSE(centralProjectionOf(*makeCamera(lens, origin), origin).has_value());
+  CameraParams clipped = p;
+  clipped.clip = glm::dvec2(55.0, 70.0);
+  EXPECT_FALSE(centralProjectionOf(*makeCamera(clipped, origin), origin).has_value());
+  for (const char* type : {"equirect", "fisheye"}) {
+    CameraParams pano = p;
+    pano.type = type;
+    pano.fovDeg.reset();
+    EXPECT_FALSE(centralProjectionOf(*makeCamera(pano, origin), origin).has_value()) << type;
+  }
+  CameraParams distorted = p;
+  distorted.type = "calibrated";
+  distorted.fovDeg.reset();
+  distorted.intrinsics = std::vector<double>{50.0, 52.0, 30.0, 21.0};
+  distorted.lensModel = "OPENCV";
+  distorted.distortion = std::vector<double>{-0.1, 0.01, 1e-4, -1e-4};
+  EXPECT_FALSE(centralProjectionOf(*makeCamera(distorted, origin), origin).has_value());
+}
+
+/// The frame of `p` with every geometry AOV; `mask` sets RenderSettings::coverageMask.
+Framebuffer renderWith(const Scene& scene, const CameraParams& p, bool mask, int packet,
+                       RenderStats& stats) {
+  const auto camera = makeCamera(p, scene.renderOrigin());
+  Framebuffer fb(p.width, p.height, parseAovList("all"));
+  RenderSettings rs;
+  rs.spp = p.spp;
+  rs.packetWidth = packet;
+  rs.tileSize = 8;
+  rs.coverageMask = mask;
+  stats = renderImage(scene, *camera, rs, fb);
+  return fb;
+}
+
+/// Pixels hit in `fb` (the centre ray's primID) whose block `mask` does not cover.
+int uncoveredHits(const Framebuffer& fb, const CoverageMask& mask) {
+  int n = 0;
+  for (int i = 0; i < fb.height; ++i)
+    for (int j = 0; j < fb.width; ++j)
+      if (fb.primId[size_t(i) * size_t(fb.width) + size_t(j)] != kInvalidId && !mask.covers(i, j))
+        ++n;
+  return n;
+}
+
+/// A mask of `p` with its rows flipped: the wrong convention the test must catch.
+std::optional<CoverageMask> flippedMask(const OccupancyGrid& grid, CentralProjection p) {
+  const glm::dmat4 flipRows(glm::dvec4(1, 0, 0, 0), glm::dvec4(0, -1, 0, 0), glm::dvec4(0, 0, 1, 0),
+                            glm::dvec4(0, p.height, 0, 1));
+  p.rasterFromRender = flipRows * p.rasterFromRender;
+  return coverageMaskOf(grid, p);
+}
+
+TEST(CoverageMask, EveryHitPixelIsCoveredFromRandomPosesAndAFlippedMaskIsCaught) {
+  const Mesh mesh = loadMesh("procedural:spheres?tris=3000");
+  const Scene scene(test::numericsDevice(), placedTwice(mesh));
+  const OccupancyGrid* grid = scene.occupancy();
+  ASSERT_NE(grid, nullptr);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  int masks = 0, flippedCaught = 0, tight = 0;
+  for (int pose = 0; pose < 60; ++pose) {
+    // Eyes around the scene, some inside its box, looking at a point near it.
+    const glm::dvec3 centre(20.0, -2.0, 6.0);
+    const glm::dvec3 eye = centre + glm::dvec3(60 * unit(rng), 30 * unit(rng), 60 * unit(rng));
+    const glm::dvec3 at = centre + glm::dvec3(25 * unit(rng), 10 * unit(rng), 25 * unit(rng));
+    CameraParams p = test::lookAt(eye, at, 64 + pose % 5, 48 + pose % 3);
+    p.fovDeg = 30 + (pose * 7) % 70;
+    const std::string what = "pose " + std::to_string(pose);
+    RenderStats stats;
+    const Framebuffer fb = renderWith(scene, p, false, 16, stats);
+    const auto camera = makeCamera(p, scene.renderOrigin());
+    const std::optional<CentralProjection> projection =
+        centralProjectionOf(*camera, scene.renderOrigin());
+    ASSERT_TRUE(projection.has_value()) << what;
+    const std::optional<CoverageMask> mask = coverageMaskOf(*grid, *projection);
+    if (!mask) continue;  // the eye in an occupied cell
+    ++masks;
+    EXPECT_EQ(uncoveredHits(fb, *mask), 0) << what;
+    if (stats.hits > 0 && mask->coveredFraction() < 0.9) ++tight;
+    const std::optional<CoverageMask> flipped = flippedMask(*grid, *projection);
+    if (flipped && uncoveredHits(fb, *flipped) > 0) ++flippedCaught;
+  }
+  EXPECT_GT(masks, 45);
+  EXPECT_GT(tight, 20);          // the mask leaves background uncovered
+  EXPECT_GT(flippedCaught, 20);  // and the check sees a mask in the wrong rows
+}
+
+TEST(CoverageMask, CellsBesideTheEyeCoverWhatTheirFrontPartCanShow) {
+  // Street level in the city, wide angle: the ground's cells under the eye reach behind it,
+  // and the rays at the bottom of the image hit their front part, close to the eye's plane.
+  const Mesh mesh = loadMesh("procedural:city");
+  const Scene scene(test::numericsDevice(), {SceneObject{&mesh}});
+  const OccupancyGrid* grid = scene.occupancy();
+  ASSERT_NE(grid, nullptr);
+  int masks = 0;
+  for (int pose = 0; pose < 8; ++pose) {
+    const double a = 0.8 * pose;
+    const glm::dvec3 eye(3.0 * std::cos(a), 0.35, 3.0 * std::sin(a));
+    CameraParams p = test::lookAt(eye, eye + glm::dvec3(std::sin(a), -0.05, -std::cos(a)), 80, 60);
+    p.fovDeg = 110;
+    const std::string what = "pose " + std::to_string(pose);
+    RenderStats stats;
+    const Framebuffer fb = renderWith(scene, p, false, 16, stats);
+    const auto camera = makeCamera(p, scene.renderOrigin());
+    const std::optional<CoverageMask> mask =
+        coverageMaskOf(*grid, *centralProjectionOf(*camera, scene.renderOrigin()));
+    if (!mask) continue;
+    ++masks;
+    EXPECT_EQ(uncoveredHits(fb, *mask), 0) << what;
+  }
+  EXPECT_GT(masks, 4);
+}
+
+TEST(CoverageMask, IsMissingWhenTheEyeIsInAnOccupiedCell) {
+  const Mesh mesh = loadMesh("procedural:spheres?tris=3000");
+  const Scene scene(test::numericsDevice(), {SceneObject{&mesh}});
+  const OccupancyGrid* grid = scene.occupancy();
+  ASSERT_NE(grid, nullptr);
+  const glm::dvec3 inside = glm::dvec3(mesh.vertex(mesh.indices[0])) + mesh.anchor;
+  const CameraParams p = test::lookAt(inside, inside + glm::dvec3(1.0, 0.2, 0.1), 32, 24);
+  const auto camera = makeCamera(p, scene.renderOrigin());
+  const std::optional<CentralProjection> projection =
+      centralProjectionOf(*camera, scene.renderOrigin());
+  ASSERT_TRUE(projection.has_value());
+  EXPECT_FALSE(coverageMaskOf(*grid, *projection).has_value());
+}
+
+TEST(CoverageMaskFrameLoop, EveryAovAndCountIsBitIdenticalWithTheMaskOnAndOff) {
+  const Mesh mesh = loadMesh("procedural:spheres?tris=6000");
+  const Scene scene(test::numericsDevice(), placedTwice(mesh));
+  uint64_t resolvedByMask = 0;
+  for (const CameraParams& p : projectiveCameras())
+    for (int packet : {1, 4, 8, 16}) {
+      const std::string what = p.type + " " + p.pixelCentre + " spp " + std::to_string(p.spp) +
+                               " packet " + std::to_string(packet);
+      RenderStats on, off;
+      const Framebuffer masked = renderWith(scene, p, true, packet, on);
+      const Framebuffer unmasked = renderWith(scene, p, false, packet, off);
+      test::expectIdentical(masked, unmasked, what);
+      EXPECT_EQ(on.raysTraced, off.raysTraced) << what;
+      EXPECT_EQ(on.hits, off.hits) << what;
+      EXPECT_GT(on.hits, 0u) << what;
+      EXPECT_LT(on.raysOutsideBox, on.raysTraced - on.hits + 1) << what;  // only misses
+      EXPECT_GE(on.maskCovered, 0.0) << what << ": the mask applies";
+      EXPECT_EQ(off.maskCovered, -1.0) << what;
+      if (on.raysOutsideBox > off.raysOutsideBox)
+        resolvedByMask += on.raysOutsideBox - off.raysOutsideBox;
+    }
+  EXPECT_GT(resolvedByMask, 10000u);  // beyond what the box alone resolves
+}
+
+}  // namespace coverage_mask_test
+}  // namespace aperture
