@@ -1,17 +1,20 @@
 #!/usr/bin/env bash
 # Issue 13, item 2: the frame loop against bare rtcIntersect16 (`bench --baseline`) with and
-# without the scene-box test (core/scene_box.h: rays that miss the scene's box are resolved as
-# misses without Embree), on the scenes of bench/run_benchmarks.sh at their reference cameras.
-# Three variants, run in turn for each scene, ROUNDS times:
-#   before:  the BEFORE binary (a build without the test);
-#   off:     this build with --no-scene-box;
+# without a way of resolving misses without Embree: the scene-box test (core/scene_box.h, rays
+# that miss the scene's box; OFF_FLAG=--no-scene-box, the default) or the coverage mask
+# (core/coverage_mask.h, blocks that see no occupied cell; OFF_FLAG=--no-coverage-mask), on the
+# scenes of bench/run_benchmarks.sh at their reference cameras. Three variants, run in turn
+# for each scene, ROUNDS times:
+#   before:  the BEFORE binary (a build without it);
+#   off:     this build with OFF_FLAG;
 #   on:      this build as it is.
 # Prints a Markdown table: per scene and variant the median over rounds of the frame loop's
 # Mrays/s, of bare Embree's, and of the ratio (each run's ratio is itself the median of its
-# per-frame pairs), and the share of rays the test resolved.
+# per-frame pairs), and the share of rays resolved without Embree.
 #   git worktree add /tmp/before <commit> && (build apps/aperture there)
 #   BEFORE=/tmp/before/build/apps/aperture bash bench/scene_box_before_after.sh
-#   (AFTER=build/apps/aperture ROUNDS=2 FRAMES=10 THREADS=2 AOVS=depth,normal SCENES_LIST=...)
+#   (AFTER=build/apps/aperture OFF_FLAG=--no-scene-box ROUNDS=2 FRAMES=10 THREADS=2
+#    AOVS=depth,normal SCENES_LIST=...)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 : "${BEFORE:?BEFORE=path of the aperture binary to compare with}"
@@ -29,7 +32,7 @@ for scene in "${ORDER[@]}"; do
     # shellcheck disable=SC2086 # the scene flags are words
     "$BEFORE" bench ${SCENES[$scene]} "${common[@]}" --json "$out/$scene+before+$round.json" >/dev/null
     # shellcheck disable=SC2086
-    "$AFTER" bench ${SCENES[$scene]} "${common[@]}" --no-scene-box \
+    "$AFTER" bench ${SCENES[$scene]} "${common[@]}" "${OFF_FLAG:---no-scene-box}" \
       --json "$out/$scene+off+$round.json" >/dev/null
     # shellcheck disable=SC2086
     "$AFTER" bench ${SCENES[$scene]} "${common[@]}" --json "$out/$scene+on+$round.json" >/dev/null
@@ -43,7 +46,7 @@ for f in glob.glob(f'{out}/*.json'):
     scene, variant, _ = f.rsplit('/', 1)[1][:-5].split('+')
     runs.setdefault((scene, variant), []).append(json.load(open(f)))
 med = lambda rs, key: statistics.median(r.get(key, 0.0) for r in rs)
-print('| scene | before: Mrays/s | bare | ratio | off: Mrays/s | bare | ratio | on: Mrays/s | bare | ratio | rays resolved by the box |')
+print('| scene | before: Mrays/s | bare | ratio | off: Mrays/s | bare | ratio | on: Mrays/s | bare | ratio | rays resolved without Embree (on) |')
 print('|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|')
 for scene in order:
     cells = []

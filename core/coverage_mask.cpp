@@ -67,7 +67,7 @@ std::optional<PixelRect> projectClipped(const Homogeneous (&corner)[8], double m
   double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
   bool any = false;
   auto add = [&](const Homogeneous& h) {
-    const double x = h.x / h.w, y = h.y / h.w;
+    const double inv = 1.0 / h.w, x = h.x * inv, y = h.y * inv;
     x0 = std::min(x0, x), x1 = std::max(x1, x);
     y0 = std::min(y0, y), y1 = std::max(y1, y);
     any = true;
@@ -144,7 +144,10 @@ std::optional<CoverageMask> coverageMaskOf(const OccupancyGrid& grid, const Cent
           }
       }
       const std::optional<PixelRect> r = projectClipped(corner, minW, p.width, p.height);
-      if (!r) {
+      // Not finite, or the whole image: a mask would resolve nothing (an interior seen from
+      // inside), so the frame goes without one rather than building it.
+      if (!r || (r->column0 == 0 && r->row0 == 0 && r->column1 == p.width - 1 &&
+                 r->row1 == p.height - 1)) {
         unusable = true;
         break;
       }

@@ -18,7 +18,8 @@
 //  - every hit has planar depth at least (distance from e to the cell) · (the smallest cosine
 //    of a ray of the image with the view axis), so each cell is clipped to that depth before
 //    it is projected: a cell beside or behind the eye covers only what it can.
-// A frame whose eye lies in an occupied cell gets no mask.
+// A frame whose eye lies in an occupied cell gets no mask, nor one where a single cell covers
+// the whole image (an interior seen from inside): such a mask would resolve nothing.
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <optional>
@@ -67,8 +68,8 @@ class CoverageMask {
   std::vector<uint8_t> covered_;
 };
 
-/// The mask of `grid` seen through `projection`; nothing when the eye lies in an occupied cell
-/// or a projection is not finite (then every ray is traced).
+/// The mask of `grid` seen through `projection`; nothing (then every ray is traced) when the eye
+/// lies in an occupied cell, a projection is not finite, or one cell covers the whole image.
 std::optional<CoverageMask> coverageMaskOf(const OccupancyGrid& grid,
                                            const CentralProjection& projection);
 

@@ -71,7 +71,9 @@ inline constexpr uint64_t kCompactBvhBuildBytesPerTriangle = 40;
 
 /// Resident bytes of the process before any job: the shared libraries' pages (Embree, TBB,
 /// OpenEXR), thread stacks and arenas; `aperture --version` peaks at 9.5 MB, and bench
-/// --scaling at 1e5 triangles leaves about 7 MB beside its mesh, BVH and framebuffers.
+/// --scaling at 1e5 triangles leaves about 7 MB beside its mesh, BVH and framebuffers. It also
+/// covers the coverage mask's occupancy grid (core/occupancy.h: 7 MB of cell marks while it is
+/// built, after the BVH's build peak, then 8 bytes per run of occupied cells).
 inline constexpr uint64_t kRuntimeBytes = 10ull << 20;
 /// What the image codec (core/image_codec.h: OpenImageIO and the libraries it brings) adds
 /// once loaded, for a job that writes or reads PNG, JPEG or TIFF files: 122 MB measured, a

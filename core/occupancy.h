@@ -18,7 +18,9 @@ namespace aperture {
 struct SceneObject;
 
 /// Cells along the longest axis of the box; the others get as many as their length needs.
-inline constexpr int kOccupancyCells = 128;
+/// 192 against 128 and 256 (bench/RESULTS.md, "Issue 13, item 2: blocks that see nothing"):
+/// finer cells fit the silhouette closer, but each frame projects more runs.
+inline constexpr int kOccupancyCells = 192;
 /// A scene with more placed triangles than this gets no grid (its one pass over every placed
 /// triangle would cost more than the rays it saves: instances multiply the count).
 inline constexpr size_t kOccupancyMaxTriangles = size_t(1) << 28;
