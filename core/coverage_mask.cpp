@@ -54,14 +54,32 @@ struct Homogeneous {
   double x, y, w;
 };
 
-/// The pixel rectangle [lo, hi] (inclusive, clamped to the image) that may see the part of a
-/// box at planar depth ≥ `minW`; empty (lo > hi) when that part projects off the image or is
-/// empty; nothing when a projection is not finite.
+/// Pixels [column0, column1] x [row0, row1], inclusive; empty when an end passes the other.
 struct PixelRect {
   int column0, row0, column1, row1;
   bool empty() const { return column0 > column1 || row0 > row1; }
 };
 
+/// Adds the vertices of the part of a box at depth ≥ minW: its corners there and the points
+/// where its 12 edges cross that depth.
+template <class Add>
+void clipAndAdd(const Homogeneous (&corner)[8], double minW, const Add& add) {
+  for (int c = 0; c < 8; ++c) {
+    if (corner[c].w >= minW) add(corner[c]);
+    for (int axis = 0; axis < 3; ++axis) {  // the box's 12 edges, each once
+      const int bit = 1 << axis;
+      if (c & bit) continue;
+      const Homogeneous &a = corner[c], &b = corner[c | bit];
+      if ((a.w >= minW) == (b.w >= minW)) continue;
+      const double s = (minW - a.w) / (b.w - a.w);  // the edge's point at depth minW
+      add(Homogeneous{a.x + s * (b.x - a.x), a.y + s * (b.y - a.y), minW});
+    }
+  }
+}
+
+/// The pixel rectangle (clamped to the image) that may see the part of a box at planar depth
+/// ≥ `minW`; empty when that part projects off the image or is empty; nothing when a
+/// projection is not finite.
 std::optional<PixelRect> projectClipped(const Homogeneous (&corner)[8], double minW, int width,
                                         int height) {
   double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
@@ -72,16 +90,12 @@ std::optional<PixelRect> projectClipped(const Homogeneous (&corner)[8], double m
     y0 = std::min(y0, y), y1 = std::max(y1, y);
     any = true;
   };
-  for (int c = 0; c < 8; ++c) {
-    if (corner[c].w >= minW) add(corner[c]);
-    for (int axis = 0; axis < 3; ++axis) {  // the box's 12 edges, each once
-      const int bit = 1 << axis;
-      if (c & bit) continue;
-      const Homogeneous &a = corner[c], &b = corner[c | bit];
-      if ((a.w >= minW) == (b.w >= minW)) continue;
-      const double s = (minW - a.w) / (b.w - a.w);  // the edge's point at depth minW
-      add({a.x + s * (b.x - a.x), a.y + s * (b.y - a.y), minW});
-    }
+  double nearest = corner[0].w;
+  for (int c = 1; c < 8; ++c) nearest = std::min(nearest, corner[c].w);
+  if (nearest >= minW) {  // the whole box lies deep enough: its corners bound it
+    for (int c = 0; c < 8; ++c) add(corner[c]);
+  } else {
+    clipAndAdd(corner, minW, add);
   }
   if (!any) return PixelRect{0, 0, -1, -1};
   if (!std::isfinite(x0) || !std::isfinite(x1) || !std::isfinite(y0) || !std::isfinite(y1))
