@@ -54,12 +54,6 @@ struct Homogeneous {
   double x, y, w;
 };
 
-/// Pixels [column0, column1] x [row0, row1], inclusive; empty when an end passes the other.
-struct PixelRect {
-  int column0, row0, column1, row1;
-  bool empty() const { return column0 > column1 || row0 > row1; }
-};
-
 /// Adds the vertices of the part of a box at depth ≥ minW: its corners there and the points
 /// where its 12 edges cross that depth.
 template <class Add>
@@ -111,66 +105,82 @@ std::optional<PixelRect> projectClipped(const Homogeneous (&corner)[8], double m
   return PixelRect{first(x0, width), first(y0, height), last(x1, width), last(y1, height)};
 }
 
+/// Projects the runs of one grid through one camera (the per-run part of coverageMaskOf).
+class RunProjector {
+ public:
+  RunProjector(const OccupancyGrid& grid, const CentralProjection& p)
+      : grid_(grid), p_(p), m_(p.rasterFromRender) {
+    const glm::dvec3 depthRow(m_[0][3], m_[1][3], m_[2][3]);
+    eyeW_ = glm::dot(depthRow, p.eye) + m_[3][3];
+    // Every cell grown by the rounding of the rays' origin (twice, and a little more).
+    const glm::dvec3 originError = glm::abs(glm::dvec3(p.rayOrigin) - p.eye);
+    grow_ = 2.0 * std::max({originError.x, originError.y, originError.z}) +
+            glm::length(p.eye) * 0x1p-40;
+    // A float direction is within 2^-23·√3 of the unit one: the rate and the distance each
+    // lose at most a part in 10^6.
+    rate_ = (p.minDepthRate - 1e-6 * glm::length(depthRow)) * (1.0 - 1e-6);
+  }
+
+  /// The pixels that may see the run; nothing when the eye lies in (or at) it, a projection is
+  /// not finite, or the run covers the whole image (a mask would then resolve nothing).
+  std::optional<PixelRect> rectOf(const OccupiedRun& run) const {
+    const glm::dvec3 lo = grid_.lo + grid_.cell * glm::dvec3(run.x0, run.y, run.z) - grow_;
+    const glm::dvec3 hi =
+        grid_.lo + grid_.cell * glm::dvec3(run.x1 + 1, run.y + 1, run.z + 1) + grow_;
+    const double distance = glm::length(glm::max(glm::max(lo - p_.eye, p_.eye - hi), 0.0));
+    const double minW = eyeW_ + distance * rate_;
+    if (!(distance > 0) || !(minW > 0)) return std::nullopt;
+    // A corner's homogeneous raster position is linear in it: the low corner's, plus the
+    // columns of the matrix scaled by the box's edges.
+    const glm::dvec4 l = m_ * glm::dvec4(lo, 1.0);
+    const Homogeneous base{l.x, l.y, l.w},
+        edge[3] = {column(0, hi.x - lo.x), column(1, hi.y - lo.y), column(2, hi.z - lo.z)};
+    Homogeneous corner[8];
+    for (int c = 0; c < 8; ++c) {
+      corner[c] = base;
+      for (int axis = 0; axis < 3; ++axis)
+        if (c & (1 << axis)) {
+          corner[c].x += edge[axis].x;
+          corner[c].y += edge[axis].y;
+          corner[c].w += edge[axis].w;
+        }
+    }
+    const std::optional<PixelRect> r = projectClipped(corner, minW, p_.width, p_.height);
+    if (r && r->column0 == 0 && r->row0 == 0 && r->column1 == p_.width - 1 &&
+        r->row1 == p_.height - 1)
+      return std::nullopt;
+    return r;
+  }
+
+  /// The rectangle of every run (in parallel); false when a run has none (rectOf).
+  bool rectsOf(std::vector<PixelRect>& out) const {
+    out.resize(grid_.runs.size());
+    std::atomic<bool> unusable{false};
+    parallelFor(out.size(), 1024, [&](size_t begin, size_t end) {
+      for (size_t k = begin; k != end && !unusable; ++k) {
+        const std::optional<PixelRect> r = rectOf(grid_.runs[k]);
+        if (!r) unusable = true;
+        if (r) out[k] = *r;
+      }
+    });
+    return !unusable;
+  }
+
+ private:
+  Homogeneous column(int c, double scale) const {
+    return {m_[c][0] * scale, m_[c][1] * scale, m_[c][3] * scale};
+  }
+
+  const OccupancyGrid& grid_;
+  const CentralProjection& p_;
+  const glm::dmat4& m_;
+  double eyeW_, grow_, rate_;
+};
+
 }  // namespace
 
-std::optional<CoverageMask> coverageMaskOf(const OccupancyGrid& grid, const CentralProjection& p) {
-  const glm::dmat4& m = p.rasterFromRender;
-  const glm::dvec3 depthRow(m[0][3], m[1][3], m[2][3]);
-  const double eyeW = glm::dot(depthRow, p.eye) + m[3][3];
-  // Every cell grown by the rounding of the rays' origin (twice, and a little more).
-  const glm::dvec3 originError = glm::abs(glm::dvec3(p.rayOrigin) - p.eye);
-  const double grow =
-      2.0 * std::max({originError.x, originError.y, originError.z}) + glm::length(p.eye) * 0x1p-40;
-  // A float direction is within 2^-23·√3 of the unit one: the rate and the distance each lose
-  // at most a part in 10^6.
-  const double rate = (p.minDepthRate - 1e-6 * glm::length(depthRow)) * (1.0 - 1e-6);
-  // A corner's homogeneous raster position is linear in it: the box's low corner's, plus the
-  // columns of `m` scaled by the box's edges.
-  auto homogeneous = [&m](int column, double scale) {
-    return Homogeneous{m[column][0] * scale, m[column][1] * scale, m[column][3] * scale};
-  };
-  std::vector<PixelRect> rects(grid.runs.size());
-  std::atomic<bool> unusable{false};
-  parallelFor(grid.runs.size(), 1024, [&](size_t first, size_t last) {
-    for (size_t k = first; k != last && !unusable; ++k) {
-      const OccupiedRun& run = grid.runs[k];
-      const glm::dvec3 lo = grid.lo + grid.cell * glm::dvec3(run.x0, run.y, run.z) - grow;
-      const glm::dvec3 hi =
-          grid.lo + grid.cell * glm::dvec3(run.x1 + 1, run.y + 1, run.z + 1) + grow;
-      const double distance = glm::length(glm::max(glm::max(lo - p.eye, p.eye - hi), 0.0));
-      const double minW = eyeW + distance * rate;
-      if (!(distance > 0) || !(minW > 0)) {  // the eye lies in (or at) the cell
-        unusable = true;
-        break;
-      }
-      const glm::dvec4 l = m * glm::dvec4(lo, 1.0);
-      const Homogeneous base{l.x, l.y, l.w},
-          edge[3] = {homogeneous(0, hi.x - lo.x), homogeneous(1, hi.y - lo.y),
-                     homogeneous(2, hi.z - lo.z)};
-      Homogeneous corner[8];
-      for (int c = 0; c < 8; ++c) {
-        corner[c] = base;
-        for (int axis = 0; axis < 3; ++axis)
-          if (c & (1 << axis)) {
-            corner[c].x += edge[axis].x;
-            corner[c].y += edge[axis].y;
-            corner[c].w += edge[axis].w;
-          }
-      }
-      const std::optional<PixelRect> r = projectClipped(corner, minW, p.width, p.height);
-      // Not finite, or the whole image: a mask would resolve nothing (an interior seen from
-      // inside), so the frame goes without one rather than building it.
-      if (!r || (r->column0 == 0 && r->row0 == 0 && r->column1 == p.width - 1 &&
-                 r->row1 == p.height - 1)) {
-        unusable = true;
-        break;
-      }
-      rects[k] = *r;
-    }
-  });
-  if (unusable) return std::nullopt;
-  CoverageMask mask(p.width, p.height);
-  const size_t bx = size_t(mask.blocksX_), by = size_t(mask.blocksY_), stride = bx + 1;
+void CoverageMask::cover(const std::vector<PixelRect>& rects) {
+  const size_t bx = size_t(blocksX_), by = size_t(blocksY_), stride = bx + 1;
   // Each rectangle adds 1 inside it through its four corners; two passes of prefix sums turn
   // the corner marks into counts of covering rectangles.
   std::vector<int> count(stride * (by + 1), 0);
@@ -189,8 +199,15 @@ std::optional<CoverageMask> coverageMaskOf(const OccupancyGrid& grid, const Cent
   for (size_t y = 0; y < by; ++y)
     for (size_t x = 0; x < bx; ++x) {
       if (y > 0) count[y * stride + x] += count[(y - 1) * stride + x];
-      mask.covered_[y * bx + x] = count[y * stride + x] > 0 ? 1 : 0;
+      covered_[y * bx + x] = count[y * stride + x] > 0 ? 1 : 0;
     }
+}
+
+std::optional<CoverageMask> coverageMaskOf(const OccupancyGrid& grid, const CentralProjection& p) {
+  std::vector<PixelRect> rects;
+  if (!RunProjector(grid, p).rectsOf(rects)) return std::nullopt;
+  CoverageMask mask(p.width, p.height);
+  mask.cover(rects);
   return mask;
 }
 

@@ -20,6 +20,7 @@
 //    it is projected: a cell beside or behind the eye covers only what it can.
 // A frame whose eye lies in an occupied cell gets no mask, nor one where a single cell covers
 // the whole image (an interior seen from inside): such a mask would resolve nothing.
+#include <cstddef>
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <optional>
@@ -51,6 +52,12 @@ struct CentralProjection {
 std::optional<CentralProjection> centralProjectionOf(const Camera& camera,
                                                      const glm::dvec3& renderOrigin);
 
+/// Pixels [column0, column1] x [row0, row1], inclusive; empty when an end passes the other.
+struct PixelRect {
+  int column0, row0, column1, row1;
+  bool empty() const { return column0 > column1 || row0 > row1; }
+};
+
 class CoverageMask {
  public:
   CoverageMask(int width, int height);
@@ -64,6 +71,9 @@ class CoverageMask {
 
  private:
   friend std::optional<CoverageMask> coverageMaskOf(const OccupancyGrid&, const CentralProjection&);
+  /// Marks the blocks the rectangles cover (each block stays covered once covered).
+  void cover(const std::vector<PixelRect>& rects);
+
   int blocksX_, blocksY_;
   std::vector<uint8_t> covered_;
 };
