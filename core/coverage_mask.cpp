@@ -6,6 +6,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "core/parallel.h"
+#include "core/vector_kernel.h"
 
 namespace aperture {
 
@@ -54,10 +55,43 @@ struct Homogeneous {
   double x, y, w;
 };
 
-/// Adds the vertices of the part of a box at depth ≥ minW: its corners there and the points
-/// where its 12 edges cross that depth.
-template <class Add>
-void clipAndAdd(const Homogeneous (&corner)[8], double minW, const Add& add) {
+/// Whether x is finite, as a comparison that vectorises (std::isfinite does not).
+inline bool finite(double x) { return std::fabs(x) <= std::numeric_limits<double>::max(); }
+
+/// The first and last pixel (column or row, clamped to [0, size)) that may see raster
+/// positions [lo, hi] along one axis, both finite: pixel j may when [j − 1, j + 2) meets
+/// [lo, hi] (a sample lies in [j, j + 1), widened by a pixel for the rounding of the ray's
+/// direction). Empty (first > last) when the span lies off the image. Branch-free, so the
+/// batch kernel's lane loop vectorises through it.
+inline void pixelSpan(double lo, double hi, int size, int& first, int& last) {
+  first = int(std::clamp(std::floor(lo) - 2.0, 0.0, double(size)));
+  last = int(std::clamp(std::floor(hi) + 2.0, -1.0, double(size - 1)));
+}
+
+/// The pixels that may see raster positions [x0, x1] x [y0, y1] (pixelSpan on each axis);
+/// nothing when a bound is not finite.
+std::optional<PixelRect> pixelsSeeing(double x0, double x1, double y0, double y1, int width,
+                                      int height) {
+  if (!finite(x0) || !finite(x1) || !finite(y0) || !finite(y1)) return std::nullopt;
+  PixelRect r;
+  pixelSpan(x0, x1, width, r.column0, r.column1);
+  pixelSpan(y0, y1, height, r.row0, r.row1);
+  return r;
+}
+
+/// The pixels that may see the part of a box (its corners' homogeneous raster positions) at
+/// planar depth ≥ `minW`: its corners there and the points where its 12 edges cross that
+/// depth bound it. Empty when no part lies there; nothing when a projection is not finite.
+std::optional<PixelRect> projectClipped(const Homogeneous (&corner)[8], double minW, int width,
+                                        int height) {
+  double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+  bool any = false;
+  auto add = [&](const Homogeneous& h) {
+    const double inv = 1.0 / h.w, x = h.x * inv, y = h.y * inv;
+    x0 = std::min(x0, x), x1 = std::max(x1, x);
+    y0 = std::min(y0, y), y1 = std::max(y1, y);
+    any = true;
+  };
   for (int c = 0; c < 8; ++c) {
     if (corner[c].w >= minW) add(corner[c]);
     for (int axis = 0; axis < 3; ++axis) {  // the box's 12 edges, each once
@@ -69,112 +103,161 @@ void clipAndAdd(const Homogeneous (&corner)[8], double minW, const Add& add) {
       add(Homogeneous{a.x + s * (b.x - a.x), a.y + s * (b.y - a.y), minW});
     }
   }
+  if (!any) return PixelRect{0, 0, -1, -1};
+  return pixelsSeeing(x0, x1, y0, y1, width, height);
 }
 
-/// The pixel rectangle (clamped to the image) that may see the part of a box at planar depth
-/// ≥ `minW`; empty when that part projects off the image or is empty; nothing when a
-/// projection is not finite.
-std::optional<PixelRect> projectClipped(const Homogeneous (&corner)[8], double minW, int width,
-                                        int height) {
-  double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
-  bool any = false;
-  auto add = [&](const Homogeneous& h) {
-    const double inv = 1.0 / h.w, x = h.x * inv, y = h.y * inv;
-    x0 = std::min(x0, x), x1 = std::max(x1, x);
-    y0 = std::min(y0, y), y1 = std::max(y1, y);
-    any = true;
-  };
-  double nearest = corner[0].w;
-  for (int c = 1; c < 8; ++c) nearest = std::min(nearest, corner[c].w);
-  if (nearest >= minW) {  // the whole box lies deep enough: its corners bound it
-    for (int c = 0; c < 8; ++c) add(corner[c]);
-  } else {
-    clipAndAdd(corner, minW, add);
+/// Runs one call of boundRunCorners takes (a constant, so its lane loops vectorise).
+constexpr int kRunBatch = 64;
+
+/// A camera's map and a grid's placement as plain numbers, for boundRunCorners.
+struct RunProjection {
+  double gridLo[3], cell;
+  double grow;     ///< every cell grown by this (the rounding of the rays' origin)
+  double eye[3];   ///< exact eye, render space
+  double eyeW;     ///< depth row of the map at the eye (0 up to rounding)
+  double rate;     ///< least depth gained per unit of distance along a ray of the image
+  double m[4][4];  ///< homogeneous raster from render space, m[column][row]
+  int width, height;
+};
+
+/// The runs of one batch, lane by lane: their boxes' corners' homogeneous raster positions,
+/// the bounds of the corners' raster positions, the nearest corner's depth, and the least
+/// depth a hit in the box can have (distance from the eye times the rate).
+struct RunBatch {
+  alignas(64) double cornerX[8][kRunBatch], cornerY[8][kRunBatch], cornerW[8][kRunBatch];
+  alignas(64) double x0[kRunBatch], x1[kRunBatch], y0[kRunBatch], y1[kRunBatch];
+  alignas(64) double nearest[kRunBatch], distance[kRunBatch], minW[kRunBatch];
+  /// The pixels the corners' bounds give (pixelSpan), valid where `bounded` is set: every
+  /// bound finite.
+  alignas(64) int column0[kRunBatch], column1[kRunBatch], row0[kRunBatch], row1[kRunBatch];
+  alignas(64) int bounded[kRunBatch];
+};
+
+/// Fills `out` for runs[0 .. kRunBatch) (the caller pads a short batch by repeating a run).
+/// Each box is the run's cells grown by p.grow; a corner's position is linear in it: the low
+/// corner's, plus the matrix's columns scaled by the box's edges. A per-ISA kernel.
+APERTURE_VECTOR_KERNEL void boundRunCorners(const RunProjection& p, const OccupiedRun* runs,
+                                            RunBatch& out) {
+  APERTURE_LANE_LOOP
+  for (int k = 0; k < kRunBatch; ++k) {
+    const OccupiedRun& r = runs[k];
+    const double lo[3] = {p.gridLo[0] + p.cell * r.x0 - p.grow, p.gridLo[1] + p.cell * r.y - p.grow,
+                          p.gridLo[2] + p.cell * r.z - p.grow};
+    const double hi[3] = {p.gridLo[0] + p.cell * (r.x1 + 1) + p.grow,
+                          p.gridLo[1] + p.cell * (r.y + 1) + p.grow,
+                          p.gridLo[2] + p.cell * (r.z + 1) + p.grow};
+    // Inner loops unrolled whole, so the lane loop around them vectorises.
+    double distance2 = 0;
+#pragma GCC unroll 3
+    for (int a = 0; a < 3; ++a) {
+      const double gap = std::max(std::max(lo[a] - p.eye[a], p.eye[a] - hi[a]), 0.0);
+      distance2 += gap * gap;
+    }
+    out.distance[k] = std::sqrt(distance2);
+    out.minW[k] = p.eyeW + out.distance[k] * p.rate;
+    double h[8][3];  // the corners' [x, y, w]; corner c takes hi on axis a where bit a is set
+#pragma GCC unroll 3
+    for (int row = 0; row < 3; ++row) {
+      const int mr = row == 2 ? 3 : row;
+      const double e0 = p.m[0][mr] * (hi[0] - lo[0]), e1 = p.m[1][mr] * (hi[1] - lo[1]),
+                   e2 = p.m[2][mr] * (hi[2] - lo[2]);
+      const double base = p.m[0][mr] * lo[0] + p.m[1][mr] * lo[1] + p.m[2][mr] * lo[2] + p.m[3][mr];
+      h[0][row] = base, h[1][row] = base + e0, h[2][row] = base + e1, h[3][row] = base + e0 + e1;
+      h[4][row] = base + e2, h[5][row] = h[1][row] + e2, h[6][row] = h[2][row] + e2;
+      h[7][row] = h[3][row] + e2;
+    }
+    double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY, nearest = INFINITY;
+#pragma GCC unroll 8
+    for (int c = 0; c < 8; ++c) {
+      out.cornerX[c][k] = h[c][0], out.cornerY[c][k] = h[c][1], out.cornerW[c][k] = h[c][2];
+      const double inv = 1.0 / h[c][2], x = h[c][0] * inv, y = h[c][1] * inv;
+      x0 = std::min(x0, x), x1 = std::max(x1, x);
+      y0 = std::min(y0, y), y1 = std::max(y1, y);
+      nearest = std::min(nearest, h[c][2]);
+    }
+    out.x0[k] = x0, out.x1[k] = x1, out.y0[k] = y0, out.y1[k] = y1, out.nearest[k] = nearest;
+    const int bounded = int(finite(x0)) & int(finite(x1)) & int(finite(y0)) & int(finite(y1));
+    out.bounded[k] = bounded;
+    // Non-finite bounds replaced by 0 before the conversions to int (their result unused).
+    pixelSpan(bounded ? x0 : 0.0, bounded ? x1 : 0.0, p.width, out.column0[k], out.column1[k]);
+    pixelSpan(bounded ? y0 : 0.0, bounded ? y1 : 0.0, p.height, out.row0[k], out.row1[k]);
   }
-  if (!any) return PixelRect{0, 0, -1, -1};
-  if (!std::isfinite(x0) || !std::isfinite(x1) || !std::isfinite(y0) || !std::isfinite(y1))
-    return std::nullopt;
-  // Pixel j may see the box when [j − 1, j + 2) meets [x0, x1]: the sample lies in [j, j + 1),
-  // widened by a pixel for the rounding of the ray's direction.
-  auto first = [](double lo, int size) {
-    return int(std::clamp(std::floor(lo) - 2.0, 0.0, double(size)));
-  };
-  auto last = [](double hi, int size) {
-    return int(std::clamp(std::floor(hi) + 2.0, -1.0, double(size - 1)));
-  };
-  return PixelRect{first(x0, width), first(y0, height), last(x1, width), last(y1, height)};
 }
 
 /// Projects the runs of one grid through one camera (the per-run part of coverageMaskOf).
 class RunProjector {
  public:
-  RunProjector(const OccupancyGrid& grid, const CentralProjection& p)
-      : grid_(grid), p_(p), m_(p.rasterFromRender) {
-    const glm::dvec3 depthRow(m_[0][3], m_[1][3], m_[2][3]);
-    eyeW_ = glm::dot(depthRow, p.eye) + m_[3][3];
+  RunProjector(const OccupancyGrid& grid, const CentralProjection& p) : grid_(grid), p_(p) {
+    const glm::dmat4& m = p.rasterFromRender;
+    const glm::dvec3 depthRow(m[0][3], m[1][3], m[2][3]);
+    for (int a = 0; a < 3; ++a) {
+      c_.gridLo[a] = grid.lo[a];
+      c_.eye[a] = p.eye[a];
+    }
+    c_.cell = grid.cell;
+    c_.eyeW = glm::dot(depthRow, p.eye) + m[3][3];
     // Every cell grown by the rounding of the rays' origin (twice, and a little more).
     const glm::dvec3 originError = glm::abs(glm::dvec3(p.rayOrigin) - p.eye);
-    grow_ = 2.0 * std::max({originError.x, originError.y, originError.z}) +
-            glm::length(p.eye) * 0x1p-40;
+    c_.grow = 2.0 * std::max({originError.x, originError.y, originError.z}) +
+              glm::length(p.eye) * 0x1p-40;
     // A float direction is within 2^-23·√3 of the unit one: the rate and the distance each
     // lose at most a part in 10^6.
-    rate_ = (p.minDepthRate - 1e-6 * glm::length(depthRow)) * (1.0 - 1e-6);
+    c_.rate = (p.minDepthRate - 1e-6 * glm::length(depthRow)) * (1.0 - 1e-6);
+    for (int column = 0; column < 4; ++column)
+      for (int row = 0; row < 4; ++row) c_.m[column][row] = m[column][row];
+    c_.width = p.width;
+    c_.height = p.height;
   }
 
-  /// The pixels that may see the run; nothing when the eye lies in (or at) it, a projection is
-  /// not finite, or the run covers the whole image (a mask would then resolve nothing).
-  std::optional<PixelRect> rectOf(const OccupiedRun& run) const {
-    const glm::dvec3 lo = grid_.lo + grid_.cell * glm::dvec3(run.x0, run.y, run.z) - grow_;
-    const glm::dvec3 hi =
-        grid_.lo + grid_.cell * glm::dvec3(run.x1 + 1, run.y + 1, run.z + 1) + grow_;
-    const double distance = glm::length(glm::max(glm::max(lo - p_.eye, p_.eye - hi), 0.0));
-    const double minW = eyeW_ + distance * rate_;
-    if (!(distance > 0) || !(minW > 0)) return std::nullopt;
-    // A corner's homogeneous raster position is linear in it: the low corner's, plus the
-    // columns of the matrix scaled by the box's edges.
-    const glm::dvec4 l = m_ * glm::dvec4(lo, 1.0);
-    const Homogeneous base{l.x, l.y, l.w},
-        edge[3] = {column(0, hi.x - lo.x), column(1, hi.y - lo.y), column(2, hi.z - lo.z)};
-    Homogeneous corner[8];
-    for (int c = 0; c < 8; ++c) {
-      corner[c] = base;
-      for (int axis = 0; axis < 3; ++axis)
-        if (c & (1 << axis)) {
-          corner[c].x += edge[axis].x;
-          corner[c].y += edge[axis].y;
-          corner[c].w += edge[axis].w;
-        }
-    }
-    const std::optional<PixelRect> r = projectClipped(corner, minW, p_.width, p_.height);
-    if (r && r->column0 == 0 && r->row0 == 0 && r->column1 == p_.width - 1 &&
-        r->row1 == p_.height - 1)
-      return std::nullopt;
-    return r;
-  }
-
-  /// The rectangle of every run (in parallel); false when a run has none (rectOf).
+  /// The rectangle of every run (in parallel, a batch at a time); false when the eye lies in
+  /// (or at) a run, a projection is not finite, or a run covers the whole image (a mask would
+  /// then resolve nothing).
   bool rectsOf(std::vector<PixelRect>& out) const {
-    out.resize(grid_.runs.size());
+    const size_t n = grid_.runs.size();
+    out.resize(n);
     std::atomic<bool> unusable{false};
-    parallelFor(out.size(), 1024, [&](size_t begin, size_t end) {
-      for (size_t k = begin; k != end && !unusable; ++k) {
-        const std::optional<PixelRect> r = rectOf(grid_.runs[k]);
-        if (!r) unusable = true;
-        if (r) out[k] = *r;
+    parallelFor((n + kRunBatch - 1) / kRunBatch, 16, [&](size_t begin, size_t end) {
+      RunBatch batch;
+      OccupiedRun runs[kRunBatch];
+      for (size_t b = begin; b != end && !unusable; ++b) {
+        const size_t first = b * kRunBatch, count = std::min(n - first, size_t(kRunBatch));
+        for (size_t k = 0; k < size_t(kRunBatch); ++k)
+          runs[k] = grid_.runs[first + std::min(k, count - 1)];
+        boundRunCorners(c_, runs, batch);
+        for (size_t k = 0; k < count; ++k) {
+          const std::optional<PixelRect> r = rectOf(batch, int(k));
+          if (!r) unusable = true;
+          if (r) out[first + k] = *r;
+        }
       }
     });
     return !unusable;
   }
 
  private:
-  Homogeneous column(int c, double scale) const {
-    return {m_[c][0] * scale, m_[c][1] * scale, m_[c][3] * scale};
+  /// Lane k's rectangle: from its corners' bounds when the whole box lies deep enough, else
+  /// from the box clipped to the least depth a hit can have (projectClipped).
+  std::optional<PixelRect> rectOf(const RunBatch& b, int k) const {
+    if (!(b.distance[k] > 0) || !(b.minW[k] > 0)) return std::nullopt;
+    std::optional<PixelRect> r;
+    if (b.nearest[k] >= b.minW[k]) {
+      if (!b.bounded[k]) return std::nullopt;
+      r = PixelRect{b.column0[k], b.row0[k], b.column1[k], b.row1[k]};
+    } else {
+      Homogeneous corner[8];
+      for (int c = 0; c < 8; ++c) corner[c] = {b.cornerX[c][k], b.cornerY[c][k], b.cornerW[c][k]};
+      r = projectClipped(corner, b.minW[k], p_.width, p_.height);
+    }
+    if (r && r->column0 == 0 && r->row0 == 0 && r->column1 == p_.width - 1 &&
+        r->row1 == p_.height - 1)
+      return std::nullopt;
+    return r;
   }
 
   const OccupancyGrid& grid_;
   const CentralProjection& p_;
-  const glm::dmat4& m_;
-  double eyeW_, grow_, rate_;
+  RunProjection c_;
 };
 
 }  // namespace
@@ -194,13 +277,18 @@ void CoverageMask::cover(const std::vector<PixelRect>& rects) {
     count[y1 * stride + x0] -= 1;
     count[y1 * stride + x1] += 1;
   }
-  for (size_t y = 0; y < by; ++y)
-    for (size_t x = 1; x < bx; ++x) count[y * stride + x] += count[y * stride + x - 1];
-  for (size_t y = 0; y < by; ++y)
-    for (size_t x = 0; x < bx; ++x) {
-      if (y > 0) count[y * stride + x] += count[(y - 1) * stride + x];
-      covered_[y * bx + x] = count[y * stride + x] > 0 ? 1 : 0;
-    }
+  for (size_t y = 0; y < by; ++y) {
+    int* row = count.data() + y * stride;
+    for (size_t x = 1; x < bx; ++x) row[x] += row[x - 1];
+  }
+  for (size_t y = 0; y < by; ++y) {
+    int* __restrict row = count.data() + y * stride;
+    const int* __restrict above = row - stride;
+    uint8_t* __restrict covered = covered_.data() + y * bx;
+    if (y > 0)
+      for (size_t x = 0; x < bx; ++x) row[x] += above[x];
+    for (size_t x = 0; x < bx; ++x) covered[x] = row[x] > 0 ? 1 : 0;
+  }
 }
 
 std::optional<CoverageMask> coverageMaskOf(const OccupancyGrid& grid, const CentralProjection& p) {
