@@ -34,6 +34,18 @@ namespace aperture {
 /// Pixels per side of a mask block: a packet's block (at most 4x4, aligned) lies in one.
 inline constexpr int kCoverageBlock = 4;
 
+/// Runs a mask may project per block of its image: its cost grows with the runs, its saving
+/// with the blocks, so a small image takes a coarse occupancy level (Occupancy::finestWithin).
+/// At 0.5 a mask costs about 8 instructions per pixel (a run about 250).
+inline constexpr double kCoverageRunsPerBlock = 0.5;
+
+/// The most runs a mask of a width x height image projects (kCoverageRunsPerBlock).
+inline size_t maxCoverageRuns(int width, int height) {
+  const double blocks = double((width + kCoverageBlock - 1) / kCoverageBlock) *
+                        double((height + kCoverageBlock - 1) / kCoverageBlock);
+  return size_t(blocks * kCoverageRunsPerBlock);
+}
+
 /// A camera's projective map from render space, as the coverage mask needs it.
 struct CentralProjection {
   /// Homogeneous raster from render space (GLM column vectors): raster x = row 0 / row 3,

@@ -43,6 +43,19 @@ class CellMarks {
           __atomic_store_n(&marks_[index(x, y, z)], uint8_t(1), __ATOMIC_RELAXED);
   }
 
+  /// The marks of `coarse` (the cells of this grid merged kOccupancyCoarsening per axis): a
+  /// coarse cell is marked when one of its cells is.
+  CellMarks coarsened(const OccupancyGrid& coarse) const {
+    CellMarks out(coarse);
+    for (int z = 0; z < grid_.dims.z; ++z)
+      for (int y = 0; y < grid_.dims.y; ++y)
+        for (int x = 0; x < grid_.dims.x; ++x)
+          if (marks_[index(x, y, z)])
+            out.marks_[out.index(x / kOccupancyCoarsening, y / kOccupancyCoarsening,
+                                 z / kOccupancyCoarsening)] = 1;
+    return out;
+  }
+
   /// The marked cells as runs along x.
   std::vector<OccupiedRun> runs() const {
     std::vector<OccupiedRun> out;
@@ -68,7 +81,7 @@ class CellMarks {
     return (size_t(z) * size_t(grid_.dims.y) + size_t(y)) * size_t(grid_.dims.x) + size_t(x);
   }
 
-  const OccupancyGrid& grid_;
+  OccupancyGrid grid_;  /// its geometry (no runs)
   std::vector<uint8_t> marks_;
 };
 
@@ -99,8 +112,14 @@ void markObject(CellMarks& marks, const Mesh& m, const std::vector<uint32_t>& in
 
 }  // namespace
 
-std::optional<OccupancyGrid> occupancyOf(const std::vector<SceneObject>& objects,
-                                         const glm::dvec3& renderOrigin, const SceneBox& box) {
+const OccupancyGrid* Occupancy::finestWithin(size_t maxRuns) const {
+  for (const OccupancyGrid& level : levels)
+    if (level.runs.size() <= maxRuns) return &level;
+  return nullptr;
+}
+
+std::optional<Occupancy> occupancyOf(const std::vector<SceneObject>& objects,
+                                     const glm::dvec3& renderOrigin, const SceneBox& box) {
   size_t placed = 0;
   for (const SceneObject& o : objects)
     placed += o.subset ? o.subset->triangleCount() : o.mesh->triangleCount();
@@ -117,6 +136,7 @@ std::optional<OccupancyGrid> occupancyOf(const std::vector<SceneObject>& objects
   const glm::dvec3 magnitude = glm::max(glm::abs(lo), glm::abs(hi));
   const double pad = double(kSceneBoxPadding) * std::max({extent.x, extent.y, extent.z, magnitude.x,
                                                           magnitude.y, magnitude.z});
+  Occupancy occupancy;
   CellMarks marks(grid);
   for (const SceneObject& o : objects) {
     const Mesh& m = *o.mesh;
@@ -125,8 +145,19 @@ std::optional<OccupancyGrid> occupancyOf(const std::vector<SceneObject>& objects
                                        o.worldFromMesh * glm::translate(glm::dmat4(1.0), m.anchor);
     markObject(marks, m, indices, renderFromLocal, pad);
   }
-  grid.runs = marks.runs();
-  return grid;
+  for (int level = 0; level < kOccupancyLevels; ++level) {
+    if (level > 0) {
+      const OccupancyGrid& finer = occupancy.levels.back();
+      grid = OccupancyGrid{finer.lo,
+                           finer.cell * kOccupancyCoarsening,
+                           (finer.dims + kOccupancyCoarsening - 1) / kOccupancyCoarsening,
+                           {}};
+      marks = marks.coarsened(grid);
+    }
+    grid.runs = marks.runs();
+    occupancy.levels.push_back(std::move(grid));
+  }
+  return occupancy;
 }
 
 }  // namespace aperture

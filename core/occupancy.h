@@ -6,6 +6,7 @@
 //
 // Conservative by construction: every point Embree can report as a hit lies in an occupied
 // cell. Triangles with a non-finite vertex are left out (Embree ignores them too).
+#include <cstddef>
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <optional>
@@ -45,10 +46,22 @@ struct OccupancyGrid {
   size_t occupiedCells() const;
 };
 
-/// The grid of `objects` (placed as a Scene places them, with render origin `renderOrigin`)
-/// on `box`, the Scene's padded box; nothing when the box is degenerate or the scene has more
-/// than kOccupancyMaxTriangles placed triangles. Parallel over triangles.
-std::optional<OccupancyGrid> occupancyOf(const std::vector<SceneObject>& objects,
-                                         const glm::dvec3& renderOrigin, const SceneBox& box);
+/// Levels of occupancy: kOccupancyCells along the box's longest side, then each level's cells
+/// merged kOccupancyCoarsening per axis. A frame projects every run of the level it uses, so a
+/// small image takes a coarse level (Occupancy::finestWithin).
+inline constexpr int kOccupancyLevels = 3;
+inline constexpr int kOccupancyCoarsening = 3;
+
+struct Occupancy {
+  std::vector<OccupancyGrid> levels;  ///< finest first, kOccupancyLevels of them
+  /// The finest level with at most `maxRuns` runs, or null.
+  const OccupancyGrid* finestWithin(size_t maxRuns) const;
+};
+
+/// The occupancy of `objects` (placed as a Scene places them, with render origin
+/// `renderOrigin`) on `box`, the Scene's padded box; nothing when the box is degenerate or the
+/// scene has more than kOccupancyMaxTriangles placed triangles. Parallel over triangles.
+std::optional<Occupancy> occupancyOf(const std::vector<SceneObject>& objects,
+                                     const glm::dvec3& renderOrigin, const SceneBox& box);
 
 }  // namespace aperture

@@ -107,7 +107,10 @@ std::optional<CoverageMask> coverageFor(const Scene& scene, const Camera& camera
   const std::optional<CentralProjection> projection =
       centralProjectionOf(camera, scene.renderOrigin());
   if (!projection) return std::nullopt;
-  const OccupancyGrid* grid = scene.occupancy();
+  const Occupancy* occupancy = scene.occupancy();
+  if (!occupancy) return std::nullopt;
+  const OccupancyGrid* grid =
+      occupancy->finestWithin(maxCoverageRuns(projection->width, projection->height));
   if (!grid) return std::nullopt;
   return coverageMaskOf(*grid, *projection);
 }

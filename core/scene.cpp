@@ -331,7 +331,7 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
   stats_.embreeBytes = device.memoryBytes() - bytesBefore;
 }
 
-const OccupancyGrid* Scene::occupancy() const {
+const Occupancy* Scene::occupancy() const {
   std::call_once(occupancyOnce_, [this] {
     if (box_) occupancy_ = occupancyOf(objects_, renderOrigin_, *box_);
   });

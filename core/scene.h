@@ -186,7 +186,7 @@ class Scene {
   /// Where in the box there is anything to hit (core/occupancy.h), built at the first call
   /// (thread-safe: cameras that cannot use it never pay for it); null without a box or
   /// above kOccupancyMaxTriangles placed triangles.
-  const OccupancyGrid* occupancy() const;
+  const Occupancy* occupancy() const;
   /// True when some object was built from a TriangleSubset (view-volume culling).
   bool culled() const { return !primIdMaps_.empty(); }
   /// True when Embree's primID is not what the user numbers a triangle by: some object was
@@ -226,7 +226,7 @@ class Scene {
   std::optional<SceneBox> box_;
   std::vector<SceneObject> objects_;  ///< as given: occupancy() reads their triangles
   mutable std::once_flag occupancyOnce_;
-  mutable std::optional<OccupancyGrid> occupancy_;
+  mutable std::optional<Occupancy> occupancy_;
   std::vector<RTCScene> subScenes_;
   /// What a top-level geomID placing a chunk stands for: the chunk's object
   /// (RTC_INVALID_GEOMETRY_ID for a geomID that places no chunk) and its first triangle.

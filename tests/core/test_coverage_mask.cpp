@@ -48,24 +48,35 @@ TEST(Occupancy, EveryPlacedTriangleLiesInOccupiedCellsAndEmptySpaceIsNotOccupied
   const Mesh mesh = loadMesh("procedural:spheres?tris=3000");
   const std::vector<SceneObject> objects = placedTwice(mesh);
   const Scene scene(test::numericsDevice(), objects);
-  const OccupancyGrid* grid = scene.occupancy();
-  ASSERT_NE(grid, nullptr);
+  const Occupancy* occupancy = scene.occupancy();
+  ASSERT_NE(occupancy, nullptr);
+  ASSERT_EQ(occupancy->levels.size(), size_t(kOccupancyLevels));
+  const OccupancyGrid* grid = &occupancy->levels.front();
   EXPECT_EQ(std::max({grid->dims.x, grid->dims.y, grid->dims.z}), kOccupancyCells);
-  for (const SceneObject& o : objects) {
-    const glm::dmat4 renderFromLocal = glm::translate(glm::dmat4(1.0), -scene.renderOrigin()) *
-                                       o.worldFromMesh *
-                                       glm::translate(glm::dmat4(1.0), o.mesh->anchor);
-    for (size_t t = 0; t < mesh.triangleCount(); t += 7) {
-      glm::dvec3 corner[3];
-      for (int c = 0; c < 3; ++c)
-        corner[c] = glm::dvec3(renderFromLocal *
-                               glm::dvec4(glm::dvec3(mesh.vertex(mesh.indices[3 * t + c])), 1.0));
-      // The corners and points inside the triangle.
-      for (const glm::dvec3& b : {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1),
-                                  glm::dvec3(1.0 / 3), glm::dvec3(0.6, 0.3, 0.1)})
-        ASSERT_TRUE(inOccupiedCell(*grid, b.x * corner[0] + b.y * corner[1] + b.z * corner[2]))
-            << "triangle " << t;
+  for (size_t level = 0; level < occupancy->levels.size(); ++level)
+    for (const SceneObject& o : objects) {
+      const glm::dmat4 renderFromLocal = glm::translate(glm::dmat4(1.0), -scene.renderOrigin()) *
+                                         o.worldFromMesh *
+                                         glm::translate(glm::dmat4(1.0), o.mesh->anchor);
+      for (size_t t = 0; t < mesh.triangleCount(); t += 7) {
+        glm::dvec3 corner[3];
+        for (int c = 0; c < 3; ++c)
+          corner[c] = glm::dvec3(renderFromLocal *
+                                 glm::dvec4(glm::dvec3(mesh.vertex(mesh.indices[3 * t + c])), 1.0));
+        // The corners and points inside the triangle.
+        for (const glm::dvec3& b : {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1),
+                                    glm::dvec3(1.0 / 3), glm::dvec3(0.6, 0.3, 0.1)})
+          ASSERT_TRUE(inOccupiedCell(occupancy->levels[level],
+                                     b.x * corner[0] + b.y * corner[1] + b.z * corner[2]))
+              << "level " << level << " triangle " << t;
+      }
     }
+  // Each level's cells are kOccupancyCoarsening of the finer one's per axis, and it has fewer
+  // runs.
+  for (size_t level = 1; level < occupancy->levels.size(); ++level) {
+    const OccupancyGrid &coarse = occupancy->levels[level], &fine = occupancy->levels[level - 1];
+    EXPECT_EQ(coarse.cell, fine.cell * kOccupancyCoarsening) << level;
+    EXPECT_LT(coarse.runs.size(), fine.runs.size()) << level;
   }
   // The spheres fill a small part of their box: most cells are empty, and the corner of the
   // box far from both placements is.
@@ -210,8 +221,7 @@ std::optional<CoverageMask> flippedMask(const OccupancyGrid& grid, CentralProjec
 TEST(CoverageMask, EveryHitPixelIsCoveredFromRandomPosesAndAFlippedMaskIsCaught) {
   const Mesh mesh = loadMesh("procedural:spheres?tris=3000");
   const Scene scene(test::numericsDevice(), placedTwice(mesh));
-  const OccupancyGrid* grid = scene.occupancy();
-  ASSERT_NE(grid, nullptr);
+  ASSERT_NE(scene.occupancy(), nullptr);
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   int masks = 0, flippedCaught = 0, tight = 0;
@@ -229,15 +239,18 @@ TEST(CoverageMask, EveryHitPixelIsCoveredFromRandomPosesAndAFlippedMaskIsCaught)
     const std::optional<CentralProjection> projection =
         centralProjectionOf(*camera, scene.renderOrigin());
     ASSERT_TRUE(projection.has_value()) << what;
-    const std::optional<CoverageMask> mask = coverageMaskOf(*grid, *projection);
-    if (!mask) continue;  // the eye in an occupied cell
-    ++masks;
-    EXPECT_EQ(uncoveredHits(fb, *mask), 0) << what;
-    if (stats.hits > 0 && mask->coveredFraction() < 0.9) ++tight;
-    const std::optional<CoverageMask> flipped = flippedMask(*grid, *projection);
-    if (flipped && uncoveredHits(fb, *flipped) > 0) ++flippedCaught;
+    for (const OccupancyGrid& grid : scene.occupancy()->levels) {  // every level
+      const std::optional<CoverageMask> mask = coverageMaskOf(grid, *projection);
+      if (!mask) continue;  // the eye in an occupied cell
+      ++masks;
+      EXPECT_EQ(uncoveredHits(fb, *mask), 0) << what << " cell " << grid.cell;
+      if (&grid != &scene.occupancy()->levels.front()) continue;
+      if (stats.hits > 0 && mask->coveredFraction() < 0.9) ++tight;
+      const std::optional<CoverageMask> flipped = flippedMask(grid, *projection);
+      if (flipped && uncoveredHits(fb, *flipped) > 0) ++flippedCaught;
+    }
   }
-  EXPECT_GT(masks, 45);
+  EXPECT_GT(masks, 3 * 45);
   EXPECT_GT(tight, 20);          // the mask leaves background uncovered
   EXPECT_GT(flippedCaught, 20);  // and the check sees a mask in the wrong rows
 }
@@ -247,8 +260,8 @@ TEST(CoverageMask, CellsBesideTheEyeCoverWhatTheirFrontPartCanShow) {
   // and the rays at the bottom of the image hit their front part, close to the eye's plane.
   const Mesh mesh = loadMesh("procedural:city");
   const Scene scene(test::numericsDevice(), {SceneObject{&mesh}});
-  const OccupancyGrid* grid = scene.occupancy();
-  ASSERT_NE(grid, nullptr);
+  ASSERT_NE(scene.occupancy(), nullptr);
+  const OccupancyGrid* grid = &scene.occupancy()->levels.front();
   int masks = 0;
   for (int pose = 0; pose < 8; ++pose) {
     const double a = 0.8 * pose;
@@ -268,11 +281,31 @@ TEST(CoverageMask, CellsBesideTheEyeCoverWhatTheirFrontPartCanShow) {
   EXPECT_GT(masks, 4);
 }
 
+TEST(CoverageMask, ASmallImageTakesACoarserLevelAndATinyOneNone) {
+  const Mesh mesh = loadMesh("procedural:spheres?tris=20000");
+  const Scene scene(test::numericsDevice(), {SceneObject{&mesh}});
+  const Occupancy& occupancy = *scene.occupancy();
+  const std::vector<OccupancyGrid>& levels = occupancy.levels;
+  // Every level is chosen for some image size, and none for a tiny image; the runs a frame
+  // projects stay within kCoverageRunsPerBlock of its blocks.
+  EXPECT_EQ(occupancy.finestWithin(maxCoverageRuns(1920, 1080)), &levels[0]);
+  EXPECT_EQ(occupancy.finestWithin(levels[0].runs.size() - 1), &levels[1]);
+  EXPECT_EQ(occupancy.finestWithin(levels[1].runs.size() - 1), &levels[2]);
+  EXPECT_EQ(occupancy.finestWithin(maxCoverageRuns(8, 8)), nullptr);
+  for (const auto& [w, h] : std::vector<std::pair<int, int>>{{1920, 1080}, {640, 480}, {96, 64}}) {
+    const OccupancyGrid* grid = occupancy.finestWithin(maxCoverageRuns(w, h));
+    if (!grid) continue;
+    EXPECT_LE(double(grid->runs.size()),
+              kCoverageRunsPerBlock * double((w + 3) / 4) * double((h + 3) / 4))
+        << w << "x" << h;
+  }
+}
+
 TEST(CoverageMask, IsMissingWhenTheEyeIsInAnOccupiedCell) {
   const Mesh mesh = loadMesh("procedural:spheres?tris=3000");
   const Scene scene(test::numericsDevice(), {SceneObject{&mesh}});
-  const OccupancyGrid* grid = scene.occupancy();
-  ASSERT_NE(grid, nullptr);
+  ASSERT_NE(scene.occupancy(), nullptr);
+  const OccupancyGrid* grid = &scene.occupancy()->levels.front();
   const glm::dvec3 inside = glm::dvec3(mesh.vertex(mesh.indices[0])) + mesh.anchor;
   const CameraParams p = test::lookAt(inside, inside + glm::dvec3(1.0, 0.2, 0.1), 32, 24);
   const auto camera = makeCamera(p, scene.renderOrigin());
