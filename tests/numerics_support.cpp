@@ -1,6 +1,7 @@
 #include "tests/numerics_support.h"
 
 #include <cmath>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "cameras/registry.h"
 
@@ -18,14 +19,31 @@ Loaded load(const std::string& spec, const LoadOptions& lo, const BuildOptions& 
   return l;
 }
 
-Framebuffer render(const Scene& scene, const CameraParams& p, AovSet aovs, RenderStats* stats) {
+Framebuffer render(const Scene& scene, const CameraParams& p, AovSet aovs, RenderStats* stats,
+                   RenderSettings settings) {
   const auto cam = makeCamera(p, scene.renderOrigin());
   Framebuffer fb(p.width, p.height, aovs);
-  RenderSettings rs;
-  rs.spp = p.spp;
-  const RenderStats s = renderImage(scene, *cam, rs, fb);
+  settings.spp = p.spp;
+  const RenderStats s = renderImage(scene, *cam, settings, fb);
   if (stats) *stats = s;
   return fb;
+}
+
+CameraParams calibratedOpenCvLike(const CameraParams& p) {
+  CameraParams c = p;
+  c.type = "calibrated";
+  c.fovDeg.reset();
+  c.intrinsics = std::vector<double>{50.0, 52.0, 30.0, 21.0};
+  c.lensModel = "OPENCV";
+  c.distortion = std::vector<double>{-0.1, 0.01, 1e-4, -1e-4};
+  return c;
+}
+
+std::vector<SceneObject> placedTwice(const Mesh& mesh, const glm::dvec3& offset) {
+  SceneObject first{&mesh}, second{&mesh};
+  second.worldFromMesh = glm::translate(glm::dmat4(1.0), offset) *
+                         glm::rotate(glm::dmat4(1.0), 0.7, glm::dvec3(0.3, 1.0, 0.2));
+  return {first, second};
 }
 
 CameraParams lookAt(glm::dvec3 eye, glm::dvec3 at, int w, int h) {

@@ -3,6 +3,7 @@
 // one shared device, a mesh with its scene, renders, and agreement of two renders.
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "cameras/params.h"
 #include "core/framebuffer.h"
@@ -25,9 +26,16 @@ struct Loaded {
 };
 Loaded load(const std::string& spec, const LoadOptions& lo = {}, const BuildOptions& bo = {});
 
-/// Renders `p` (its size and spp) into a fresh framebuffer of `aovs`.
+/// Renders `p` (its size and spp) into a fresh framebuffer of `aovs`, with `settings` (whose
+/// spp is taken from `p`).
 Framebuffer render(const Scene& scene, const CameraParams& p, AovSet aovs = parseAovList("all"),
-                   RenderStats* stats = nullptr);
+                   RenderStats* stats = nullptr, RenderSettings settings = {});
+
+/// A calibrated OPENCV camera (distorted, 50 px focal length) at the pose and size of `p`.
+CameraParams calibratedOpenCvLike(const CameraParams& p);
+
+/// `mesh` placed twice: once as loaded, once turned and moved by `offset` (an Embree instance).
+std::vector<SceneObject> placedTwice(const Mesh& mesh, const glm::dvec3& offset);
 
 /// A 40° perspective camera at `eye` looking at `at`, w x h pixels.
 CameraParams lookAt(glm::dvec3 eye, glm::dvec3 at, int w, int h);

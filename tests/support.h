@@ -14,6 +14,7 @@
 #include "cameras/params.h"
 #include "core/framebuffer.h"
 #include "core/image_codec.h"
+#include "core/render.h"
 
 namespace aperture::test {
 
@@ -91,6 +92,19 @@ inline constexpr double kMaxPixelError = 1e-2;
 /// Expects differingAovs(a, b) to be "", naming `what` when it is not.
 inline void expectIdentical(const Framebuffer& a, const Framebuffer& b, const std::string& what) {
   EXPECT_EQ(differingAovs(a, b), "") << what;
+}
+/// Two renders of one frame that differ only in how misses are resolved without Embree (`on`
+/// resolves more of them): every AOV and the traced, skipped and hit counts equal, some hits,
+/// and `on` resolved nothing but misses.
+inline void expectSameFrameFewerEmbreeRays(const Framebuffer& onFrame, const Framebuffer& offFrame,
+                                           const RenderStats& on, const RenderStats& off,
+                                           const std::string& what) {
+  expectIdentical(onFrame, offFrame, what);
+  EXPECT_EQ(on.raysTraced, off.raysTraced) << what;
+  EXPECT_EQ(on.raysSkipped, off.raysSkipped) << what;
+  EXPECT_EQ(on.hits, off.hits) << what;
+  EXPECT_GT(on.hits, 0u) << what;
+  EXPECT_LT(on.raysOutsideBox, on.raysTraced - on.hits + 1) << what;  // only misses
 }
 inline bool samePixels(const Framebuffer& a, const Framebuffer& b) {
   return differingAovs(a, b).empty();
