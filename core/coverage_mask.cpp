@@ -4,6 +4,8 @@
 #include <atomic>
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
+#include <limits>
+#include <vector>
 
 #include "core/parallel.h"
 #include "core/vector_kernel.h"
