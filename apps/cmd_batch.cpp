@@ -132,13 +132,13 @@ void checkJobMemory(const JobFile& jobs, const std::string& maxMemory) {
   size_t worst = 0;
   MemoryEstimate largest;
   for (size_t k = 0; k + 1 < footprints.size(); ++k) {
-    MemoryEstimate e = pairEstimate(footprints[k], footprints[k + 1]);
-    e.imageCodecBytes = codecBytes;
+    const MemoryEstimate e = pairEstimate(footprints[k], footprints[k + 1]);
     if (e.total() > largest.total()) {
       largest = e;
       worst = k;
     }
   }
+  largest.imageCodecBytes = codecBytes;  // the same for every pair
   try {
     checkMemoryLimit(largest, limit, "--max-memory", maxMemory);
   } catch (const Error& e) {

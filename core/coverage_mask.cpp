@@ -57,9 +57,6 @@ struct Homogeneous {
   double x, y, w;
 };
 
-/// Whether x is finite, as a comparison that vectorises (std::isfinite does not).
-inline bool finite(double x) { return std::fabs(x) <= std::numeric_limits<double>::max(); }
-
 /// The first and last pixel (column or row, clamped to [0, size)) that may see raster
 /// positions [lo, hi] along one axis, both finite: pixel j may when [j − 1, j + 2) meets
 /// [lo, hi] (a sample lies in [j, j + 1), widened by a pixel for the rounding of the ray's
@@ -74,7 +71,7 @@ inline void pixelSpan(double lo, double hi, int size, int& first, int& last) {
 /// nothing when a bound is not finite.
 std::optional<PixelRect> pixelsSeeing(double x0, double x1, double y0, double y1, int width,
                                       int height) {
-  if (!finite(x0) || !finite(x1) || !finite(y0) || !finite(y1)) return std::nullopt;
+  if (!finiteLane(x0) || !finiteLane(x1) || !finiteLane(y0) || !finiteLane(y1)) return std::nullopt;
   PixelRect r;
   pixelSpan(x0, x1, width, r.column0, r.column1);
   pixelSpan(y0, y1, height, r.row0, r.row1);
@@ -124,11 +121,10 @@ struct RunProjection {
 };
 
 /// The runs of one batch, lane by lane: their boxes' corners' homogeneous raster positions,
-/// the bounds of the corners' raster positions, the nearest corner's depth, and the least
-/// depth a hit in the box can have (distance from the eye times the rate).
+/// the nearest corner's depth, and the least depth a hit in the box can have (distance from
+/// the eye times the rate).
 struct RunBatch {
   alignas(64) double cornerX[8][kRunBatch], cornerY[8][kRunBatch], cornerW[8][kRunBatch];
-  alignas(64) double x0[kRunBatch], x1[kRunBatch], y0[kRunBatch], y1[kRunBatch];
   alignas(64) double nearest[kRunBatch], distance[kRunBatch], minW[kRunBatch];
   /// The pixels the corners' bounds give (pixelSpan), valid where `bounded` is set: every
   /// bound finite.
@@ -178,8 +174,9 @@ APERTURE_VECTOR_KERNEL void boundRunCorners(const RunProjection& p, const Occupi
       y0 = std::min(y0, y), y1 = std::max(y1, y);
       nearest = std::min(nearest, h[c][2]);
     }
-    out.x0[k] = x0, out.x1[k] = x1, out.y0[k] = y0, out.y1[k] = y1, out.nearest[k] = nearest;
-    const int bounded = int(finite(x0)) & int(finite(x1)) & int(finite(y0)) & int(finite(y1));
+    out.nearest[k] = nearest;
+    const int bounded =
+        int(finiteLane(x0)) & int(finiteLane(x1)) & int(finiteLane(y0)) & int(finiteLane(y1));
     out.bounded[k] = bounded;
     // Non-finite bounds replaced by 0 before the conversions to int (their result unused).
     pixelSpan(bounded ? x0 : 0.0, bounded ? x1 : 0.0, p.width, out.column0[k], out.column1[k]);
@@ -190,7 +187,7 @@ APERTURE_VECTOR_KERNEL void boundRunCorners(const RunProjection& p, const Occupi
 /// Projects the runs of one grid through one camera (the per-run part of coverageMaskOf).
 class RunProjector {
  public:
-  RunProjector(const OccupancyGrid& grid, const CentralProjection& p) : grid_(grid), p_(p) {
+  RunProjector(const OccupancyGrid& grid, const CentralProjection& p) : grid_(grid) {
     const glm::dmat4& m = p.rasterFromRender;
     const glm::dvec3 depthRow(m[0][3], m[1][3], m[2][3]);
     for (int a = 0; a < 3; ++a) {
@@ -249,16 +246,15 @@ class RunProjector {
     } else {
       Homogeneous corner[8];
       for (int c = 0; c < 8; ++c) corner[c] = {b.cornerX[c][k], b.cornerY[c][k], b.cornerW[c][k]};
-      r = projectClipped(corner, b.minW[k], p_.width, p_.height);
+      r = projectClipped(corner, b.minW[k], c_.width, c_.height);
     }
-    if (r && r->column0 == 0 && r->row0 == 0 && r->column1 == p_.width - 1 &&
-        r->row1 == p_.height - 1)
+    if (r && r->column0 == 0 && r->row0 == 0 && r->column1 == c_.width - 1 &&
+        r->row1 == c_.height - 1)
       return std::nullopt;
     return r;
   }
 
   const OccupancyGrid& grid_;
-  const CentralProjection& p_;
   RunProjection c_;
 };
 

@@ -253,10 +253,6 @@ struct BlockColor {
   float shade[N], cover[N];
 };
 
-/// Whether x is finite, as a comparison that vectorises (std::isfinite does not): false for
-/// ±inf and NaN.
-inline bool finite(float x) { return std::fabs(x) <= std::numeric_limits<float>::max(); }
-
 /// Keeps the lanes to trace in Embree's −1/0 mask: the camera gave a ray, the lane lies in
 /// the image and the ray is finite. Counts the skipped non-finite rays; returns the active
 /// lane count. Branch-free over the lanes, so it compiles to vector compares.
@@ -273,8 +269,8 @@ int selectLanes(const ImagePlan& plan, const PacketRequest& req, PacketState<N>&
   APERTURE_LANE_LOOP
   for (int k = 0; k < N; ++k) {  // 0/1 integers and & rather than && (no branches)
     const int live = int(valid[k] != 0) & int(laneInImage(x0, y0, kBW, k, width, height));
-    const int isFinite = int(finite(ox[k])) & int(finite(oy[k])) & int(finite(oz[k])) &
-                         int(finite(dx[k])) & int(finite(dy[k])) & int(finite(dz[k]));
+    const int isFinite = int(finiteLane(ox[k])) & int(finiteLane(oy[k])) & int(finiteLane(oz[k])) &
+                         int(finiteLane(dx[k])) & int(finiteLane(dy[k])) & int(finiteLane(dz[k]));
     nonFinite += live & (isFinite ^ 1);
     valid[k] = -(live & isFinite);
     active += live & isFinite;
