@@ -772,6 +772,9 @@ void checkFramebuffer(const Camera& camera, const RenderSettings& settings, cons
 
 namespace {
 
+/// When a render call started: its frames' seconds count from there.
+using TimePoint = std::chrono::steady_clock::time_point;
+
 /// Work counters of one frame, summed over its tiles.
 struct FrameProgress {
   std::atomic<uint64_t> traced{0}, skipped{0}, outsideBox{0}, hits{0};
@@ -781,9 +784,11 @@ struct FrameProgress {
 /// The one parallel loop over (frame, tile) behind renderImage, renderImages and
 /// renderImagesStacked: the frames' tiles are numbered one after another (frame k owns tiles
 /// [firstTile[k], firstTile[k + 1])), so small frames keep every core busy. Returns each
-/// frame's stats; `progress` as renderImages documents it.
+/// frame's stats, each frame's seconds counted from `start` (the caller's entry, so the
+/// plans' per-frame work, the coverage mask included, is timed); `progress` as renderImages
+/// documents it.
 std::vector<RenderStats> renderPlans(const std::deque<ImagePlan>& plans,
-                                     const std::function<void(size_t)>& progress) {
+                                     const std::function<void(size_t)>& progress, TimePoint start) {
   const size_t n = plans.size();
   std::vector<size_t> firstTile(n + 1, 0);
   std::unique_ptr<FrameProgress[]> frames(new FrameProgress[n]);
@@ -797,7 +802,6 @@ std::vector<RenderStats> renderPlans(const std::deque<ImagePlan>& plans,
   std::vector<RenderStats> stats(n);
   std::mutex progressMutex;
   size_t framesDone = 0;
-  const auto start = std::chrono::steady_clock::now();
   parallelFor(firstTile[n], 1, [&](size_t first, size_t last) {
     for (size_t tile = first; tile != last; ++tile) {
       const size_t k =
@@ -844,17 +848,19 @@ RenderSettings settingsFor(const Camera& camera, const RenderSettings& settings)
 
 RenderStats renderImage(const Scene& scene, const Camera& camera, const RenderSettings& settings,
                         Framebuffer& fb) {
+  const TimePoint start = std::chrono::steady_clock::now();
   validateRenderSettings(settings);
   checkFramebuffer(camera, settings, fb);
   std::deque<ImagePlan> plans;
   plans.emplace_back(scene, camera, settings, fb);
-  return renderPlans(plans, {}).front();
+  return renderPlans(plans, {}, start).front();
 }
 
 std::vector<RenderStats> renderImages(const Scene& scene, const std::vector<const Camera*>& cameras,
                                       const RenderSettings& settings,
                                       std::vector<Framebuffer>& framebuffers,
                                       const std::function<void(size_t)>& progress) {
+  const TimePoint start = std::chrono::steady_clock::now();
   validateRenderSettings(settings);
   if (cameras.size() != framebuffers.size())
     throw Error(cat("renderImages: ", cameras.size(), " cameras but ", framebuffers.size(),
@@ -866,13 +872,14 @@ std::vector<RenderStats> renderImages(const Scene& scene, const std::vector<cons
     checkFramebuffer(*cameras[k], forCamera, framebuffers[k]);
     plans.emplace_back(scene, *cameras[k], forCamera, framebuffers[k]);
   }
-  return renderPlans(plans, progress);
+  return renderPlans(plans, progress, start);
 }
 
 std::vector<RenderStats> renderImagesStacked(const Scene& scene,
                                              const std::vector<const Camera*>& cameras,
                                              const RenderSettings& settings, Framebuffer& stacked,
                                              const std::function<void(size_t)>& progress) {
+  const TimePoint start = std::chrono::steady_clock::now();
   validateRenderSettings(settings);
   if (cameras.empty()) throw Error("renderImagesStacked: no camera");
   if (stacked.aovSet().empty()) throw Error("renderImagesStacked: the framebuffer holds no AOV");
@@ -894,7 +901,7 @@ std::vector<RenderStats> renderImagesStacked(const Scene& scene,
     plans.emplace_back(scene, *cameras[k], settingsFor(*cameras[k], settings), stacked,
                        k * framePixels);
   }
-  return renderPlans(plans, progress);
+  return renderPlans(plans, progress, start);
 }
 
 }  // namespace aperture
