@@ -158,6 +158,9 @@ struct ImagePlan {
   bool remapPrimIds;                // Scene::remapsPrimIds: culled or reordered, primID is mapped
   /// The blocks that may see the scene (coverageFor); packets outside are misses.
   std::optional<CoverageMask> coverage;
+  /// Packets of uncovered blocks are neither generated nor traced: a coverage mask, and not
+  /// the null trace (which fakes a hit on every ray).
+  bool skipUncovered;
   /// The scene's box for the scene-box test; null when the test is off or cannot resolve any
   /// ray (boxTestFor), or the coverage mask replaces it.
   const SceneBox* box;
@@ -206,6 +209,7 @@ ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSet
       instanced(scene_.instanceCount() > 0),
       remapPrimIds(scene_.remapsPrimIds()),
       coverage(coverageFor(scene_, camera_, settings_)),
+      skipUncovered(coverage && !settings_.nullTrace),
       box(coverage ? nullptr : boxTestFor(scene_, camera_, settings_)),
       colorSamples(color ? settings_.spp : 0),
       geometryFromSample(anyGeometry && color && settings_.spp == 1),
@@ -228,6 +232,10 @@ ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSet
 template <int N>
 struct PacketState : PacketBuffers<N> {
   RTCIntersectContext ctx;
+  /// The packet's block sees nothing of the scene (its coverage mask leaves it uncovered):
+  /// the camera did not generate its rays, and every lane in the image is a miss. Never set
+  /// in the null trace, which fakes a hit on every ray.
+  bool unseen = false;
 
   PacketState() {
     rtcInitIntersectContext(&ctx);
@@ -329,13 +337,22 @@ int resolveLanesMissingBox(const ImagePlan& plan, PacketState<N>& st, int active
 template <int N, bool kNull>
 bool tracePacket(const ImagePlan& plan, const PacketRequest& req, PacketState<N>& st,
                  TileCounters& count) {
+  if (st.unseen) {
+    // Every lane in the image would have been valid and finite (a camera with a coverage
+    // mask has a ray for every pixel), so the counts are those of the generated packet.
+    const uint64_t lanes = uint64_t(std::min(blockWidthFor(N), plan.width - req.x0)) *
+                           uint64_t(std::min(blockHeightFor(N), plan.height - req.y0));
+    count.traced += lanes;
+    count.outsideBox += lanes;
+    return false;
+  }
   const int active = selectLanes<N>(plan, req, st, count);
   if (active == 0) return false;
   count.traced += uint64_t(active);
-  if (plan.coverage && !plan.coverage->covers(req.y0, req.x0)) {
+  // The null trace generates the rays of uncovered blocks and fakes their hits too; the count
+  // says what the mask would have resolved.
+  if (kNull && plan.coverage && !plan.coverage->covers(req.y0, req.x0))
     count.outsideBox += uint64_t(active);
-    if constexpr (!kNull) return false;  // the null trace still fakes every hit
-  }
   if (resolveLanesMissingBox<N, kNull>(plan, st, active, count) == 0) return false;
   if constexpr (kNull) {
     fakeHits<N>(plan, st);
@@ -696,7 +713,12 @@ class PacketPipeline {
     next_.x0 = x0_;
     return (next_.y0 += kBH) < y1_;
   }
-  void generateNext() { plan_.camera.generate(next_, states_[slot_].lanes, states_[slot_].valid); }
+  /// Generates the rays of next_, unless its block is unseen (PacketState::unseen).
+  void generateNext() {
+    PacketState<N>& st = states_[slot_];
+    st.unseen = plan_.skipUncovered && !plan_.coverage->covers(next_.y0, next_.x0);
+    if (!st.unseen) plan_.camera.generate(next_, st.lanes, st.valid);
+  }
 
   const ImagePlan& plan_;
   const int x0_, x1_, y1_;

@@ -156,6 +156,45 @@ TEST(CentralProjection, EveryRayProjectsIntoItsOwnPixelAndAFlippedRowConventionI
   }
 }
 
+/// Pixels (and samples) of the image of `camera` whose generated lane is invalid or not
+/// finite.
+int pixelsWithoutFiniteRay(const Camera& camera, int width, int height, int spp) {
+  int n = 0;
+  PacketBuffers<16> packet;
+  for (int sample = 0; sample < spp; ++sample)
+    for (int y0 = 0; y0 < height; y0 += 4)
+      for (int x0 = 0; x0 < width; x0 += 4) {
+        const PacketRequest req{x0, y0, 4, 4, spp == 1 ? 0 : sample};
+        camera.generate(req, packet.lanes, packet.valid);
+        const RayLanes& l = packet.lanes;
+        for (int k = 0; k < 16; ++k) {
+          if (!req.pixel(k).inImage(width, height)) continue;
+          const bool finite = std::isfinite(l.orgX[k]) && std::isfinite(l.orgY[k]) &&
+                              std::isfinite(l.orgZ[k]) && std::isfinite(l.dirX[k]) &&
+                              std::isfinite(l.dirY[k]) && std::isfinite(l.dirZ[k]);
+          n += int(!packet.valid[k] || !finite);
+        }
+      }
+  return n;
+}
+
+// The frame loop neither generates nor traces the packets of blocks the mask leaves
+// uncovered, and counts every lane in the image as a ray resolved: right only if each camera
+// with a projection gives every pixel a finite ray.
+TEST(CentralProjection, EveryPixelOfACameraWithOneHasAFiniteRay) {
+  const glm::dvec3 origin(1.0, 2.0, 3.0);
+  for (const CameraParams& p : projectiveCameras()) {
+    const auto camera = makeCamera(p, origin);
+    ASSERT_TRUE(centralProjectionOf(*camera, origin).has_value());
+    EXPECT_EQ(pixelsWithoutFiniteRay(*camera, p.width, p.height, p.spp), 0)
+        << p.type << " " << p.pixelCentre << " spp " << p.spp;
+  }
+  // The count can fail: a distorted lens has pixels without a ray (past its fold).
+  CameraParams folded = test::calibratedOpenCvLike(projectiveCameras().front());
+  folded.distortion = std::vector<double>{-0.8, 0.0, 0.0, 0.0};  // folds at r_d 0.43
+  EXPECT_GT(pixelsWithoutFiniteRay(*makeCamera(folded, origin), folded.width, folded.height, 1), 0);
+}
+
 TEST(CentralProjection, OnlyProjectiveCamerasFromOneEyeHaveOne) {
   const glm::dvec3 origin(0.0);
   CameraParams p = test::lookAt({30.0, 12.0, 60.0}, {20.0, 0.0, 5.0}, 61, 43);
