@@ -266,7 +266,10 @@ void measureAgainstBaseline(const Bench& b, nlohmann::json& j) {
   else
     std::printf("misses resolved without Embree: %.1f%% of the frame loop's rays, by %s\n",
                 100 * outside,
-                b.settings.sceneBoxTest ? "the scene-box test" : "nothing (--no-scene-box)");
+                frame.boxTested            ? "the scene-box test"
+                : !b.settings.sceneBoxTest ? "nothing (--no-scene-box)"
+                                           : "nothing (no coverage mask, and every ray starts "
+                                             "inside the scene's box)");
   j["rays_outside_box_fraction"] = outside;
   j["coverage_mask_covered"] = frame.maskCovered;
   j["mrays_per_s"] = toJson(renderS);

@@ -297,4 +297,26 @@ std::optional<CoverageMask> coverageMaskOf(const OccupancyGrid& grid, const Cent
   return mask;
 }
 
+std::optional<CoverageMask> refinedCoverageMask(const Occupancy& occupancy,
+                                                const CentralProjection& p, int raysPerPixel) {
+  const size_t maxRuns = maxCoverageRuns(p.width, p.height);
+  const double rays = double(p.width) * double(p.height) * double(raysPerPixel);
+  std::optional<CoverageMask> finest;
+  double resolved = 0, lastGain = 0;
+  int projected = 0;
+  for (auto level = occupancy.levels.rbegin(); level != occupancy.levels.rend(); ++level) {
+    if (level->runs.size() > maxRuns) continue;  // finer levels have more runs still
+    if (projected >= 2 && !refinementPays(lastGain, level->runs.size())) break;
+    std::optional<CoverageMask> mask = coverageMaskOf(*level, p);
+    if (!mask) continue;  // the eye in one of its (larger) occupied cells: try a finer one
+    ++projected;
+    const double levelResolved = (1.0 - mask->coveredFraction()) * rays;
+    lastGain = levelResolved - resolved;
+    resolved = levelResolved;
+    finest = std::move(mask);
+  }
+  if (finest && finest->coveredFraction() == 1.0) return std::nullopt;
+  return finest;
+}
+
 }  // namespace aperture

@@ -35,7 +35,7 @@ namespace aperture {
 inline constexpr int kCoverageBlock = 4;
 
 /// Runs a mask may project per block of its image: its cost grows with the runs, its saving
-/// with the blocks, so a small image takes a coarse occupancy level (Occupancy::finestWithin).
+/// with the blocks, so a small image takes only coarse occupancy levels (refinedCoverageMask).
 /// At 0.5 a mask costs about 8 instructions per pixel (a run about 250).
 inline constexpr double kCoverageRunsPerBlock = 0.5;
 
@@ -94,5 +94,27 @@ class CoverageMask {
 /// lies in an occupied cell, a projection is not finite, or one cell covers the whole image.
 std::optional<CoverageMask> coverageMaskOf(const OccupancyGrid& grid,
                                            const CentralProjection& projection);
+
+/// Projecting one run costs about as much as resolving this many rays without Embree (a run
+/// took 24 ns and a bunny ray 7 ns at 2 threads, AMD Zen 4; bench/RESULTS.md).
+inline constexpr double kRaysPerRun = 5;
+
+/// Whether projecting a finer level of `nextRuns` runs pays, when the last refinement
+/// resolved `lastGain` more rays: the gains of successive levels shrink, so the last one
+/// bounds the next.
+inline bool refinementPays(double lastGain, size_t nextRuns) {
+  return lastGain > kRaysPerRun * double(nextRuns);
+}
+
+/// The mask a frame uses: the levels of `occupancy` within maxCoverageRuns, coarsest first, the
+/// two coarsest always (an interior seen from inside resolves nothing at either and stops
+/// there; a coarse level can cover a whole image its finer ones do not), each finer one while
+/// refinementPays. A finer level's cells lie in the coarser ones, so its mask covers no block
+/// the coarser one leaves. `raysPerPixel` weighs a block by the rays it saves. Nothing when no
+/// level gives a mask or the finest one projected covers every block (it would resolve
+/// nothing).
+std::optional<CoverageMask> refinedCoverageMask(const Occupancy& occupancy,
+                                                const CentralProjection& projection,
+                                                int raysPerPixel);
 
 }  // namespace aperture

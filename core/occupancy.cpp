@@ -112,12 +112,6 @@ void markObject(CellMarks& marks, const Mesh& m, const std::vector<uint32_t>& in
 
 }  // namespace
 
-const OccupancyGrid* Occupancy::finestWithin(size_t maxRuns) const {
-  for (const OccupancyGrid& level : levels)
-    if (level.runs.size() <= maxRuns) return &level;
-  return nullptr;
-}
-
 std::optional<Occupancy> occupancyOf(const std::vector<SceneObject>& objects,
                                      const glm::dvec3& renderOrigin, const SceneBox& box) {
   size_t placed = 0;

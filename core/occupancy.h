@@ -47,15 +47,13 @@ struct OccupancyGrid {
 };
 
 /// Levels of occupancy: kOccupancyCells along the box's longest side, then each level's cells
-/// merged kOccupancyCoarsening per axis. A frame projects every run of the level it uses, so a
-/// small image takes a coarse level (Occupancy::finestWithin).
+/// merged kOccupancyCoarsening per axis. A frame projects every run of the levels it uses
+/// (refinedCoverageMask, core/coverage_mask.h), so a small image takes only coarse levels.
 inline constexpr int kOccupancyLevels = 3;
 inline constexpr int kOccupancyCoarsening = 3;
 
 struct Occupancy {
   std::vector<OccupancyGrid> levels;  ///< finest first, kOccupancyLevels of them
-  /// The finest level with at most `maxRuns` runs, or null.
-  const OccupancyGrid* finestWithin(size_t maxRuns) const;
 };
 
 /// The occupancy of `objects` (placed as a Scene places them, with render origin

@@ -109,10 +109,7 @@ std::optional<CoverageMask> coverageFor(const Scene& scene, const Camera& camera
   if (!projection) return std::nullopt;
   const Occupancy* occupancy = scene.occupancy();
   if (!occupancy) return std::nullopt;
-  const OccupancyGrid* grid =
-      occupancy->finestWithin(maxCoverageRuns(projection->width, projection->height));
-  if (!grid) return std::nullopt;
-  return coverageMaskOf(*grid, *projection);
+  return refinedCoverageMask(*occupancy, *projection, s.spp);
 }
 
 struct ImagePlan;
@@ -850,6 +847,7 @@ std::vector<RenderStats> renderPlans(const std::deque<ImagePlan>& plans,
       stats[k].raysSkipped = f.skipped;
       stats[k].raysOutsideBox = f.outsideBox;
       if (plan.coverage) stats[k].maskCovered = plan.coverage->coveredFraction();
+      stats[k].boxTested = plan.box != nullptr;
       stats[k].hits = f.hits;
       if (!progress) continue;
       const std::lock_guard<std::mutex> lock(progressMutex);

@@ -58,6 +58,9 @@ struct RenderStats {
   /// Fraction of the image's blocks the frame's coverage mask covered; −1 when the frame had
   /// none (RenderSettings::coverageMask).
   double maskCovered = -1;
+  /// Whether the frame ran the scene-box test (RenderSettings::sceneBoxTest; not when the
+  /// coverage mask replaced it, nor when every ray starts inside the box).
+  bool boxTested = false;
   uint64_t hits = 0;
   double mraysPerSecond() const { return seconds > 0 ? raysTraced / seconds * 1e-6 : 0; }
 };

@@ -308,24 +308,86 @@ TEST(CoverageMask, CellsBesideTheEyeCoverWhatTheirFrontPartCanShow) {
   EXPECT_GT(masks, 4);
 }
 
-TEST(CoverageMask, ASmallImageTakesACoarserLevelAndATinyOneNone) {
-  const Mesh mesh = loadMesh("procedural:spheres?tris=20000");
-  const Scene scene(test::numericsDevice(), {SceneObject{&mesh}});
-  const Occupancy& occupancy = *scene.occupancy();
-  const std::vector<OccupancyGrid>& levels = occupancy.levels;
-  // Every level is chosen for some image size, and none for a tiny image; the runs a frame
-  // projects stay within kCoverageRunsPerBlock of its blocks.
-  EXPECT_EQ(occupancy.finestWithin(maxCoverageRuns(1920, 1080)), &levels[0]);
-  EXPECT_EQ(occupancy.finestWithin(levels[0].runs.size() - 1), &levels[1]);
-  EXPECT_EQ(occupancy.finestWithin(levels[1].runs.size() - 1), &levels[2]);
-  EXPECT_EQ(occupancy.finestWithin(maxCoverageRuns(8, 8)), nullptr);
-  for (const auto& [w, h] : std::vector<std::pair<int, int>>{{1920, 1080}, {640, 480}, {96, 64}}) {
-    const OccupancyGrid* grid = occupancy.finestWithin(maxCoverageRuns(w, h));
-    if (!grid) continue;
-    EXPECT_LE(double(grid->runs.size()),
-              kCoverageRunsPerBlock * double((w + 3) / 4) * double((h + 3) / 4))
-        << w << "x" << h;
+/// Covered fraction of each level's mask of `camera` (finest first), −1 where it has none.
+std::vector<double> levelCoverage(const Scene& scene, const CentralProjection& projection) {
+  std::vector<double> covered;
+  for (const OccupancyGrid& grid : scene.occupancy()->levels) {
+    const std::optional<CoverageMask> mask = coverageMaskOf(grid, projection);
+    covered.push_back(mask ? mask->coveredFraction() : -1.0);
   }
+  return covered;
+}
+
+/// The projection of `p` in `scene`.
+CentralProjection projectionOf(const Scene& scene, const CameraParams& p) {
+  return *centralProjectionOf(*makeCamera(p, scene.renderOrigin()), scene.renderOrigin());
+}
+
+/// The covered fraction of the mask a frame of `p` in `scene` uses (refinedCoverageMask), −1
+/// for none.
+double refinedCoverage(const Scene& scene, const CameraParams& p) {
+  const std::optional<CoverageMask> mask =
+      refinedCoverageMask(*scene.occupancy(), projectionOf(scene, p), p.spp);
+  return mask ? mask->coveredFraction() : -1.0;
+}
+
+TEST(CoverageMask, RefinesOnlyWhileTheLastRefinementResolvedEnoughRays) {
+  const Mesh mesh = loadMesh("procedural:city");
+  const Scene scene(test::numericsDevice(), {SceneObject{&mesh}});
+  const std::vector<OccupancyGrid>& levels = scene.occupancy()->levels;
+  const auto pose = [](const glm::dvec3& eye, double fov, int width, int height) {
+    CameraParams p = test::lookAt(eye, {0.0, 1.0, 0.0}, width, height);
+    p.fovDeg = fov;
+    return p;
+  };
+  const double rays = 1920.0 * 1080.0;
+  // From far away the finest level would resolve a little more than the middle one, but the
+  // step before it resolved too little to pay for its runs: the middle level is used.
+  const CameraParams far = pose({0.0, 0.5, 60.0}, 30, 1920, 1080);
+  std::vector<double> c = levelCoverage(scene, projectionOf(scene, far));
+  ASSERT_LT(c[0], c[1]);
+  ASSERT_FALSE(refinementPays((c[2] - c[1]) * rays, levels[0].runs.size()));
+  EXPECT_EQ(refinedCoverage(scene, far), c[1]);
+  // Among the towers each refinement resolves much more: the finest level is used.
+  const CameraParams street = pose({0.0, 3.0, 10.0}, 60, 1920, 1080);
+  c = levelCoverage(scene, projectionOf(scene, street));
+  ASSERT_TRUE(refinementPays((c[2] - c[1]) * rays, levels[0].runs.size()));
+  EXPECT_EQ(refinedCoverage(scene, street), c[0]);
+  // A smaller image projects no level past its run budget (maxCoverageRuns), even where 64
+  // samples per pixel would make the refinement pay, and a tiny one none at all.
+  CameraParams small = pose({0.0, 3.0, 10.0}, 60, 640, 480);
+  small.spp = 64;
+  c = levelCoverage(scene, projectionOf(scene, small));
+  ASSERT_TRUE(refinementPays((c[2] - c[1]) * 640.0 * 480.0 * 64.0, levels[0].runs.size()));
+  ASSERT_LT(levels[1].runs.size(), maxCoverageRuns(640, 480));
+  ASSERT_GT(levels[0].runs.size(), maxCoverageRuns(640, 480));
+  EXPECT_EQ(refinedCoverage(scene, small), c[1]);
+  EXPECT_EQ(refinedCoverage(scene, pose({0.0, 3.0, 10.0}, 60, 8, 8)), -1.0);
+  // The eye in an occupied cell of the coarsest level: it gives no mask and does not count as
+  // one of the two levels always projected.
+  const CameraParams close = pose({1.0, 2.0, 8.0}, 30, 1920, 1080);
+  c = levelCoverage(scene, projectionOf(scene, close));
+  ASSERT_EQ(c[2], -1.0);
+  ASSERT_LT(c[0], c[1]);
+  EXPECT_EQ(refinedCoverage(scene, close), c[0]);
+}
+
+TEST(CoverageMask, IsNoneWhereEveryLevelCoversTheWholeImage) {
+  // Inside a cube, and at street level facing a wall: the masks cover every block, so a
+  // frame is better off without one.
+  const Mesh cube = loadMesh("procedural:cube");
+  const Scene room(test::numericsDevice(), {SceneObject{&cube}});
+  const CameraParams inside = test::lookAt({0.1, 0.05, 0.0}, {1.0, 0.2, 0.3}, 320, 240);
+  for (const double covered : levelCoverage(room, projectionOf(room, inside)))
+    ASSERT_EQ(covered, 1.0);
+  EXPECT_EQ(refinedCoverage(room, inside), -1.0);
+  const Mesh city = loadMesh("procedural:city");
+  const Scene scene(test::numericsDevice(), {SceneObject{&city}});
+  CameraParams wall = test::lookAt({0.0, 0.35, 3.0}, {0.0, 1.0, 0.0}, 1920, 1080);
+  wall.fovDeg = 60;
+  for (const double covered : levelCoverage(scene, projectionOf(scene, wall)))
+    ASSERT_TRUE(covered == 1.0 || covered == -1.0);
+  EXPECT_EQ(refinedCoverage(scene, wall), -1.0);
 }
 
 TEST(CoverageMask, IsMissingWhenTheEyeIsInAnOccupiedCell) {
