@@ -95,8 +95,10 @@ class CoverageMask {
 std::optional<CoverageMask> coverageMaskOf(const OccupancyGrid& grid,
                                            const CentralProjection& projection);
 
-/// Projecting one run costs about as much as resolving this many rays without Embree (a run
-/// took 24 ns and a bunny ray 7 ns at 2 threads, AMD Zen 4; bench/RESULTS.md).
+/// Projecting one run costs about as much as tracing this many of the rays a mask resolves:
+/// a run took 24 ns and an average bunny ray 7 ns (wall time at 2 threads, AMD Zen 4), and a
+/// resolved ray would have been a miss, cheaper than the average (bench/RESULTS.md, sixth
+/// session).
 inline constexpr double kRaysPerRun = 5;
 
 /// Whether projecting a finer level of `nextRuns` runs pays, when the last refinement
