@@ -305,7 +305,7 @@ std::optional<CoverageMask> refinedCoverageMask(const Occupancy& occupancy,
   double resolved = 0, lastGain = 0;
   int projected = 0;
   for (auto level = occupancy.levels.rbegin(); level != occupancy.levels.rend(); ++level) {
-    if (level->runs.size() > maxRuns) continue;  // finer levels have more runs still
+    if (level->runs.size() > maxRuns) continue;  // over this frame's budget
     if (projected >= 2 && !refinementPays(lastGain, level->runs.size())) break;
     std::optional<CoverageMask> mask = coverageMaskOf(*level, p);
     if (!mask) continue;  // the eye in one of its (larger) occupied cells: try a finer one

@@ -308,7 +308,8 @@ TEST(CoverageMask, CellsBesideTheEyeCoverWhatTheirFrontPartCanShow) {
   EXPECT_GT(masks, 4);
 }
 
-/// Covered fraction of each level's mask of `camera` (finest first), −1 where it has none.
+/// Covered fraction of each level's mask through `projection` (finest first), −1 where it has
+/// none.
 std::vector<double> levelCoverage(const Scene& scene, const CentralProjection& projection) {
   std::vector<double> covered;
   for (const OccupancyGrid& grid : scene.occupancy()->levels) {
