@@ -268,6 +268,28 @@ class CalibratedCamera final : public CameraBase {
   /// Every ray starts at the eye, at tnear 0.
   std::optional<glm::vec3> sharedRayOrigin() const override { return renderEye_; }
 
+  /// A distorted lens at 1 spp: every ray is a pixel centre's, whose direction the table holds.
+  std::optional<LensBlockBounds> lensBlockBounds() const override {
+    static_assert(DirectionTable::kBlock == 4, "LensBlockBounds::blocks are 4 x 4 pixels");
+    if (!table_ || spp_ != 1) return std::nullopt;
+    LensBlockBounds b;
+    // Camera space (OpenCV axes) from render space: rows U, −V, −W about the eye, the inverse
+    // of worldDirection's rotation.
+    const glm::dvec3 rows[3] = {frame_.u, -frame_.v, -frame_.w};
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) b.cameraFromRender[c][r] = rows[r][c];
+      b.cameraFromRender[3][r] = -glm::dot(rows[r], renderEyeD_);
+    }
+    b.eye = renderEyeD_;
+    b.width = width_;
+    b.height = height_;
+    b.blocks = table_->planeBounds().data();
+    b.blockRays = table_->blockRays().data();
+    b.extent = table_->planeExtent();
+    b.minCosine = table_->minCosine();
+    return b;
+  }
+
   void generate(const PacketRequest& req, RayLanes& out, int* valid) const override {
     const bool centres = req.centreRay() || spp_ == 1;
     if (centres && generateCentres(req, out, valid)) return;

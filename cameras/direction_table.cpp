@@ -1,6 +1,7 @@
 #include "cameras/direction_table.h"
 
 #include <algorithm>
+#include <limits>
 #include <list>
 #include <mutex>
 
@@ -31,6 +32,43 @@ DirectionTable::DirectionTable(const CalibratedSensor& sensor)
           valid_[k] = 1;
         }
       }
+  });
+  boundPlaneCrossings(blockRows);
+}
+
+void DirectionTable::boundPlaneCrossings(size_t blockRows) {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  constexpr int kLanes = kBlock * kBlock;
+  const glm::dvec4 none(inf, inf, -inf, -inf);
+  planeBounds_.assign(blockRows * blocksPerRow_, none);
+  blockRays_.assign(planeBounds_.size(), 0);
+  std::mutex mutex;
+  planeExtent_ = none;
+  parallelFor(planeBounds_.size(), 64, [&](size_t first, size_t last) {
+    glm::dvec4 extent = none;
+    double cosine = 1;
+    for (size_t b = first; b < last; ++b) {
+      glm::dvec4 bounds = none;
+      uint16_t rays = 0;
+      for (size_t k = b * kLanes; k < (b + 1) * kLanes; ++k) {
+        if (!valid_[k]) continue;
+        rays = uint16_t(rays | (1u << (k - b * kLanes)));
+        cosine = std::min(cosine, z_[k]);
+        if (!(z_[k] > 0)) continue;  // behind the plane: minCosine rules the table out
+        const double px = x_[k] / z_[k], py = y_[k] / z_[k];
+        bounds = glm::dvec4(std::min(bounds.x, px), std::min(bounds.y, py), std::max(bounds.z, px),
+                            std::max(bounds.w, py));
+      }
+      planeBounds_[b] = bounds;
+      blockRays_[b] = rays;
+      extent = glm::dvec4(std::min(extent.x, bounds.x), std::min(extent.y, bounds.y),
+                          std::max(extent.z, bounds.z), std::max(extent.w, bounds.w));
+    }
+    const std::lock_guard<std::mutex> lock(mutex);
+    planeExtent_ =
+        glm::dvec4(std::min(planeExtent_.x, extent.x), std::min(planeExtent_.y, extent.y),
+                   std::max(planeExtent_.z, extent.z), std::max(planeExtent_.w, extent.w));
+    minCosine_ = std::min(minCosine_, cosine);
   });
 }
 

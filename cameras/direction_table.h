@@ -3,6 +3,7 @@
 // pixel centre of a calibrated sensor, computed once by the lens's exact inverse and shared
 // by every image (and every thread) that uses the sensor. A distorted camera then costs a
 // table read and a rotation per ray, like a pinhole.
+#include <cstdint>
 #include <glm/glm.hpp>
 #include <memory>
 #include <vector>
@@ -42,16 +43,38 @@ class DirectionTable {
   const double* z() const { return z_.data(); }
   const unsigned char* validity() const { return valid_.data(); }
 
+  /// Where the rays of each block of kBlock x kBlock pixels cross the plane z = 1, (d.x /
+  /// d.z, d.y / d.z): (x0, y0, x1, y1), blocks row by row; x0 > x1 for a block without a ray.
+  /// Meaningful where minCosine() > 0 (every ray in front).
+  const std::vector<glm::dvec4>& planeBounds() const { return planeBounds_; }
+  /// The same over every ray.
+  glm::dvec4 planeExtent() const { return planeExtent_; }
+  /// The least cosine of a ray with the optical axis (its z; 1 without rays).
+  double minCosine() const { return minCosine_; }
+  /// Per block (as planeBounds), the pixels with a ray: bit r·kBlock + c for the pixel in the
+  /// block's row r and column c (none past the image's edges).
+  const std::vector<uint16_t>& blockRays() const { return blockRays_; }
+
   /// Pixels with a ray, of width x height.
   size_t validCount() const;
-  size_t bytes() const { return 3 * x_.size() * sizeof(double) + valid_.size(); }
+  size_t bytes() const {
+    return 3 * x_.size() * sizeof(double) + valid_.size() +
+           planeBounds_.size() * (sizeof(glm::dvec4) + sizeof(uint16_t));
+  }
   const CalibratedSensor& sensor() const { return sensor_; }
 
  private:
+  /// Fills planeBounds_, planeExtent_ and minCosine_ from the directions.
+  void boundPlaneCrossings(size_t blockRows);
+
   CalibratedSensor sensor_;
   size_t blocksPerRow_ = 0;
   std::vector<double> x_, y_, z_;
   std::vector<unsigned char> valid_;
+  std::vector<glm::dvec4> planeBounds_;
+  std::vector<uint16_t> blockRays_;
+  glm::dvec4 planeExtent_{0.0};
+  double minCosine_ = 1;
 };
 
 /// The unit camera-space direction (OpenCV axes) of aperture raster position (x, y) of

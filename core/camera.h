@@ -162,6 +162,25 @@ inline glm::dmat4 standardCameraFromWorld(const glm::dvec3& eye, const glm::dvec
   return m;
 }
 
+/// Where the pixel-centre rays of each 4x4 block of an image cross the plane z = 1 of a camera
+/// frame (a camera-space direction d crosses it at (d.x / d.z, d.y / d.z)), for a camera whose
+/// rays all start at one point along directions no 4x4 matrix maps (a distorted lens): the
+/// coverage mask bounds what each block sees through them (core/coverage_mask.h).
+struct LensBlockBounds {
+  /// Render space to the camera frame (an orthonormal rotation about the eye; z forwards).
+  glm::dmat4 cameraFromRender{1.0};
+  glm::dvec3 eye{0.0};  ///< the exact eye, render space
+  int width = 0, height = 0;
+  /// Per block of 4 x 4 pixels from the top-left, row by row: (x0, y0, x1, y1) on the plane;
+  /// x0 > x1 for a block without a ray. Owned by the camera.
+  const glm::dvec4* blocks = nullptr;
+  /// Per block, the pixels with a ray: bit 4·r + c for the block's row r and column c (none
+  /// past the image's edges; each such ray is finite). Owned by the camera.
+  const uint16_t* blockRays = nullptr;
+  glm::dvec4 extent{0.0};  ///< the same over every ray
+  double minCosine = 0;    ///< the least cosine of a ray with the frame's z axis
+};
+
 class Camera {
  public:
   virtual ~Camera() = default;
@@ -189,6 +208,10 @@ class Camera {
   /// planes). Where it lies in the scene's box, no ray can miss the box, and the frame loop
   /// skips its scene-box test (core/scene_box.h). Nothing is always a safe answer.
   virtual std::optional<glm::vec3> sharedRayOrigin() const { return std::nullopt; }
+  /// For a camera with a shared ray origin and no projective map (describe().ndcFromWorld
+  /// empty), whose every ray is a pixel-centre ray: where they cross a plane, block by block
+  /// (LensBlockBounds), or nothing. Nothing is always a safe answer.
+  virtual std::optional<LensBlockBounds> lensBlockBounds() const { return std::nullopt; }
 };
 
 }  // namespace aperture

@@ -41,7 +41,9 @@ std::optional<CentralProjection> centralProjectionOf(const Camera& camera,
 }
 
 CoverageMask::CoverageMask(int width, int height)
-    : blocksX_((width + kCoverageBlock - 1) / kCoverageBlock),
+    : width_(width),
+      height_(height),
+      blocksX_((width + kCoverageBlock - 1) / kCoverageBlock),
       blocksY_((height + kCoverageBlock - 1) / kCoverageBlock),
       covered_(size_t(blocksX_) * size_t(blocksY_), 0) {}
 
@@ -317,6 +319,73 @@ std::optional<CoverageMask> refinedCoverageMask(const Occupancy& occupancy,
   }
   if (finest && finest->coveredFraction() == 1.0) return std::nullopt;
   return finest;
+}
+
+CentralProjection lensPlaneProjection(const LensBlockBounds& lens, const glm::vec3& rayOrigin) {
+  const glm::dvec4 e = lens.extent;
+  const double sx = lens.width / (e.z - e.x), sy = lens.height / (e.w - e.y);
+  // Rows of the camera frame (GLM: m[column][row]); raster x = sx·(c.x − x0·c.z) / c.z.
+  const glm::dmat4& c = lens.cameraFromRender;
+  CentralProjection p;
+  for (int column = 0; column < 4; ++column) {
+    const double cx = c[column][0], cy = c[column][1], cz = c[column][2];
+    p.rasterFromRender[column] = glm::dvec4(sx * (cx - e.x * cz), sy * (cy - e.y * cz), cz, cz);
+  }
+  p.eye = lens.eye;
+  p.rayOrigin = rayOrigin;
+  p.width = lens.width;
+  p.height = lens.height;
+  p.minDepthRate = lens.minCosine;  // row 3's linear part is the unit z axis
+  return p;
+}
+
+CoverageMask maskThroughLens(const CoverageMask& onPlane, const LensBlockBounds& lens) {
+  static_assert(kCoverageBlock == 4, "LensBlockBounds::blocks are 4 x 4 pixels");
+  // A ray of a block crosses the plane inside the block's bounds; its raster pixel there lies
+  // in the plane mask's covered blocks if the occupancy can be on it (the projection's rects
+  // are widened by two raster pixels, which covers the rounding of the float direction). The
+  // plane's raster has the image's density, so a block's bounds span one to four of its blocks.
+  const size_t pbx = size_t(onPlane.blocksX_), pby = size_t(onPlane.blocksY_);
+  const glm::dvec4 e = lens.extent;
+  const double sx = lens.width / (e.z - e.x), sy = lens.height / (e.w - e.y);
+  // Truncation is the floor of the clamped, non-negative raster position (and needs no libm
+  // call in the portable build).
+  const auto blockOf = [](double raster, size_t blocks) {
+    return size_t(std::clamp(raster, 0.0, double(kCoverageBlock * blocks - 1))) / kCoverageBlock;
+  };
+  CoverageMask mask(lens.width, lens.height);
+  mask.blockRays_ = lens.blockRays;
+  const size_t bx = size_t(mask.blocksX_);
+  parallelFor(size_t(mask.blocksY_), 16, [&](size_t firstRow, size_t lastRow) {
+    for (size_t b = firstRow * bx; b < lastRow * bx; ++b) {
+      const glm::dvec4 r = lens.blocks[b];
+      if (!(r.x <= r.z && r.y <= r.w)) continue;  // no ray: the frame loop traces none
+      const size_t x0 = blockOf((r.x - e.x) * sx, pbx), x1 = blockOf((r.z - e.x) * sx, pbx);
+      const size_t y0 = blockOf((r.y - e.y) * sy, pby), y1 = blockOf((r.w - e.y) * sy, pby);
+      const uint8_t* top = onPlane.covered_.data() + y0 * pbx;
+      const uint8_t* bottom = onPlane.covered_.data() + y1 * pbx;
+      uint8_t seen = top[x0] | top[x1] | bottom[x0] | bottom[x1];  // the usual 2 x 2 at most
+      if (x1 > x0 + 1 || y1 > y0 + 1)
+        for (size_t y = y0; y <= y1; ++y)
+          for (size_t x = x0; x <= x1; ++x) seen |= onPlane.covered_[y * pbx + x];
+      mask.covered_[b] = seen;
+    }
+  });
+  return mask;
+}
+
+std::optional<CoverageMask> lensCoverageMask(const Occupancy& occupancy,
+                                             const LensBlockBounds& lens,
+                                             const glm::vec3& rayOrigin) {
+  const glm::dvec4 e = lens.extent;
+  if (!(lens.minCosine >= kLensMaskMinCosine) || !(e.z > e.x) || !(e.w > e.y) || !lens.blocks)
+    return std::nullopt;
+  const std::optional<CoverageMask> onPlane =
+      refinedCoverageMask(occupancy, lensPlaneProjection(lens, rayOrigin), 1);
+  if (!onPlane) return std::nullopt;
+  CoverageMask mask = maskThroughLens(*onPlane, lens);
+  if (mask.coveredFraction() == 1.0) return std::nullopt;
+  return mask;
 }
 
 }  // namespace aperture

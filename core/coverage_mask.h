@@ -20,6 +20,10 @@
 //    it is projected: a cell beside or behind the eye covers only what it can.
 // A frame whose eye lies in an occupied cell gets no mask, nor one where a single cell covers
 // the whole image (an interior seen from inside): such a mask would resolve nothing.
+// A distorted lens at 1 spp (Camera::lensBlockBounds) gets one too: the cells are projected
+// onto a raster of the plane z = 1 of its camera frame, and each block of the image is covered
+// where its rays' crossings of that plane meet a covered block there (lensCoverageMask).
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <glm/glm.hpp>
@@ -70,25 +74,64 @@ struct PixelRect {
   bool empty() const { return column0 > column1 || row0 > row1; }
 };
 
+class CoverageMask;
+
+/// The least cosine with the lens's axis of the rays of a camera that gets a mask through its
+/// lens (lensCoverageMask): wider lenses spread the plane z = 1 too far for its raster.
+inline constexpr double kLensMaskMinCosine = 0.1;
+
+/// The mask of a camera with a distorted lens (Camera::lensBlockBounds): the occupancy is
+/// projected (refinedCoverageMask) onto a raster of the plane z = 1 of the camera frame, as
+/// many pixels as the image over the plane's extent, and a block of the image is covered
+/// where its bounds on the plane meet a covered block of that raster. Nothing when the lens
+/// is wider than kLensMaskMinCosine allows or no mask would resolve anything.
+std::optional<CoverageMask> lensCoverageMask(const Occupancy& occupancy,
+                                             const LensBlockBounds& lens,
+                                             const glm::vec3& rayOrigin);
+
+/// lensCoverageMask's projection onto the plane's raster: the extent of the plane z = 1 that
+/// `lens`'s rays cross, over as many pixels as the image (x and y scaled apart).
+CentralProjection lensPlaneProjection(const LensBlockBounds& lens, const glm::vec3& rayOrigin);
+
 class CoverageMask {
  public:
   CoverageMask(int width, int height);
   /// Whether the block holding pixel (row, column) may see an occupied cell.
-  bool covers(int row, int column) const {
-    return covered_[size_t(row / kCoverageBlock) * size_t(blocksX_) +
-                    size_t(column / kCoverageBlock)] != 0;
+  bool covers(int row, int column) const { return covered_[blockOf(row, column)] != 0; }
+  /// Pixels with a ray among the w x h pixels at (row, column), which lie in one block: every
+  /// one inside the image for a projective camera (each gives every pixel a finite ray), the
+  /// lens's for a mask through a lens (LensBlockBounds::blockRays). The frame loop counts an
+  /// uncovered packet's rays with it instead of generating them.
+  int raysIn(int row, int column, int w, int h) const {
+    if (!blockRays_) return std::min(w, width_ - column) * std::min(h, height_ - row);
+    const int r = row % kCoverageBlock, c = column % kCoverageBlock;
+    uint32_t lanes = 0;
+    for (int k = 0; k < h; ++k) lanes |= ((1u << w) - 1u) << (kCoverageBlock * (r + k) + c);
+    return __builtin_popcount(blockRays_[blockOf(row, column)] & lanes);
   }
   /// Fraction of the image's blocks covered.
   double coveredFraction() const;
 
  private:
   friend std::optional<CoverageMask> coverageMaskOf(const OccupancyGrid&, const CentralProjection&);
+  friend CoverageMask maskThroughLens(const CoverageMask&, const LensBlockBounds&);
   /// Marks the blocks the rectangles cover (each block stays covered once covered).
   void cover(const std::vector<PixelRect>& rects);
 
+  size_t blockOf(int row, int column) const {
+    return size_t(row / kCoverageBlock) * size_t(blocksX_) + size_t(column / kCoverageBlock);
+  }
+
+  int width_, height_;
   int blocksX_, blocksY_;
   std::vector<uint8_t> covered_;
+  /// A mask through a lens: its blocks' rays (LensBlockBounds::blockRays), else null.
+  const uint16_t* blockRays_ = nullptr;
 };
+
+/// The mask of a lens's image from `onPlane`, a mask of its plane's raster
+/// (lensPlaneProjection): a block is covered where its bounds meet a covered block there.
+CoverageMask maskThroughLens(const CoverageMask& onPlane, const LensBlockBounds& lens);
 
 /// The mask of `grid` seen through `projection`; nothing (then every ray is traced) when the eye
 /// lies in an occupied cell, a projection is not finite, or one cell covers the whole image.

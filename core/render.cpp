@@ -100,16 +100,20 @@ const SceneBox* boxTestFor(const Scene& scene, const Camera& camera, const Rende
 }
 
 /// The coverage mask (core/coverage_mask.h) of `camera` when RenderSettings::coverageMask
-/// applies and the camera has a projective map from one eye; it then replaces the box test.
+/// applies and the camera's rays start at one eye along a projective map, or along a lens's
+/// pixel-centre directions (Camera::lensBlockBounds); it then replaces the box test.
 std::optional<CoverageMask> coverageFor(const Scene& scene, const Camera& camera,
                                         const RenderSettings& s) {
   if (!s.sceneBoxTest || !s.coverageMask || !scene.box()) return std::nullopt;
   const std::optional<CentralProjection> projection =
       centralProjectionOf(camera, scene.renderOrigin());
-  if (!projection) return std::nullopt;
+  const std::optional<LensBlockBounds> lens = projection ? std::nullopt : camera.lensBlockBounds();
+  const std::optional<glm::vec3> origin = camera.sharedRayOrigin();
+  if (!projection && !(lens && origin)) return std::nullopt;
   const Occupancy* occupancy = scene.occupancy();
   if (!occupancy) return std::nullopt;
-  return refinedCoverageMask(*occupancy, *projection, s.spp);
+  if (projection) return refinedCoverageMask(*occupancy, *projection, s.spp);
+  return lensCoverageMask(*occupancy, *lens, *origin);
 }
 
 struct ImagePlan;
@@ -155,8 +159,9 @@ struct ImagePlan {
   bool remapPrimIds;                // Scene::remapsPrimIds: culled or reordered, primID is mapped
   /// The blocks that may see the scene (coverageFor); packets outside are misses.
   std::optional<CoverageMask> coverage;
-  /// Packets of uncovered blocks are neither generated nor traced: a coverage mask, and not
-  /// the null trace (which fakes a hit on every ray).
+  /// Packets of uncovered blocks are neither generated nor traced (CoverageMask::raysIn
+  /// counts their rays): a coverage mask, and not the null trace (which fakes a hit on every
+  /// ray).
   bool skipUncovered;
   /// The scene's box for the scene-box test; null when the test is off or cannot resolve any
   /// ray (boxTestFor), or the coverage mask replaces it.
@@ -335,10 +340,9 @@ template <int N, bool kNull>
 bool tracePacket(const ImagePlan& plan, const PacketRequest& req, PacketState<N>& st,
                  TileCounters& count) {
   if (st.unseen) {
-    // Every lane in the image would have been valid and finite (a camera with a coverage
-    // mask has a ray for every pixel), so the counts are those of the generated packet.
-    const uint64_t lanes = uint64_t(std::min(blockWidthFor(N), plan.width - req.x0)) *
-                           uint64_t(std::min(blockHeightFor(N), plan.height - req.y0));
+    // The lanes that would have been valid and finite: the counts of the generated packet.
+    const uint64_t lanes =
+        uint64_t(plan.coverage->raysIn(req.y0, req.x0, blockWidthFor(N), blockHeightFor(N)));
     count.traced += lanes;
     count.outsideBox += lanes;
     return false;

@@ -7,7 +7,9 @@
 // flipped is caught); and every AOV and count is bit-identical with the mask on and off.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -245,19 +247,30 @@ std::optional<CoverageMask> flippedMask(const OccupancyGrid& grid, CentralProjec
   return coverageMaskOf(grid, p);
 }
 
+/// The scene of the random-pose tests: procedural spheres placed twice (placedTwice).
+struct RandomPoseScene {
+  Mesh mesh = loadMesh("procedural:spheres?tris=3000");
+  Scene scene{test::numericsDevice(), placedTwice(mesh)};
+};
+
+/// Pose number `pose` of the random-pose tests: an eye around the scene of placedTwice (some
+/// inside its box) looking at a point near it, on a small image whose size varies.
+CameraParams randomPose(std::mt19937& rng, int pose) {
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const glm::dvec3 centre(20.0, -2.0, 6.0);
+  const glm::dvec3 eye = centre + glm::dvec3(60 * unit(rng), 30 * unit(rng), 60 * unit(rng));
+  const glm::dvec3 at = centre + glm::dvec3(25 * unit(rng), 10 * unit(rng), 25 * unit(rng));
+  return test::lookAt(eye, at, 64 + pose % 5, 48 + pose % 3);
+}
+
 TEST(CoverageMask, EveryHitPixelIsCoveredFromRandomPosesAndAFlippedMaskIsCaught) {
-  const Mesh mesh = loadMesh("procedural:spheres?tris=3000");
-  const Scene scene(test::numericsDevice(), placedTwice(mesh));
+  const RandomPoseScene setup;
+  const Scene& scene = setup.scene;
   ASSERT_NE(scene.occupancy(), nullptr);
   std::mt19937 rng(7);
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
   int masks = 0, flippedCaught = 0, tight = 0;
   for (int pose = 0; pose < 60; ++pose) {
-    // Eyes around the scene, some inside its box, looking at a point near it.
-    const glm::dvec3 centre(20.0, -2.0, 6.0);
-    const glm::dvec3 eye = centre + glm::dvec3(60 * unit(rng), 30 * unit(rng), 60 * unit(rng));
-    const glm::dvec3 at = centre + glm::dvec3(25 * unit(rng), 10 * unit(rng), 25 * unit(rng));
-    CameraParams p = test::lookAt(eye, at, 64 + pose % 5, 48 + pose % 3);
+    CameraParams p = randomPose(rng, pose);
     p.fovDeg = 30 + (pose * 7) % 70;
     const std::string what = "pose " + std::to_string(pose);
     RenderStats stats;
@@ -306,6 +319,158 @@ TEST(CoverageMask, CellsBesideTheEyeCoverWhatTheirFrontPartCanShow) {
     EXPECT_EQ(uncoveredHits(fb, *mask), 0) << what;
   }
   EXPECT_GT(masks, 4);
+}
+
+/// A calibrated camera of `p`'s pose and size with a distorted lens: `model` with the
+/// horizontal field of view `fovDeg` (f = (W / 2) / tan(fov / 2), principal point at the
+/// centre) and `distortion`, at 1 spp.
+CameraParams lensCamera(CameraParams p, const char* model, double fovDeg,
+                        std::vector<double> distortion) {
+  const double f = 0.5 * p.width / std::tan(0.5 * fovDeg * M_PI / 180.0);
+  p.type = "calibrated";
+  p.fovDeg.reset();
+  p.intrinsics = std::vector<double>{f, f, 0.5 * p.width, 0.5 * p.height};
+  p.lensModel = model;
+  p.distortion = std::move(distortion);
+  return p;
+}
+
+/// Distorted lenses the lens mask serves: mild and strong OPENCV barrels, a fisheye, one that
+/// folds inside the image (pixels without a ray), and COLMAP's integer pixel centres.
+std::vector<CameraParams> lensCameras(const CameraParams& pose) {
+  std::vector<CameraParams> all{lensCamera(pose, "OPENCV", 60, {-0.1, 0.01, 1e-4, -1e-4}),
+                                lensCamera(pose, "OPENCV", 80, {-0.3, 0.08, 0.0, 0.0}),
+                                lensCamera(pose, "OPENCV_FISHEYE", 90, {0.05, 0.01, 0.0, 0.0}),
+                                lensCamera(pose, "OPENCV", 70, {-0.8, 0.0, 0.0, 0.0})};
+  CameraParams integer = all.front();
+  integer.pixelCentre = "integer";
+  all.push_back(integer);
+  return all;
+}
+
+/// The largest distance (plane units, relative to 1 + the point's size) by which the ray of a
+/// valid lane of `camera` crosses the plane z = 1 outside the bounds `bounds` gives its block
+/// (`rowShift` reads the bounds of the block that many rows further down instead: a wrong
+/// block the check must catch). Counts the lanes checked in `lanes`.
+double largestPlaneEscape(const Camera& camera, const LensBlockBounds& bounds, int rowShift,
+                          int& lanes) {
+  const int blocksX = (bounds.width + 3) / 4, blocksY = (bounds.height + 3) / 4;
+  const glm::dmat3 rotation(bounds.cameraFromRender);
+  double worst = 0;
+  PacketBuffers<16> packet;
+  for (int y0 = 0; y0 < bounds.height; y0 += 4)
+    for (int x0 = 0; x0 < bounds.width; x0 += 4) {
+      const int blockRow = y0 / 4 + rowShift;
+      if (blockRow >= blocksY) continue;
+      const PacketRequest req{x0, y0, 4, 4, 0};
+      camera.generate(req, packet.lanes, packet.valid);
+      const glm::dvec4 b = bounds.blocks[size_t(blockRow) * size_t(blocksX) + size_t(x0 / 4)];
+      for (int k = 0; k < 16; ++k) {
+        if (!packet.valid[k] || !req.pixel(k).inImage(bounds.width, bounds.height)) continue;
+        const glm::dvec3 d =
+            rotation * glm::dvec3(packet.lanes.dirX[k], packet.lanes.dirY[k], packet.lanes.dirZ[k]);
+        const glm::dvec2 q(d.x / d.z, d.y / d.z);
+        const double scale = 1.0 + std::max(std::fabs(q.x), std::fabs(q.y));
+        ++lanes;
+        if (!(b.x <= b.z)) {  // a block without a ray in the bounds
+          worst = std::max(worst, 1.0);
+          continue;
+        }
+        worst = std::max({worst, (b.x - q.x) / scale, (q.x - b.z) / scale, (b.y - q.y) / scale,
+                          (q.y - b.w) / scale});
+      }
+    }
+  return worst;
+}
+
+TEST(LensBlockBounds, EveryCentreRayCrossesThePlaneInsideItsBlocksBounds) {
+  const glm::dvec3 origin(1.0, 2.0, 3.0);
+  const CameraParams pose = test::lookAt({30.0, 12.0, 60.0}, {20.0, 0.0, 5.0}, 61, 43);
+  for (const CameraParams& p : lensCameras(pose)) {
+    const std::string what = p.lensModel + " " + p.pixelCentre;
+    const auto camera = makeCamera(p, origin);
+    const std::optional<LensBlockBounds> bounds = camera->lensBlockBounds();
+    ASSERT_TRUE(bounds.has_value()) << what;
+    int lanes = 0;
+    // Within the rounding of the float directions the frame loop traces.
+    EXPECT_LT(largestPlaneEscape(*camera, *bounds, 0, lanes), 1e-6) << what;
+    EXPECT_GT(lanes, 1000) << what;
+    // The bounds of the block below miss rays of this one.
+    EXPECT_GT(largestPlaneEscape(*camera, *bounds, 1, lanes), 1e-3) << what;
+  }
+  // None where a pixel's rays are not all its centre's (spp 4), nor for an undistorted lens
+  // (it has a projective map instead).
+  CameraParams samples = lensCameras(pose).front();
+  samples.spp = 4;
+  EXPECT_FALSE(makeCamera(samples, origin)->lensBlockBounds().has_value());
+  CameraParams pinhole = lensCameras(pose).front();
+  pinhole.lensModel = "PINHOLE";
+  pinhole.distortion.reset();
+  EXPECT_FALSE(makeCamera(pinhole, origin)->lensBlockBounds().has_value());
+}
+
+/// `lens` with each block's bounds taken from the block one row down (the last row without
+/// rays): a mask built from it looks at the wrong rows.
+struct ShiftedBounds {
+  std::vector<glm::dvec4> blocks;
+  LensBlockBounds lens;
+  explicit ShiftedBounds(LensBlockBounds original) : lens(original) {
+    const size_t bx = size_t(original.width + 3) / 4, by = size_t(original.height + 3) / 4;
+    const double inf = std::numeric_limits<double>::infinity();
+    blocks.assign(bx * by, glm::dvec4(inf, inf, -inf, -inf));
+    for (size_t b = 0; b + bx < bx * by; ++b) blocks[b] = original.blocks[b + bx];
+    lens.blocks = blocks.data();
+  }
+};
+
+TEST(CoverageMask, ThroughALensEveryHitPixelIsCoveredFromRandomPosesAndAShiftedMaskIsCaught) {
+  const RandomPoseScene setup;
+  const Scene& scene = setup.scene;
+  ASSERT_NE(scene.occupancy(), nullptr);
+  std::mt19937 rng(11);
+  int masks = 0, shiftedCaught = 0, tight = 0;
+  for (int pose = 0; pose < 60; ++pose) {
+    const std::vector<CameraParams> lenses = lensCameras(randomPose(rng, pose));
+    CameraParams p = lenses[size_t(pose) % lenses.size()];
+    const std::string what = "pose " + std::to_string(pose) + " " + p.lensModel;
+    RenderStats stats;
+    const Framebuffer fb = renderWith(scene, p, false, 16, stats);
+    const auto camera = makeCamera(p, scene.renderOrigin());
+    const LensBlockBounds bounds = *camera->lensBlockBounds();
+    ASSERT_GE(bounds.minCosine, kLensMaskMinCosine) << what;
+    const CentralProjection plane = lensPlaneProjection(bounds, *camera->sharedRayOrigin());
+    const ShiftedBounds shifted(bounds);
+    for (const OccupancyGrid& grid : scene.occupancy()->levels) {  // every level
+      const std::optional<CoverageMask> onPlane = coverageMaskOf(grid, plane);
+      if (!onPlane) continue;  // the eye in an occupied cell
+      ++masks;
+      const CoverageMask mask = maskThroughLens(*onPlane, bounds);
+      EXPECT_EQ(uncoveredHits(fb, mask), 0) << what << " cell " << grid.cell;
+      if (&grid != &scene.occupancy()->levels.front()) continue;
+      if (stats.hits > 0 && mask.coveredFraction() < 0.9) ++tight;
+      if (uncoveredHits(fb, maskThroughLens(*onPlane, shifted.lens)) > 0) ++shiftedCaught;
+    }
+  }
+  EXPECT_GT(masks, 3 * 45);
+  EXPECT_GT(tight, 20);          // the finest mask leaves background uncovered
+  EXPECT_GT(shiftedCaught, 10);  // and the check sees a mask of the wrong rows
+}
+
+TEST(CoverageMask, ThroughALensWiderThanTheLimitGetsNone) {
+  const Mesh mesh = loadMesh("procedural:spheres?tris=3000");
+  const Scene scene(test::numericsDevice(), {SceneObject{&mesh}});
+  const CameraParams pose = test::lookAt({0.0, 0.5, 40.0}, {0.0, 0.0, 0.0}, 160, 120);
+  // f = (W / 2) / tan(fov / 2): at "175°" the equidistant fisheye's corners lie 170° off-axis,
+  // at "60°" 34°.
+  for (const double fov : {60.0, 175.0}) {
+    const CameraParams p = lensCamera(pose, "OPENCV_FISHEYE", fov, {0.0, 0.0, 0.0, 0.0});
+    const auto camera = makeCamera(p, scene.renderOrigin());
+    const LensBlockBounds bounds = *camera->lensBlockBounds();
+    EXPECT_EQ(bounds.minCosine<kLensMaskMinCosine, fov> 170) << fov;
+    EXPECT_EQ(lensCoverageMask(*scene.occupancy(), bounds, *camera->sharedRayOrigin()).has_value(),
+              fov < 170)
+        << fov;
+  }
 }
 
 /// Covered fraction of each level's mask through `projection` (finest first), −1 where it has
@@ -423,6 +588,26 @@ TEST(CoverageMaskFrameLoop, EveryAovAndCountIsBitIdenticalWithTheMaskOnAndOff) {
         resolvedByMask += on.raysOutsideBox - off.raysOutsideBox;
     }
   EXPECT_GT(resolvedByMask, 10000u);  // beyond what the box alone resolves
+}
+
+TEST(CoverageMaskFrameLoop, EveryAovAndCountIsBitIdenticalThroughALensWithTheMaskOnAndOff) {
+  const Mesh mesh = loadMesh("procedural:spheres?tris=6000");
+  const Scene scene(test::numericsDevice(), placedTwice(mesh));
+  const CameraParams pose = test::lookAt({30.0, 12.0, 60.0}, {20.0, 0.0, 5.0}, 160, 120);
+  uint64_t resolvedByMask = 0;
+  for (const CameraParams& p : lensCameras(pose))
+    for (int packet : {1, 4, 8, 16}) {
+      const std::string what =
+          p.lensModel + " " + p.pixelCentre + " packet " + std::to_string(packet);
+      RenderStats on, off;
+      const Framebuffer masked = renderWith(scene, p, true, packet, on);
+      const Framebuffer unmasked = renderWith(scene, p, false, packet, off);
+      test::expectSameFrameFewerEmbreeRays(masked, unmasked, on, off, what);
+      EXPECT_GE(on.maskCovered, 0.0) << what << ": the mask applies";
+      if (on.raysOutsideBox > off.raysOutsideBox)
+        resolvedByMask += on.raysOutsideBox - off.raysOutsideBox;
+    }
+  EXPECT_GT(resolvedByMask, 10000u);
 }
 
 }  // namespace coverage_mask_test
