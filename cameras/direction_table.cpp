@@ -1,6 +1,7 @@
 #include "cameras/direction_table.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <list>
 #include <mutex>
@@ -36,11 +37,29 @@ DirectionTable::DirectionTable(const CalibratedSensor& sensor)
   boundPlaneCrossings(blockRows);
 }
 
+namespace {
+
+/// `b` (x0, y0, x1, y1) as floats that hold it: the lows rounded down, the highs up.
+glm::vec4 outwardToFloat(const glm::dvec4& b) {
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  const auto down = [&](double v) {
+    const float f = float(v);
+    return double(f) > v ? std::nextafter(f, -inf) : f;
+  };
+  const auto up = [&](double v) {
+    const float f = float(v);
+    return double(f) < v ? std::nextafter(f, inf) : f;
+  };
+  return glm::vec4(down(b.x), down(b.y), up(b.z), up(b.w));
+}
+
+}  // namespace
+
 void DirectionTable::boundPlaneCrossings(size_t blockRows) {
   constexpr double inf = std::numeric_limits<double>::infinity();
   constexpr int kLanes = kBlock * kBlock;
   const glm::dvec4 none(inf, inf, -inf, -inf);
-  planeBounds_.assign(blockRows * blocksPerRow_, none);
+  planeBounds_.assign(blockRows * blocksPerRow_, glm::vec4(none));
   blockRays_.assign(planeBounds_.size(), 0);
   std::mutex mutex;
   planeExtent_ = none;
@@ -59,7 +78,7 @@ void DirectionTable::boundPlaneCrossings(size_t blockRows) {
         bounds = glm::dvec4(std::min(bounds.x, px), std::min(bounds.y, py), std::max(bounds.z, px),
                             std::max(bounds.w, py));
       }
-      planeBounds_[b] = bounds;
+      planeBounds_[b] = outwardToFloat(bounds);
       blockRays_[b] = rays;
       extent = glm::dvec4(std::min(extent.x, bounds.x), std::min(extent.y, bounds.y),
                           std::max(extent.z, bounds.z), std::max(extent.w, bounds.w));

@@ -44,9 +44,9 @@ class DirectionTable {
   const unsigned char* validity() const { return valid_.data(); }
 
   /// Where the rays of each block of kBlock x kBlock pixels cross the plane z = 1, (d.x /
-  /// d.z, d.y / d.z): (x0, y0, x1, y1), blocks row by row; x0 > x1 for a block without a ray.
-  /// Meaningful where minCosine() > 0 (every ray in front).
-  const std::vector<glm::dvec4>& planeBounds() const { return planeBounds_; }
+  /// d.z, d.y / d.z): (x0, y0, x1, y1), blocks row by row, rounded outwards to float; x0 > x1
+  /// for a block without a ray. Meaningful where minCosine() > 0 (every ray in front).
+  const std::vector<glm::vec4>& planeBounds() const { return planeBounds_; }
   /// The same over every ray.
   glm::dvec4 planeExtent() const { return planeExtent_; }
   /// The least cosine of a ray with the optical axis (its z; 1 without rays).
@@ -59,7 +59,7 @@ class DirectionTable {
   size_t validCount() const;
   size_t bytes() const {
     return 3 * x_.size() * sizeof(double) + valid_.size() +
-           planeBounds_.size() * (sizeof(glm::dvec4) + sizeof(uint16_t));
+           planeBounds_.size() * (sizeof(glm::vec4) + sizeof(uint16_t));
   }
   const CalibratedSensor& sensor() const { return sensor_; }
 
@@ -71,7 +71,7 @@ class DirectionTable {
   size_t blocksPerRow_ = 0;
   std::vector<double> x_, y_, z_;
   std::vector<unsigned char> valid_;
-  std::vector<glm::dvec4> planeBounds_;
+  std::vector<glm::vec4> planeBounds_;
   std::vector<uint16_t> blockRays_;
   glm::dvec4 planeExtent_{0.0};
   double minCosine_ = 1;

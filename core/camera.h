@@ -171,9 +171,9 @@ struct LensBlockBounds {
   glm::dmat4 cameraFromRender{1.0};
   glm::dvec3 eye{0.0};  ///< the exact eye, render space
   int width = 0, height = 0;
-  /// Per block of 4 x 4 pixels from the top-left, row by row: (x0, y0, x1, y1) on the plane;
-  /// x0 > x1 for a block without a ray. Owned by the camera.
-  const glm::dvec4* blocks = nullptr;
+  /// Per block of 4 x 4 pixels from the top-left, row by row: (x0, y0, x1, y1) on the plane,
+  /// holding every crossing; x0 > x1 for a block without a ray. Owned by the camera.
+  const glm::vec4* blocks = nullptr;
   /// Per block, the pixels with a ray: bit 4·r + c for the block's row r and column c (none
   /// past the image's edges; each such ray is finite). Owned by the camera.
   const uint16_t* blockRays = nullptr;

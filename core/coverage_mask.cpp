@@ -358,7 +358,7 @@ CoverageMask maskThroughLens(const CoverageMask& onPlane, const LensBlockBounds&
   const size_t bx = size_t(mask.blocksX_);
   parallelFor(size_t(mask.blocksY_), 16, [&](size_t firstRow, size_t lastRow) {
     for (size_t b = firstRow * bx; b < lastRow * bx; ++b) {
-      const glm::dvec4 r = lens.blocks[b];
+      const glm::dvec4 r(lens.blocks[b]);
       if (!(r.x <= r.z && r.y <= r.w)) continue;  // no ray: the frame loop traces none
       const size_t x0 = blockOf((r.x - e.x) * sx, pbx), x1 = blockOf((r.z - e.x) * sx, pbx);
       const size_t y0 = blockOf((r.y - e.y) * sy, pby), y1 = blockOf((r.w - e.y) * sy, pby);

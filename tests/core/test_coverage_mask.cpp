@@ -364,7 +364,7 @@ double largestPlaneEscape(const Camera& camera, const LensBlockBounds& bounds, i
       if (blockRow >= blocksY) continue;
       const PacketRequest req{x0, y0, 4, 4, 0};
       camera.generate(req, packet.lanes, packet.valid);
-      const glm::dvec4 b = bounds.blocks[size_t(blockRow) * size_t(blocksX) + size_t(x0 / 4)];
+      const glm::dvec4 b(bounds.blocks[size_t(blockRow) * size_t(blocksX) + size_t(x0 / 4)]);
       for (int k = 0; k < 16; ++k) {
         if (!packet.valid[k] || !req.pixel(k).inImage(bounds.width, bounds.height)) continue;
         const glm::dvec3 d =
@@ -412,12 +412,12 @@ TEST(LensBlockBounds, EveryCentreRayCrossesThePlaneInsideItsBlocksBounds) {
 /// `lens` with each block's bounds taken from the block one row down (the last row without
 /// rays): a mask built from it looks at the wrong rows.
 struct ShiftedBounds {
-  std::vector<glm::dvec4> blocks;
+  std::vector<glm::vec4> blocks;
   LensBlockBounds lens;
   explicit ShiftedBounds(LensBlockBounds original) : lens(original) {
     const size_t bx = size_t(original.width + 3) / 4, by = size_t(original.height + 3) / 4;
-    const double inf = std::numeric_limits<double>::infinity();
-    blocks.assign(bx * by, glm::dvec4(inf, inf, -inf, -inf));
+    const float inf = std::numeric_limits<float>::infinity();
+    blocks.assign(bx * by, glm::vec4(inf, inf, -inf, -inf));
     for (size_t b = 0; b + bx < bx * by; ++b) blocks[b] = original.blocks[b + bx];
     lens.blocks = blocks.data();
   }
