@@ -19,7 +19,10 @@ extern "C" void AnnotateNewMemory(const char* file, int line, const volatile voi
 // (fold_tree), through atomics TSan cannot see; once tbb::parallel_for has returned, that
 // stack below the caller's frame is dead, and its next user would be reported racing with
 // them (tests/tsan.supp matches these reports only while TSan can still restore the worker's
-// stack). Forgetting the dead region's access history removes them at the source.
+// stack). Forgetting the dead region's access history removes them at the source: after each
+// loop, and again before the next one forks, since a worker's last touch can land after the
+// caller has resumed (seen once in a CI rehearsal: the frame loop's packet on the main thread's
+// stack reported against a worker's atomic write whose stack TSan could not restore).
 #define APERTURE_TSAN_FORGET_STACK_BELOW(p) \
   AnnotateNewMemory(__FILE__, __LINE__, static_cast<const char*>(p) - (64 << 10), 64 << 10)
 #else
@@ -34,7 +37,8 @@ namespace aperture {
 /// parallel (simple partitioner: chunk boundaries do not depend on the thread count).
 template <class Body>
 void parallelFor(size_t n, size_t grain, const Body& body) {
-  char fork = 0, join = 0;  // addresses used only as TSan synchronisation objects
+  char fork = 0, join = 0;                  // addresses used only as TSan synchronisation objects
+  APERTURE_TSAN_FORGET_STACK_BELOW(&fork);  // dead stack: the body may run on this thread
   APERTURE_TSAN_RELEASE(&fork);
   tbb::parallel_for(
       tbb::blocked_range<size_t>(0, n, grain ? grain : 1),
