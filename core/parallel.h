@@ -21,8 +21,8 @@ extern "C" void AnnotateNewMemory(const char* file, int line, const volatile voi
 // them (tests/tsan.supp matches these reports only while TSan can still restore the worker's
 // stack). Forgetting the dead region's access history removes them at the source: after each
 // loop, and again before the next one forks, since a worker's last touch can land after the
-// caller has resumed (seen once in a CI rehearsal: the frame loop's packet on the main thread's
-// stack reported against a worker's atomic write whose stack TSan could not restore).
+// caller has resumed. The frame loop also forgets the stack below each tile's frame
+// (renderTile, core/render.cpp), where reports of that kind kept appearing.
 #define APERTURE_TSAN_FORGET_STACK_BELOW(p) \
   AnnotateNewMemory(__FILE__, __LINE__, static_cast<const char*>(p) - (64 << 10), 64 << 10)
 #else
