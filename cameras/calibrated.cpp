@@ -87,6 +87,23 @@ CameraFrame frameOfWorldToCamera(const glm::dmat4& m) {
   return f;
 }
 
+namespace {
+
+/// OpenCV camera space (x right, y down, z forwards) from the space of frame U, V, W about
+/// `eye`: rows U, −V, −W, translated by −R·eye.
+glm::dmat4 openCvCameraFromFrame(const glm::dvec3& u, const glm::dvec3& v, const glm::dvec3& w,
+                                 const glm::dvec3& eye) {
+  glm::dmat4 m(1.0);  // GLM: m[column][row]
+  const glm::dvec3 rows[3] = {u, -v, -w};
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) m[c][r] = rows[r][c];
+    m[3][r] = -glm::dot(rows[r], eye);
+  }
+  return m;
+}
+
+}  // namespace
+
 glm::dmat4 calibratedWorldToCamera(const CameraParams& p) {
   const AxisConvention axes = parseAxisConvention(p.convention);
   if (p.worldToCamera)
@@ -95,13 +112,7 @@ glm::dmat4 calibratedWorldToCamera(const CameraParams& p) {
   if (p.cameraToWorld)
     return worldToCameraOpenCV(matrixOfRowMajor(*p.cameraToWorld), axes, true, "--camera-to-world");
   const CameraFrame f = frameFromParams(p);
-  glm::dmat4 m(1.0);
-  const glm::dvec3 rows[3] = {f.u, -f.v, -f.w};
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) m[c][r] = rows[r][c];
-    m[3][r] = -glm::dot(rows[r], f.e);
-  }
-  return m;
+  return openCvCameraFromFrame(f.u, f.v, f.w, f.e);
 }
 
 CameraParams calibratedCameraParams(const CalibratedSensor& sensor,
@@ -273,13 +284,8 @@ class CalibratedCamera final : public CameraBase {
     static_assert(DirectionTable::kBlock == 4, "LensBlockBounds::blocks are 4 x 4 pixels");
     if (!table_ || spp_ != 1) return std::nullopt;
     LensBlockBounds b;
-    // Camera space (OpenCV axes) from render space: rows U, −V, −W about the eye, the inverse
-    // of worldDirection's rotation.
-    const glm::dvec3 rows[3] = {frame_.u, -frame_.v, -frame_.w};
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) b.cameraFromRender[c][r] = rows[r][c];
-      b.cameraFromRender[3][r] = -glm::dot(rows[r], renderEyeD_);
-    }
+    // The table's camera space from render space: the inverse of worldDirection's rotation.
+    b.cameraFromRender = openCvCameraFromFrame(frame_.u, frame_.v, frame_.w, renderEyeD_);
     b.eye = renderEyeD_;
     b.width = width_;
     b.height = height_;

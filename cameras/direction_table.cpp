@@ -53,6 +53,11 @@ glm::vec4 outwardToFloat(const glm::dvec4& b) {
   return glm::vec4(down(b.x), down(b.y), up(b.z), up(b.w));
 }
 
+/// The bounds (x0, y0, x1, y1) holding both `a` and `b`.
+glm::dvec4 boundsUnion(const glm::dvec4& a, const glm::dvec4& b) {
+  return glm::dvec4(std::min(a.x, b.x), std::min(a.y, b.y), std::max(a.z, b.z), std::max(a.w, b.w));
+}
+
 }  // namespace
 
 void DirectionTable::boundPlaneCrossings(size_t blockRows) {
@@ -75,18 +80,14 @@ void DirectionTable::boundPlaneCrossings(size_t blockRows) {
         cosine = std::min(cosine, z_[k]);
         if (!(z_[k] > 0)) continue;  // behind the plane: minCosine rules the table out
         const double px = x_[k] / z_[k], py = y_[k] / z_[k];
-        bounds = glm::dvec4(std::min(bounds.x, px), std::min(bounds.y, py), std::max(bounds.z, px),
-                            std::max(bounds.w, py));
+        bounds = boundsUnion(bounds, glm::dvec4(px, py, px, py));
       }
       planeBounds_[b] = outwardToFloat(bounds);
       blockRays_[b] = rays;
-      extent = glm::dvec4(std::min(extent.x, bounds.x), std::min(extent.y, bounds.y),
-                          std::max(extent.z, bounds.z), std::max(extent.w, bounds.w));
+      extent = boundsUnion(extent, bounds);
     }
     const std::lock_guard<std::mutex> lock(mutex);
-    planeExtent_ =
-        glm::dvec4(std::min(planeExtent_.x, extent.x), std::min(planeExtent_.y, extent.y),
-                   std::max(planeExtent_.z, extent.z), std::max(planeExtent_.w, extent.w));
+    planeExtent_ = boundsUnion(planeExtent_, extent);
     minCosine_ = std::min(minCosine_, cosine);
   });
 }

@@ -323,7 +323,8 @@ std::optional<CoverageMask> refinedCoverageMask(const Occupancy& occupancy,
 
 CentralProjection lensPlaneProjection(const LensBlockBounds& lens, const glm::vec3& rayOrigin) {
   const glm::dvec4 e = lens.extent;
-  const double sx = lens.width / (e.z - e.x), sy = lens.height / (e.w - e.y);
+  const glm::dvec2 scale = lensPlaneScale(lens);
+  const double sx = scale.x, sy = scale.y;
   // Rows of the camera frame (GLM: m[column][row]); raster x = sx·(c.x − x0·c.z) / c.z.
   const glm::dmat4& c = lens.cameraFromRender;
   CentralProjection p;
@@ -347,7 +348,8 @@ CoverageMask maskThroughLens(const CoverageMask& onPlane, const LensBlockBounds&
   // plane's raster has the image's density, so a block's bounds span one to four of its blocks.
   const size_t pbx = size_t(onPlane.blocksX_), pby = size_t(onPlane.blocksY_);
   const glm::dvec4 e = lens.extent;
-  const double sx = lens.width / (e.z - e.x), sy = lens.height / (e.w - e.y);
+  const glm::dvec2 scale = lensPlaneScale(lens);
+  const double sx = scale.x, sy = scale.y;
   // Truncation is the floor of the clamped, non-negative raster position (and needs no libm
   // call in the portable build).
   const auto blockOf = [](double raster, size_t blocks) {

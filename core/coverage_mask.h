@@ -93,6 +93,12 @@ std::optional<CoverageMask> lensCoverageMask(const Occupancy& occupancy,
 /// `lens`'s rays cross, over as many pixels as the image (x and y scaled apart).
 CentralProjection lensPlaneProjection(const LensBlockBounds& lens, const glm::vec3& rayOrigin);
 
+/// Pixels of the plane's raster (lensPlaneProjection) per unit of the plane, along x and y.
+inline glm::dvec2 lensPlaneScale(const LensBlockBounds& lens) {
+  return {lens.width / (lens.extent.z - lens.extent.x),
+          lens.height / (lens.extent.w - lens.extent.y)};
+}
+
 class CoverageMask {
  public:
   CoverageMask(int width, int height);
