@@ -90,16 +90,6 @@ const char* pixelCentreName(PixelCentre c) {
   return c == PixelCentre::HalfInteger ? "half-integer" : "integer";
 }
 
-// aperture's raster and the half-integer sources agree; OpenCV's pixel (i, j) centre (j, i)
-// sits half a pixel up and left of the raster's (j + ½, i + ½).
-glm::dvec2 sourcePixelOfRaster(const glm::dvec2& raster, PixelCentre centre) {
-  return centre == PixelCentre::HalfInteger ? raster : raster - glm::dvec2(0.5);
-}
-
-glm::dvec2 rasterOfSourcePixel(const glm::dvec2& sourcePixel, PixelCentre centre) {
-  return centre == PixelCentre::HalfInteger ? sourcePixel : sourcePixel + glm::dvec2(0.5);
-}
-
 glm::dmat4 worldToCameraOpenCV(const glm::dmat4& pose, AxisConvention from, bool cameraToWorld,
                                const std::string& context) {
   checkRigid(pose, context);

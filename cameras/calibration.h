@@ -34,9 +34,15 @@ AxisConvention parseAxisConvention(const std::string& name);
 const char* pixelCentreName(PixelCentre c);  ///< "half-integer", "integer"
 
 /// The one pixel-centre conversion: aperture's raster position (pixel (i, j) centre at
-/// (j + ½, i + ½)) in a source's pixel coordinates, and back.
-glm::dvec2 sourcePixelOfRaster(const glm::dvec2& raster, PixelCentre centre);
-glm::dvec2 rasterOfSourcePixel(const glm::dvec2& sourcePixel, PixelCentre centre);
+/// (j + ½, i + ½)) in a source's pixel coordinates, and back. The raster and the half-integer
+/// sources agree; OpenCV's pixel (i, j) centre (j, i) sits half a pixel up and left of the
+/// raster's. Inline: the direction tables convert every pixel.
+inline glm::dvec2 sourcePixelOfRaster(const glm::dvec2& raster, PixelCentre centre) {
+  return centre == PixelCentre::HalfInteger ? raster : raster - glm::dvec2(0.5);
+}
+inline glm::dvec2 rasterOfSourcePixel(const glm::dvec2& sourcePixel, PixelCentre centre) {
+  return centre == PixelCentre::HalfInteger ? sourcePixel : sourcePixel + glm::dvec2(0.5);
+}
 
 /// The one axis conversion: a source's pose (world-to-camera, or camera-to-world when
 /// `cameraToWorld`) in its axes, as world-to-camera in OpenCV axes. Throws Error (naming

@@ -22,14 +22,26 @@ DirectionTable::DirectionTable(const CalibratedSensor& sensor)
   y_.assign(n, 0.0);
   z_.assign(n, 1.0);
   valid_.assign(n, 0);
+  // sensorDirection of every pixel centre, kBatch pixels of a row at a time (the lens solves
+  // them side by side, with the same result).
+  constexpr int kBatch = Lens::kBatch;
   parallelFor(size_t(sensor.height), 8, [&](size_t rowBegin, size_t rowEnd) {
+    glm::dvec2 pixels[kBatch];
+    glm::dvec3 dirs[kBatch];
+    bool hasRay[kBatch];
     for (size_t i = rowBegin; i < rowEnd; ++i)
-      for (int j = 0; j < sensor_.width; ++j) {
-        const size_t k = index(int(i), j);
-        if (const auto d = sensorDirection(sensor_, j + 0.5, double(i) + 0.5)) {
-          x_[k] = d->x;
-          y_[k] = d->y;
-          z_[k] = d->z;
+      for (int j0 = 0; j0 < sensor_.width; j0 += kBatch) {
+        const int count = std::min(kBatch, sensor_.width - j0);
+        for (int c = 0; c < count; ++c)
+          pixels[c] =
+              sourcePixelOfRaster(glm::dvec2(j0 + c + 0.5, double(i) + 0.5), sensor_.pixelCentre);
+        sensor_.lens.unprojectBatch(count, pixels, dirs, hasRay);
+        for (int c = 0; c < count; ++c) {
+          if (!hasRay[c]) continue;
+          const size_t k = index(int(i), j0 + c);
+          x_[k] = dirs[c].x;
+          y_[k] = dirs[c].y;
+          z_[k] = dirs[c].z;
           valid_[k] = 1;
         }
       }

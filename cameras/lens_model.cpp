@@ -298,85 +298,158 @@ void Lens::tabulateInverse() {
   inverseRadius_ = std::move(radius), inverseSlope_ = std::move(slope);
 }
 
-std::optional<double> Lens::invertRadialProfile(double t, bool exact) const {
-  if (!(t >= 0)) return std::nullopt;
-  if (t == 0) return 0.0;
-  if (valid_.bounded() && !(t < valid_.maxDistorted)) return std::nullopt;
-  // The bracket [lo, hi] (ρ(lo) <= t <= ρ(hi)) and the first guess: the table's cell of t with
-  // cubic Hermite interpolation (good to ~1e-9: one Newton step then reaches rounding), past
-  // the table from its end to the fold, or by doubling where nothing bounds r.
-  double lo = 0, hi = 0, r = t, rho = 0, drho = 0;
-  const double cell = inverseRadius_.empty() ? kInf : t / inverseStep_;
-  if (cell < kInverseTableCells) {
-    const int k = static_cast<int>(cell);
-    const double s = cell - k, h = inverseStep_;
-    lo = inverseRadius_[k], hi = inverseRadius_[k + 1];
-    r = (1 + 2 * s) * (1 - s) * (1 - s) * lo + s * (1 - s) * (1 - s) * h * inverseSlope_[k] +
-        s * s * (3 - 2 * s) * hi + s * s * (s - 1) * h * inverseSlope_[k + 1];
-    if (!exact) return std::min(std::max(r, lo), hi);
-  } else {
-    lo = inverseRadius_.empty() ? 0 : inverseRadius_.back();
-    if (valid_.bounded()) {
-      hi = valid_.maxUndistorted;
-    } else {
-      for (hi = std::max({1.0, t, 2 * lo});; hi *= 2) {
-        radialProfile(hi, rho, drho);
-        if (!(rho < t)) break;
-        if (hi > 1e300) return std::nullopt;
-      }
-    }
+std::optional<double> Lens::radialBracketEnd(double t, double lo) const {
+  double rho = 0, drho = 0;
+  for (double hi = std::max({1.0, t, 2 * lo});; hi *= 2) {
+    radialProfile(hi, rho, drho);
+    if (!(rho < t)) return hi;
+    if (hi > 1e300) return std::nullopt;
   }
-  // Newton on ρ(r) = t, kept inside the bracket by bisection.
-  if (!(r > lo && r < hi)) r = 0.5 * (lo + hi);
-  for (int i = 0; i < kMaxRadialIterations; ++i) {
-    radialProfile(r, rho, drho);
-    const double f = rho - t;
-    if (f == 0) return drho > 0 ? std::optional<double>(r) : std::nullopt;
-    (f < 0 ? lo : hi) = r;
-    double next = r - f / drho;
-    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-    if (std::abs(next - r) <= 1e-15 * r) {
-      if (!(std::abs(f) <= kAcceptedResidual * std::max(1.0, t)) || !(drho > 0))
-        return std::nullopt;
-      return next;
-    }
-    r = next;
-  }
-  return std::nullopt;
 }
 
-std::optional<glm::dvec2> Lens::newton(const glm::dvec2& target, glm::dvec2 x) const {
-  const double scale = std::max(1.0, glm::length(target));
-  glm::dmat2 jacobian;
-  glm::dvec2 residual = distort(x, &jacobian) - target;
-  double error = glm::length(residual);
-  bool stalled = false;
-  for (int i = 0;; ++i) {
-    const double det = glm::determinant(jacobian);
-    if (!std::isfinite(error) || !std::isfinite(det) || det == 0) return std::nullopt;
-    if (error <= kConvergedResidual * scale || (stalled && error <= kAcceptedResidual * scale)) {
-      // A solution on the folded side of the map (det < 0) or past the radial fold is not the
-      // inverse: no ray.
-      if (!(det > 0) || !(glm::length(x) < valid_.maxUndistorted)) return std::nullopt;
-      return x;
+template <int L>
+__attribute__((flatten)) void Lens::invertRadialLanes(const double* t, bool exact, double* r,
+                                                      bool* solve) const {
+  // Each lane's bracket [lo, hi] (ρ(lo) <= t <= ρ(hi)) and first guess: the table's cell of t
+  // with cubic Hermite interpolation (good to ~1e-9: one Newton step then reaches rounding),
+  // past the table from its end to the fold, or by doubling where nothing bounds r.
+  double lo[L], hi[L];
+  bool running[L];
+  for (int k = 0; k < L; ++k) {
+    running[k] = false;
+    if (!solve[k]) continue;
+    solve[k] = false;
+    const double tk = t[k];
+    if (!(tk >= 0)) continue;
+    if (tk == 0) {
+      r[k] = 0, solve[k] = true;
+      continue;
     }
-    if (stalled || i == kMaxNewtonIterations) return std::nullopt;
-    // step = J⁻¹ · residual, written out for the 2 × 2 case; halved until the new point stays
-    // inside the radial fold and does not raise the residual (near a fold the full step can
-    // overshoot onto the other side). No decrease in kMaxHalvings: the residual is at its floor.
-    glm::dvec2 step((jacobian[1][1] * residual.x - jacobian[1][0] * residual.y) / det,
-                    (-jacobian[0][1] * residual.x + jacobian[0][0] * residual.y) / det);
-    stalled = true;
-    for (int h = 0; h < kMaxHalvings; ++h, step *= 0.5) {
-      const glm::dvec2 next = x - step;
-      if (!(glm::length(next) < valid_.maxUndistorted)) continue;
-      glm::dmat2 nextJacobian;
-      const glm::dvec2 nextResidual = distort(next, &nextJacobian) - target;
-      const double nextError = glm::length(nextResidual);
-      if (!(nextError <= error)) continue;
-      stalled = glm::length(step) <= kStalledStep * std::max(1.0, glm::length(next));
-      x = next, jacobian = nextJacobian, residual = nextResidual, error = nextError;
-      break;
+    if (valid_.bounded() && !(tk < valid_.maxDistorted)) continue;
+    double l = 0, h = 0, guess = tk;
+    const double cell = inverseRadius_.empty() ? kInf : tk / inverseStep_;
+    if (cell < kInverseTableCells) {
+      const int c = static_cast<int>(cell);
+      const double s = cell - c, w = inverseStep_;
+      l = inverseRadius_[c], h = inverseRadius_[c + 1];
+      guess = (1 + 2 * s) * (1 - s) * (1 - s) * l + s * (1 - s) * (1 - s) * w * inverseSlope_[c] +
+              s * s * (3 - 2 * s) * h + s * s * (s - 1) * w * inverseSlope_[c + 1];
+      if (!exact) {
+        r[k] = std::min(std::max(guess, l), h), solve[k] = true;
+        continue;
+      }
+    } else {
+      l = inverseRadius_.empty() ? 0 : inverseRadius_.back();
+      if (valid_.bounded()) {
+        h = valid_.maxUndistorted;
+      } else {
+        const std::optional<double> end = radialBracketEnd(tk, l);
+        if (!end) continue;
+        h = *end;
+      }
+    }
+    if (!(guess > l && guess < h)) guess = 0.5 * (l + h);
+    lo[k] = l, hi[k] = h, r[k] = guess, running[k] = true;
+  }
+  // Newton on ρ(r) = t, kept inside the bracket by bisection, every running lane one step per
+  // round.
+  for (int i = 0; i < kMaxRadialIterations; ++i) {
+    bool any = false;
+    for (int k = 0; k < L; ++k) {
+      if (!running[k]) continue;
+      double rho = 0, drho = 0;
+      radialProfile(r[k], rho, drho);
+      const double f = rho - t[k];
+      if (f == 0) {
+        solve[k] = drho > 0, running[k] = false;
+        continue;
+      }
+      (f < 0 ? lo[k] : hi[k]) = r[k];
+      double next = r[k] - f / drho;
+      if (!(next > lo[k] && next < hi[k])) next = 0.5 * (lo[k] + hi[k]);
+      if (std::abs(next - r[k]) <= 1e-15 * r[k]) {
+        solve[k] = std::abs(f) <= kAcceptedResidual * std::max(1.0, t[k]) && drho > 0;
+        r[k] = next, running[k] = false;
+        continue;
+      }
+      r[k] = next, any = true;
+    }
+    if (!any) break;
+  }
+}
+
+std::optional<double> Lens::invertRadialProfile(double t, bool exact) const {
+  double r = 0;
+  bool solved = true;
+  invertRadialLanes<1>(&t, exact, &r, &solved);
+  return solved ? std::optional<double>(r) : std::nullopt;
+}
+
+template <int L>
+__attribute__((flatten)) void Lens::newtonLanes(const glm::dvec2* target, glm::dvec2* x,
+                                                bool* solve) const {
+  double scale[L] = {}, error[L] = {};
+  glm::dmat2 jacobian[L] = {};
+  glm::dvec2 residual[L] = {}, step[L] = {};
+  bool running[L], stalled[L], searching[L];
+  for (int k = 0; k < L; ++k) {
+    running[k] = solve[k], solve[k] = false, stalled[k] = false;
+    if (!running[k]) continue;
+    scale[k] = std::max(1.0, glm::length(target[k]));
+    residual[k] = distort(x[k], &jacobian[k]) - target[k];
+    error[k] = glm::length(residual[k]);
+  }
+  for (int i = 0;; ++i) {
+    bool any = false;
+    for (int k = 0; k < L; ++k) {
+      searching[k] = false;
+      if (!running[k]) continue;
+      const glm::dmat2& J = jacobian[k];
+      const double det = glm::determinant(J);
+      if (!std::isfinite(error[k]) || !std::isfinite(det) || det == 0) {
+        running[k] = false;
+        continue;
+      }
+      if (error[k] <= kConvergedResidual * scale[k] ||
+          (stalled[k] && error[k] <= kAcceptedResidual * scale[k])) {
+        // A solution on the folded side of the map (det < 0) or past the radial fold is not
+        // the inverse: no ray.
+        solve[k] = det > 0 && glm::length(x[k]) < valid_.maxUndistorted, running[k] = false;
+        continue;
+      }
+      if (stalled[k] || i == kMaxNewtonIterations) {
+        running[k] = false;
+        continue;
+      }
+      // step = J⁻¹ · residual, written out for the 2 × 2 case.
+      const glm::dvec2& e = residual[k];
+      step[k] =
+          glm::dvec2((J[1][1] * e.x - J[1][0] * e.y) / det, (-J[0][1] * e.x + J[0][0] * e.y) / det);
+      stalled[k] = true, searching[k] = true, any = true;
+    }
+    if (!any) return;
+    // Each step is halved until the new point stays inside the radial fold and does not raise
+    // the residual (near a fold the full step can overshoot onto the other side). No decrease
+    // in kMaxHalvings: the residual is at its floor, and the lane stays stalled.
+    for (int h = 0; h < kMaxHalvings; ++h) {
+      bool more = false;
+      for (int k = 0; k < L; ++k) {
+        if (!searching[k]) continue;
+        const glm::dvec2 next = x[k] - step[k];
+        if (glm::length(next) < valid_.maxUndistorted) {
+          glm::dmat2 nextJacobian;
+          const glm::dvec2 nextResidual = distort(next, &nextJacobian) - target[k];
+          const double nextError = glm::length(nextResidual);
+          if (nextError <= error[k]) {
+            stalled[k] = glm::length(step[k]) <= kStalledStep * std::max(1.0, glm::length(next));
+            x[k] = next, jacobian[k] = nextJacobian, residual[k] = nextResidual;
+            error[k] = nextError, searching[k] = false;
+            continue;
+          }
+        }
+        step[k] *= 0.5, more = true;
+      }
+      if (!more) break;
     }
   }
 }
@@ -390,33 +463,69 @@ double Lens::nonRadialReach() const {
   return (4 * (std::abs(terms_.p1) + std::abs(terms_.p2)) + std::hypot(terms_.sx1, terms_.sy1)) * s;
 }
 
-std::optional<glm::dvec2> Lens::undistort(const glm::dvec2& distorted) const {
-  if (!isFinite(distorted)) return std::nullopt;
-  const double t = glm::length(distorted);
-  if (terms_.identity) {
-    if (!(t < valid_.maxUndistorted)) return std::nullopt;  // a fisheye's θ >= π
-    return distorted;
+template <int L>
+__attribute__((flatten)) void Lens::undistortLanes(const glm::dvec2* distorted,
+                                                   glm::dvec2* undistorted, bool* solve) const {
+  double t[L];
+  for (int k = 0; k < L; ++k) {
+    if (solve[k] && !isFinite(distorted[k])) solve[k] = false;
+    t[k] = solve[k] ? glm::length(distorted[k]) : 0.0;
   }
-  if (t == 0) return glm::dvec2(0.0);  // every model maps 0 to 0 with the identity Jacobian
-  const std::optional<double> r = invertRadialProfile(t, terms_.radialOnly);
+  if (terms_.identity) {
+    for (int k = 0; k < L; ++k) {
+      if (!solve[k]) continue;
+      solve[k] = t[k] < valid_.maxUndistorted;  // a fisheye's θ >= π has none
+      undistorted[k] = distorted[k];
+    }
+    return;
+  }
+  // Every model maps 0 to 0 with the identity Jacobian: t = 0 needs no inverse.
+  double r[L] = {};
+  bool radial[L];
+  for (int k = 0; k < L; ++k) {
+    radial[k] = solve[k] && t[k] != 0;
+    if (solve[k] && t[k] == 0) undistorted[k] = glm::dvec2(0.0);
+  }
+  invertRadialLanes<L>(t, terms_.radialOnly, r, radial);
   // Radial models: (u', v') = (ρ(r)/r)·(u, v) points along (u, v), so the radial inverse is the
   // whole inverse, with the same residual, and ρ' > 0, ρ > 0 inside the fold make the
   // Jacobian's determinant (ρ/r)·ρ' positive.
   if (terms_.radialOnly) {
-    if (!r) return std::nullopt;
-    return distorted * (*r / t);
+    for (int k = 0; k < L; ++k) {
+      if (!solve[k] || t[k] == 0) continue;
+      solve[k] = radial[k];
+      if (radial[k]) undistorted[k] = distorted[k] * (r[k] / t[k]);
+    }
+    return;
   }
   // With tangential or thin-prism terms, Newton on the 2D map starts from the radial inverse
   // along the point's own direction; when the radial part alone has no inverse there, just
   // inside the fold, unless the point lies beyond the terms' reach.
-  glm::dvec2 start(0.0);
-  if (r)
-    start = distorted * (*r / t);
-  else if (valid_.bounded() && t < valid_.maxDistorted + nonRadialReach())
-    start = distorted * (0.99 * valid_.maxUndistorted / t);
-  else
-    return std::nullopt;
-  return newton(distorted, start);
+  const double reach = valid_.bounded() ? valid_.maxDistorted + nonRadialReach() : kInf;
+  bool newton[L];
+  for (int k = 0; k < L; ++k) {
+    newton[k] = false;
+    if (!solve[k] || t[k] == 0) continue;
+    if (radial[k]) {
+      undistorted[k] = distorted[k] * (r[k] / t[k]);
+    } else if (valid_.bounded() && t[k] < reach) {
+      undistorted[k] = distorted[k] * (0.99 * valid_.maxUndistorted / t[k]);
+    } else {
+      solve[k] = false;
+      continue;
+    }
+    newton[k] = true;
+  }
+  newtonLanes<L>(distorted, undistorted, newton);
+  for (int k = 0; k < L; ++k)
+    if (solve[k] && t[k] != 0) solve[k] = newton[k];
+}
+
+std::optional<glm::dvec2> Lens::undistort(const glm::dvec2& distorted) const {
+  glm::dvec2 undistorted(0.0);
+  bool solved = true;
+  undistortLanes<1>(&distorted, &undistorted, &solved);
+  return solved ? std::optional<glm::dvec2>(undistorted) : std::nullopt;
 }
 
 std::optional<glm::dvec2> Lens::project(const glm::dvec3& dir) const {
@@ -444,18 +553,47 @@ std::optional<glm::dvec2> Lens::project(const glm::dvec3& dir) const {
   return pixel;
 }
 
-std::optional<glm::dvec3> Lens::unproject(const glm::dvec2& pixel) const {
-  const glm::dvec2 distorted((pixel.x - cx_) / fx_, (pixel.y - cy_) / fy_);
-  const std::optional<glm::dvec2> u = undistort(distorted);
-  if (!u) return std::nullopt;
-  if (fisheye_) {
+template <int L>
+__attribute__((flatten)) void Lens::unprojectLanes(const glm::dvec2* pixels, glm::dvec3* dirs,
+                                                   bool* solve) const {
+  glm::dvec2 distorted[L], u[L] = {};
+  for (int k = 0; k < L; ++k)
+    distorted[k] = glm::dvec2((pixels[k].x - cx_) / fx_, (pixels[k].y - cy_) / fy_);
+  undistortLanes<L>(distorted, u, solve);
+  for (int k = 0; k < L; ++k) {
+    if (!solve[k]) continue;
+    if (!fisheye_) {
+      dirs[k] = glm::normalize(glm::dvec3(u[k].x, u[k].y, 1.0));
+      continue;
+    }
     // (u, v) = θ·(x, y)/|(x, y)|: the ray at θ off-axis along the azimuth of (u, v).
-    const double theta = glm::length(*u);
-    if (theta == 0) return glm::dvec3(0, 0, 1);
+    const double theta = glm::length(u[k]);
+    if (theta == 0) {
+      dirs[k] = glm::dvec3(0, 0, 1);
+      continue;
+    }
     const double s = std::sin(theta) / theta;
-    return glm::dvec3(u->x * s, u->y * s, std::cos(theta));
+    dirs[k] = glm::dvec3(u[k].x * s, u[k].y * s, std::cos(theta));
   }
-  return glm::normalize(glm::dvec3(u->x, u->y, 1.0));
+}
+
+std::optional<glm::dvec3> Lens::unproject(const glm::dvec2& pixel) const {
+  glm::dvec3 dir(0.0);
+  bool solved = true;
+  unprojectLanes<1>(&pixel, &dir, &solved);
+  return solved ? std::optional<glm::dvec3>(dir) : std::nullopt;
+}
+
+void Lens::unprojectBatch(int n, const glm::dvec2* pixels, glm::dvec3* dirs, bool* hasRay) const {
+  glm::dvec2 lanePixels[kBatch];
+  glm::dvec3 laneDirs[kBatch];
+  bool solve[kBatch];
+  for (int k = 0; k < kBatch; ++k) {
+    solve[k] = k < n;
+    lanePixels[k] = solve[k] ? pixels[k] : glm::dvec2(0.0);
+  }
+  unprojectLanes<kBatch>(lanePixels, laneDirs, solve);
+  for (int k = 0; k < n; ++k) dirs[k] = laneDirs[k], hasRay[k] = solve[k];
 }
 
 }  // namespace aperture

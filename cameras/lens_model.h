@@ -91,6 +91,13 @@ class Lens {
   /// Inverse: the unit camera-space direction of a pixel position (COLMAP convention), or
   /// nothing outside the valid region or where Newton's method does not converge.
   std::optional<glm::dvec3> unproject(const glm::dvec2& pixel) const;
+  /// Pixels unprojectBatch solves side by side.
+  static constexpr int kBatch = 8;
+  /// unproject() of pixels[0, n), n <= kBatch, side by side: their Newton iterations
+  /// interleaved, so each one's chain of square roots and divides overlaps the others'
+  /// instead of stalling. The same directions bit for bit (one implementation serves both).
+  /// hasRay[k] is false where unproject() gives nothing; dirs[k] is then unspecified.
+  void unprojectBatch(int n, const glm::dvec2* pixels, glm::dvec3* dirs, bool* hasRay) const;
 
   /// The distortion in normalised coordinates: for the pinhole models (u, v) = (x/z, y/z) to
   /// the distorted (u', v'); for the fisheye models (u, v) = θ·(x, y)/|(x, y)| to the
@@ -123,14 +130,29 @@ class Lens {
   void gain(double s, double& g, double& dg) const;
   /// The radial profile ρ(r) = r·g(r²) and its derivative.
   void radialProfile(double r, double& rho, double& drho) const;
+  // The inverse, for L lanes side by side (L = 1 for one point, kBatch for unprojectBatch):
+  // the lanes k with solve[k] set on entry are solved; on return solve[k] says whether lane k
+  // has a solution, written to its output. Each lane computes exactly what it would alone.
+
   /// The r in the valid region with ρ(r) = t (t >= 0), by bracketed Newton; nothing past it.
   /// Not `exact`: the table's first guess where it has one (for the 2D Newton to refine).
+  template <int L>
+  void invertRadialLanes(const double* t, bool exact, double* r, bool* solve) const;
+  /// invertRadialLanes of one radius.
   std::optional<double> invertRadialProfile(double t, bool exact = true) const;
+  /// Past the table, where nothing bounds r: the first of max(1, t, 2·lo)·2^k with ρ >= t.
+  std::optional<double> radialBracketEnd(double t, double lo) const;
   /// Fills inverseRadius_ and inverseSlope_ (after valid_).
   void tabulateInverse();
-  /// Newton's method on the 2D map from `start`; nothing without convergence, outside the
-  /// valid region or where the Jacobian's determinant is not positive.
-  std::optional<glm::dvec2> newton(const glm::dvec2& distorted, glm::dvec2 start) const;
+  /// Newton's method on the 2D map from x[k] towards target[k]; no solution without
+  /// convergence, outside the valid region or where the Jacobian's determinant is not
+  /// positive.
+  template <int L>
+  void newtonLanes(const glm::dvec2* target, glm::dvec2* x, bool* solve) const;
+  template <int L>
+  void undistortLanes(const glm::dvec2* distorted, glm::dvec2* undistorted, bool* solve) const;
+  template <int L>
+  void unprojectLanes(const glm::dvec2* pixels, glm::dvec3* dirs, bool* solve) const;
   LensValidRegion findValidRegion() const;
   /// How far the tangential and thin-prism terms can move a point of the valid region.
   double nonRadialReach() const;

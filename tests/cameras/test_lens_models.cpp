@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <optional>
 #include <random>
 #include <string>
@@ -843,6 +844,57 @@ TEST(LensModelExtremes, DirectionTableOfAWholeImage) {
   // (about 139000 pixels outside the circle).
   EXPECT_GT(missing, 0);
   EXPECT_LT(missing, 960 * 540 / 3);
+}
+
+// unprojectBatch solves up to Lens::kBatch pixels side by side, their Newton iterations in
+// lockstep: each lane must get exactly unproject()'s ray (or none), whatever its neighbours do
+// (converge sooner or later, halve their steps, have no ray at all). Every model and lens of
+// allCases(), pixels scattered over and beyond the image in batches of every size 1-8.
+TEST(LensModelBatch, EveryLaneIsUnprojectBitForBit) {
+  std::mt19937_64 rng(20261126);
+  int bounded = 0;  // lenses with a fold (or a fisheye's θ = π)
+  for (const LensCase& c : allCases()) {
+    SCOPED_TRACE(c.label);
+    const Lens lens(c.model, c.params);
+    const glm::dvec2 centre(lens.cx(), lens.cy());
+    // Radii from 0.1 px to five times the fold's (or 5 f where nothing bounds the lens),
+    // log-uniform, in random directions.
+    const double reach =
+        5 * lens.fx() *
+        std::max(1.0, lens.validRegion().bounded() ? lens.validRegion().maxDistorted : 1.0);
+    std::uniform_real_distribution<double> logRadius(std::log(0.1), std::log(reach)),
+        azimuth(0, 2 * kPi);
+    int withRay = 0, without = 0;
+    for (int batch = 0; batch < 400; ++batch) {
+      const int n = 1 + batch % Lens::kBatch;
+      glm::dvec2 pixels[Lens::kBatch];
+      for (int k = 0; k < n; ++k) {
+        const double r = std::exp(logRadius(rng)), a = azimuth(rng);
+        pixels[k] = centre + r * glm::dvec2(std::cos(a), std::sin(a));
+      }
+      glm::dvec3 dirs[Lens::kBatch];
+      bool hasRay[Lens::kBatch];
+      lens.unprojectBatch(n, pixels, dirs, hasRay);
+      for (int k = 0; k < n; ++k) {
+        const std::optional<glm::dvec3> alone = lens.unproject(pixels[k]);
+        ASSERT_EQ(hasRay[k], alone.has_value()) << "lane " << k << " of " << n;
+        if (!alone) {
+          ++without;
+          continue;
+        }
+        ++withRay;
+        ASSERT_EQ(std::memcmp(&dirs[k], &*alone, sizeof(glm::dvec3)), 0)
+            << "lane " << k << " of " << n << ": " << dirs[k].x << " " << dirs[k].y << " "
+            << dirs[k].z << " against " << alone->x << " " << alone->y << " " << alone->z;
+      }
+    }
+    EXPECT_GT(withRay, 0);
+    if (lens.validRegion().bounded()) {
+      ++bounded;
+      EXPECT_GT(without, 0);  // past the fold: lanes without a ray beside lanes with one
+    }
+  }
+  EXPECT_GE(bounded, 10);
 }
 
 }  // namespace
