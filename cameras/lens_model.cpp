@@ -585,6 +585,10 @@ std::optional<glm::dvec3> Lens::unproject(const glm::dvec2& pixel) const {
 }
 
 void Lens::unprojectBatch(int n, const glm::dvec2* pixels, glm::dvec3* dirs, bool* hasRay) const {
+  if (n == 1) {  // nothing to interleave: one lane, not eight with seven idle
+    hasRay[0] = true;
+    return unprojectLanes<1>(pixels, dirs, hasRay);
+  }
   glm::dvec2 lanePixels[kBatch];
   glm::dvec3 laneDirs[kBatch];
   bool solve[kBatch];
