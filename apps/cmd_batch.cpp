@@ -122,10 +122,16 @@ void checkJobMemory(const JobFile& jobs, const std::string& maxMemory) {
   std::vector<SceneFootprint> footprints;
   for (const Job& job : jobs.scenes) footprints.push_back(footprintOf(job));
   const uint64_t codecBytes = anyWritesThroughImageCodec(jobs) ? kImageCodecBytes : 0;
+  // The tables' cache serves every scene: the job's cameras together.
+  std::vector<CameraParams> cameras;
+  for (const Job& job : jobs.scenes)
+    for (const JobImage& image : job.images) cameras.push_back(image.params);
+  const uint64_t tableBytes = directionTableBytes(cameras);
   if (footprints.size() == 1) {
     const SceneFootprint& f = footprints.front();
     MemoryEstimate e = estimateMemory(f.specs, f.pixels, 1, 0, f.bytesPerPixel);
     e.imageCodecBytes = codecBytes;
+    e.lensTableBytes = tableBytes;
     checkMemoryLimit(e, limit, "--max-memory", maxMemory);
     return;
   }
@@ -139,6 +145,7 @@ void checkJobMemory(const JobFile& jobs, const std::string& maxMemory) {
     }
   }
   largest.imageCodecBytes = codecBytes;  // the same for every pair
+  largest.lensTableBytes = tableBytes;
   try {
     checkMemoryLimit(largest, limit, "--max-memory", maxMemory);
   } catch (const Error& e) {

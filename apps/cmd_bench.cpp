@@ -412,7 +412,7 @@ int runBench(const BenchArgs& a) {
   settings.sceneBoxTest = !a.noSceneBox;
   settings.coverageMask = !a.noCoverageMask;
   validateBenchArgs(a);
-  checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs, 0, false);
+  checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs, 0, false, {unframed});
 
   const MemoryEstimate estimate =
       benchMemoryEstimate(sceneOptions, unframed.width, unframed.height, aovs);

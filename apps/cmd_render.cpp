@@ -82,7 +82,7 @@ int runRender(const RenderArgs& a) {
   const std::vector<DatasetOutput> datasets = datasetOutputsOf(a, aovs);
   const bool imageCodec = writesThroughImageCodec(!a.preview.empty(), {a.out});
   checkMemoryBudget(a.scene, {unframed.width, unframed.height}, aovs, a.preview.empty() ? 0 : 4,
-                    imageCodec);
+                    imageCodec, {unframed});
   if (imageCodec) aperture::imageCodec();  // a missing plugin fails before the mesh loads
   const PreviewOptions preview = checkRenderOutputs(a, aovs);
   if (given.has("eye") || unframed.worldToCamera || unframed.cameraToWorld) makeCamera(unframed);

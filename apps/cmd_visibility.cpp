@@ -177,7 +177,7 @@ int runVisibility(const VisibilityArgs& a) {
   glm::ivec2 largest(0);
   for (const CameraParams& p : cams.params)
     if (int64_t(p.width) * p.height > int64_t(largest.x) * largest.y) largest = {p.width, p.height};
-  checkMemoryBudget(a.scene, largest, primIds, 0, false);
+  checkMemoryBudget(a.scene, largest, primIds, 0, false, cams.params);
 
   ThreadLimit threads(a.threads);
   Device device;

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <map>
 
+#include "cameras/calibrated.h"
 #include "cameras/culling.h"
 #include "core/error.h"
 #include "core/layers.h"
@@ -15,7 +16,8 @@
 namespace aperture::app {
 
 void checkMemoryBudget(const SceneOptions& o, glm::ivec2 size, const AovSet& aovs,
-                       uint64_t extraBytesPerPixel, bool imageCodec) {
+                       uint64_t extraBytesPerPixel, bool imageCodec,
+                       const std::vector<CameraParams>& cameras) {
   const uint64_t limit = parseMemoryLimit("--max-memory", o.maxMemory);
   if (limit == 0) return;
   std::vector<std::string> specs = o.meshes;
@@ -23,6 +25,7 @@ void checkMemoryBudget(const SceneOptions& o, glm::ivec2 size, const AovSet& aov
   MemoryEstimate e = estimateMemory(specs, uint64_t(size.x), uint64_t(size.y), aovs,
                                     extraBytesPerPixel, o.buildOptions());
   if (imageCodec) e.imageCodecBytes = kImageCodecBytes;
+  e.lensTableBytes = directionTableBytes(cameras);
   checkMemoryLimit(e, limit, "--max-memory", o.maxMemory);
 }
 

@@ -61,10 +61,12 @@ struct SceneOptions {
 void addSceneOptions(CLI::App& app, SceneOptions& o);
 
 /// Refuses, before anything is loaded, a job whose meshes, BVH and framebuffers (estimated
-/// from the files' headers and the image size), and the image codec when it writes through it
-/// (kImageCodecBytes), exceed --max-memory. No-op without the flag.
+/// from the files' headers and the image size), the image codec when it writes through it
+/// (kImageCodecBytes) and the direction tables of `cameras`' distorted lenses exceed
+/// --max-memory. No-op without the flag.
 void checkMemoryBudget(const SceneOptions& o, glm::ivec2 size, const AovSet& aovs,
-                       uint64_t extraBytesPerPixel, bool imageCodec);
+                       uint64_t extraBytesPerPixel, bool imageCodec,
+                       const std::vector<CameraParams>& cameras);
 
 /// Loaded meshes and the Embree scene over them, logged as they are made.
 struct LoadedScene {

@@ -157,6 +157,19 @@ std::optional<CalibratedView> calibratedViewOf(const CameraDescription& c) {
   return view;
 }
 
+// An undistorted pinhole's directions cost less to compute than to read from memory.
+bool readsDirectionTable(const Lens& lens) { return lens.distorted(); }
+
+uint64_t directionTableBytes(const std::vector<CameraParams>& cameras) {
+  std::vector<CalibratedSensor> sensors;
+  for (const CameraParams& p : cameras) {
+    if (p.type != "calibrated") continue;
+    CalibratedSensor sensor = calibratedSensorOf(p);
+    if (readsDirectionTable(sensor.lens)) sensors.push_back(std::move(sensor));
+  }
+  return uint64_t(DirectionTable::peakBytes(sensors));
+}
+
 std::optional<CalibratedView> calibratedViewOf(const CameraParams& p) {
   if (p.type == "calibrated")
     return CalibratedView{calibratedSensorOf(p), calibratedWorldToCamera(p)};
@@ -269,12 +282,11 @@ class CalibratedCamera final : public CameraBase {
     vw_ = width_ / lens.fx();
     vh_ = height_ / lens.fy();
     shift_ = ImageWindow::shiftForPrincipalPoint(pp.x, pp.y, width_, height_);
-    // An undistorted pinhole's directions cost less to compute than to read from memory.
-    if (!lens.distorted())
+    if (readsDirectionTable(lens))
+      table_ = DirectionTable::of(sensor_);
+    else
       pinhole_ = PinholeLens{lens.fx(), lens.fy(), lens.cx(), lens.cy(),
                              sensor_.pixelCentre == PixelCentre::Integer ? -0.5 : 0.0};
-    else
-      table_ = DirectionTable::of(sensor_);
   }
 
   /// Every ray starts at the eye, at tnear 0.

@@ -3,6 +3,7 @@
 // its source's pixel convention, posed by a world-to-camera or camera-to-world matrix in
 // OpenCV, OpenGL or Blender axes, or by eye / at / up like the lecture cameras. Camera files
 // (cameras/camera_file.h) become these parameters; they are the parameters' one owner.
+#include <cstdint>
 #include <glm/glm.hpp>
 #include <optional>
 #include <vector>
@@ -18,6 +19,15 @@ namespace aperture {
 /// intrinsics (fx, fy, cx, cy; single-focal models need fx == fy) and distortion, and the
 /// pixel convention. Throws Error naming the parameter for a wrong count or value.
 CalibratedSensor calibratedSensorOf(const CameraParams& p);
+
+/// Whether a calibrated camera with this lens reads its rays from a direction table
+/// (cameras/direction_table.h): a distorted lens. An undistorted pinhole computes them.
+bool readsDirectionTable(const Lens& lens);
+
+/// At most how many bytes of direction tables cameras of `cameras`, made one after the other,
+/// hold at once (DirectionTable::peakBytes of the calibrated ones that read a table): for
+/// --max-memory. Throws Error as calibratedSensorOf for a calibrated camera's bad lens.
+uint64_t directionTableBytes(const std::vector<CameraParams>& cameras);
 
 /// World-to-camera in OpenCV axes: from world_to_camera / camera_to_world (in `convention`
 /// axes) when given, else from the frame of eye / at / up (x = U, y = −V, z = −W).

@@ -5,6 +5,7 @@
 #include <limits>
 #include <list>
 #include <mutex>
+#include <set>
 
 #include "core/parallel.h"
 
@@ -108,11 +109,34 @@ size_t DirectionTable::validCount() const {
   return size_t(std::count(valid_.begin(), valid_.end(), 1));
 }
 
+size_t DirectionTable::bytesFor(int width, int height) {
+  const size_t blocks =
+      size_t((width + kBlock - 1) / kBlock) * size_t((height + kBlock - 1) / kBlock);
+  // x, y, z and the validity byte per entry, kBlock² entries, the plane bounds and ray bits.
+  constexpr size_t kEntries = kBlock * kBlock;
+  return blocks * (kEntries * (3 * sizeof(double) + 1) + sizeof(glm::vec4) + sizeof(uint16_t));
+}
+
+size_t DirectionTable::peakBytes(const std::vector<CalibratedSensor>& sensors) {
+  // Sensors as operator== compares them: size, pixel convention, model and parameters.
+  std::set<std::vector<double>> distinct;
+  size_t all = 0, largest = 0;
+  for (const CalibratedSensor& s : sensors) {
+    std::vector<double> key = {double(s.width), double(s.height), double(s.pixelCentre),
+                               double(s.lens.model())};
+    key.insert(key.end(), s.lens.params().begin(), s.lens.params().end());
+    if (!distinct.insert(std::move(key)).second) continue;
+    const size_t bytes = bytesFor(s.width, s.height);
+    all += bytes;
+    largest = std::max(largest, bytes);
+  }
+  return std::min(all, kCacheBytes + largest);
+}
+
 std::shared_ptr<const DirectionTable> DirectionTable::of(const CalibratedSensor& sensor) {
   // A batch renders image after image; images of one sensor usually come together (COLMAP
-  // sorts by image id), so a few recent tables suffice. A 1080p table holds 52 MB, a 24 Mpx
-  // DSLR's 610 MB: the cache keeps the most recent tables up to 1 GiB (at least one).
-  constexpr size_t kBudgetBytes = size_t(1) << 30;
+  // sorts by image id), so a few recent tables suffice. A 1080p table holds 54 MB, a 24 Mpx
+  // DSLR's 630 MB: the cache keeps the most recent tables up to 1 GiB (at least one).
   static std::mutex mutex;
   static std::list<std::shared_ptr<const DirectionTable>> recent;  // most recent first
   std::lock_guard<std::mutex> lock(mutex);
@@ -125,7 +149,7 @@ std::shared_ptr<const DirectionTable> DirectionTable::of(const CalibratedSensor&
   size_t bytes = 0;
   for (auto it = recent.begin(); it != recent.end(); ++it) {
     bytes += (*it)->bytes();
-    if (it != recent.begin() && bytes > kBudgetBytes) {
+    if (it != recent.begin() && bytes > kCacheBytes) {
       recent.erase(it, recent.end());
       break;
     }

@@ -17,6 +17,16 @@ class DirectionTable {
   /// The table of `sensor`: from a small process-wide cache (the most recently used sensors),
   /// or computed in parallel and added to it. Thread-safe.
   static std::shared_ptr<const DirectionTable> of(const CalibratedSensor& sensor);
+  /// What the cache of `of` keeps: the most recent tables up to this many bytes (and the most
+  /// recent one whatever its size).
+  static constexpr size_t kCacheBytes = size_t(1) << 30;
+  /// The bytes a table of a width x height sensor holds (bytes() of its table).
+  static size_t bytesFor(int width, int height);
+  /// At most how many bytes of tables the cache and a camera being made hold at once when
+  /// cameras of these sensors are made one after the other (each distinct sensor counted
+  /// once): every table while they fit in kCacheBytes, else the cache's bound plus the
+  /// largest table, being computed beside it. For --max-memory.
+  static size_t peakBytes(const std::vector<CalibratedSensor>& sensors);
   /// Computes the table (no cache).
   explicit DirectionTable(const CalibratedSensor& sensor);
 

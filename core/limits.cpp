@@ -294,7 +294,7 @@ std::string formatBytes(uint64_t bytes) {
 }
 
 uint64_t MemoryEstimate::total() const {
-  return runtimeBytes + imageCodecBytes +
+  return runtimeBytes + imageCodecBytes + lensTableBytes +
          std::max({loadPeakBytes, buildPhaseBytes(), renderPhaseBytes()});
 }
 
@@ -305,7 +305,9 @@ std::string MemoryEstimate::describe() const {
              " while building), framebuffers ", formatBytes(framebufferBytes), ", runtime ",
              formatBytes(runtimeBytes),
              imageCodecBytes ? cat(", image codec ", formatBytes(imageCodecBytes)) : "",
-             "; the peak is the runtime and the largest of loading, building and rendering)");
+             lensTableBytes ? cat(", lens direction tables ", formatBytes(lensTableBytes)) : "",
+             "; the peak is the runtime", lensTableBytes ? " and the tables" : "",
+             " and the largest of loading, building and rendering)");
 }
 
 MemoryEstimate estimateMemory(const std::vector<std::string>& meshSpecs, uint64_t width,

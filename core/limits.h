@@ -54,6 +54,9 @@ uint64_t framebufferBytesPerPixel(const AovSet& aovs);
 //              meshes are built together in the top-level BVH;
 //   rendering  the mesh buffers, the BVH and the framebuffers (allocated after the build, in
 //              the pages the primitive references gave back).
+// The direction tables of distorted calibrated cameras (MemoryEstimate::lensTableBytes) are
+// made with the cameras, which a job file makes when it is read, and counted beside every
+// phase.
 // Measured at 1e7 triangles: mesh 18.0 B/tri (12 B per vertex, 12 per triangle, 0.5 vertices
 // per triangle), build peak 97.5 B/tri above the mesh (BVH 65.2 + references 32.3), BVH after
 // the build 65-69 B/tri. The compact BVH (RTC_SCENE_FLAG_COMPACT: triangles kept as indices
@@ -89,10 +92,14 @@ struct MemoryEstimate {
   uint64_t framebufferBytes = 0;  ///< AOV buffers plus per-pixel extras (preview, half copy)
   uint64_t runtimeBytes = 0;      ///< kRuntimeBytes
   uint64_t imageCodecBytes = 0;   ///< kImageCodecBytes when the job uses the image codec
+  /// Direction tables of distorted calibrated cameras (cameras/direction_table.h), made with
+  /// the cameras and kept in a cache: counted in every phase (a job file's cameras are made
+  /// when it is read, before anything loads).
+  uint64_t lensTableBytes = 0;
   uint64_t triangles = 0;
   uint64_t buildPhaseBytes() const { return meshBytes + bvhBuildBytes; }
   uint64_t renderPhaseBytes() const { return meshBytes + bvhBytes + framebufferBytes; }
-  /// The runtime (and the image codec) plus the largest of the three phases.
+  /// The runtime, the image codec and the lens tables, plus the largest of the three phases.
   uint64_t total() const;
   /// "1.2 GB (meshes 400 MB for 5000000 triangles, BVH 400 MB, framebuffers 400 MB)".
   std::string describe() const;
