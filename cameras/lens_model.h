@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include "cameras/lens_inverse.h"
+
 namespace aperture {
 
 enum class LensModelId {
@@ -92,10 +94,9 @@ class Lens {
   /// nothing outside the valid region or where Newton's method does not converge.
   std::optional<glm::dvec3> unproject(const glm::dvec2& pixel) const;
   /// Pixels unprojectBatch solves side by side.
-  static constexpr int kBatch = 8;
-  /// unproject() of pixels[0, n), n <= kBatch, side by side: their Newton iterations
-  /// interleaved, so each one's chain of square roots and divides overlaps the others'
-  /// instead of stalling. The same directions bit for bit (one implementation serves both).
+  static constexpr int kBatch = kLensLanes;
+  /// unproject() of pixels[0, n), n <= kBatch, side by side (cameras/lens_inverse.h: one
+  /// vector lane each). The same directions bit for bit: one implementation serves both.
   /// hasRay[k] is false where unproject() gives nothing; dirs[k] is then unspecified.
   void unprojectBatch(int n, const glm::dvec2* pixels, glm::dvec3* dirs, bool* hasRay) const;
 
@@ -112,47 +113,18 @@ class Lens {
   bool operator==(const Lens& o) const { return model_ == o.model_ && params_ == o.params_; }
 
  private:
-  /// Every model's distortion in one shared form, filled from the parameters once:
-  ///   (u', v') = g(s)·(u, v) + tangential(u, v) + (sx1, sy1)·s,   s = u² + v²,
-  ///   g(s) = N(s) / D(s),  N = 1 + n1 s + … + n4 s⁴,  D = 1 + d1 s + d2 s² + d3 s³,
-  ///   tangential = (2 p1 u v + p2 (s + 2u²), 2 p2 u v + p1 (s + 2v²)).
-  struct Terms {
-    double num[5] = {1, 0, 0, 0, 0};  ///< N's coefficients by power of s
-    double den[4] = {1, 0, 0, 0};     ///< D's (FULL_OPENCV's k4, k5, k6)
-    double p1 = 0, p2 = 0;            ///< tangential (OpenCV's p1, p2)
-    double sx1 = 0, sy1 = 0;          ///< thin prism
-    bool identity = true;             ///< no distortion at all: (u', v') = (u, v)
-    bool rational = false;            ///< D is not 1
-    bool radialOnly = true;           ///< no tangential or thin-prism term
-  };
-  static Terms termsOf(LensModelId model, const std::vector<double>& distortion);
-  /// g(s) and dg/ds.
-  void gain(double s, double& g, double& dg) const;
+  static DistortionTerms termsOf(LensModelId model, const std::vector<double>& distortion);
   /// The radial profile ρ(r) = r·g(r²) and its derivative.
-  void radialProfile(double r, double& rho, double& drho) const;
-  // The inverse, for L lanes side by side (L = 1 for one point, kBatch for unprojectBatch):
-  // the lanes k with solve[k] set on entry are solved; on return solve[k] says whether lane k
-  // has a solution, written to its output. Each lane computes exactly what it would alone.
-
+  void radialProfile(double r, double& rho, double& drho) const {
+    radialProfileOf(terms_, r, rho, drho);
+  }
   /// The r in the valid region with ρ(r) = t (t >= 0), by bracketed Newton; nothing past it.
   /// Not `exact`: the table's first guess where it has one (for the 2D Newton to refine).
-  template <int L>
-  void invertRadialLanes(const double* t, bool exact, double* r, bool* solve) const;
-  /// invertRadialLanes of one radius.
   std::optional<double> invertRadialProfile(double t, bool exact = true) const;
-  /// Past the table, where nothing bounds r: the first of max(1, t, 2·lo)·2^k with ρ >= t.
-  std::optional<double> radialBracketEnd(double t, double lo) const;
   /// Fills inverseRadius_ and inverseSlope_ (after valid_).
   void tabulateInverse();
-  /// Newton's method on the 2D map from x[k] towards target[k]; no solution without
-  /// convergence, outside the valid region or where the Jacobian's determinant is not
-  /// positive.
-  template <int L>
-  void newtonLanes(const glm::dvec2* target, glm::dvec2* x, bool* solve) const;
-  template <int L>
-  void undistortLanes(const glm::dvec2* distorted, glm::dvec2* undistorted, bool* solve) const;
-  template <int L>
-  void unprojectLanes(const glm::dvec2* pixels, glm::dvec3* dirs, bool* solve) const;
+  /// What the inverse (cameras/lens_inverse.h) reads: views into this lens.
+  LensInverse inverse() const;
   LensValidRegion findValidRegion() const;
   /// How far the tangential and thin-prism terms can move a point of the valid region.
   double nonRadialReach() const;
@@ -161,7 +133,7 @@ class Lens {
   std::vector<double> params_;
   double fx_ = 0, fy_ = 0, cx_ = 0, cy_ = 0;  ///< from params_, read per pixel
   bool fisheye_ = false;
-  Terms terms_;
+  DistortionTerms terms_;
   LensValidRegion valid_;
   /// The radial profile's inverse r(t) and dr/dt at evenly spaced distorted radii t = k·step:
   /// the first guess of Newton's method (empty for a lens without distortion).
