@@ -8,9 +8,10 @@
 // cameras/calibration.h, not here.
 //
 // The inverse maps a pixel to its ray by Newton's method with the analytic Jacobian, in
-// double precision. Where the forward model is not invertible (past the first fold of the
-// radial polynomial, beyond a fisheye's fold or beyond 180° off-axis), a pixel has no ray:
-// unproject() returns nothing and the renderer records a miss.
+// double precision (the formulas and the solver: cameras/lens_inverse.h). Where the forward
+// model is not invertible (past the first fold of the radial polynomial, beyond a fisheye's
+// fold or beyond 180° off-axis), a pixel has no ray: unproject() returns nothing and the
+// renderer records a miss.
 #include <glm/glm.hpp>
 #include <optional>
 #include <string>
