@@ -665,6 +665,18 @@ void storeColor(const ImagePlan& plan, const PacketRequest& req, const BlockColo
                              {shade, shade, shade, cover}, plan.fb.rgba.data());
 }
 
+/// This thread's two packets of width N, which PacketPipeline fills in turn. In thread-local
+/// storage rather than on the frame loop's stack: TBB keeps its task-tree nodes on the stack
+/// below a parallel loop's caller and may touch them after the caller resumed (core/parallel.h),
+/// and ThreadSanitizer reported those late touches as races with the packets written there
+/// (1 in about 20 CI runs, in a render subprocess; the worker's stack not restorable, so no
+/// suppression matches). A thread renders one tile at a time, so one pair per thread suffices.
+template <int N>
+PacketState<N>* threadPackets() {
+  static thread_local PacketState<N> packets[2];
+  return packets;
+}
+
 /// A tile's packets in render order, block by block (rows of blocks, left to right) and
 /// within a block pass by pass, with the rays of the next packet generated before the current
 /// one is traced: the camera's long dependency chain (a double √ and ÷ per ray) then overlaps
@@ -726,7 +738,7 @@ class PacketPipeline {
   PacketRequest next_;
   int pass_ = 0, slot_ = 0;
   bool more_;
-  PacketState<N> states_[2];
+  PacketState<N>* const states_ = threadPackets<N>();  // two
 };
 
 /// Renders the next block of the pipeline: the colour samples, then the centre ray when it
@@ -755,11 +767,11 @@ APERTURE_VECTOR_KERNEL void renderTile(const ImagePlan& plan, int x0, int y0, in
   // Denormals flushed on every worker (Embree's recommendation); same mode on all threads.
   _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
   _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
-  // Under TSan: the stack below this frame is dead, but a TBB worker of an earlier loop may
-  // have touched TBB nodes there after its caller resumed (core/parallel.h); the packets below
-  // would be reported racing with it. Compiled out otherwise.
-  char frame = 0;
-  APERTURE_TSAN_FORGET_STACK_BELOW(&frame);
+  // Under TSan: the stack below this frame's base is dead (its locals not yet written), but a
+  // TBB worker of an earlier loop may have touched TBB nodes there after its caller resumed
+  // (core/parallel.h); the hit lanes and AOV values written there would be reported racing
+  // with it. The packets themselves are thread-local (threadPackets). Compiled out otherwise.
+  APERTURE_TSAN_FORGET_STACK_BELOW(__builtin_frame_address(0));
   PacketPipeline<N> packets(plan, x0, y0, x1, y1);
   while (packets.more()) renderBlock<N, kNull>(plan, packets, count);
 }
