@@ -183,16 +183,17 @@ template <class T>
 MaskOf<T> invertRadial(const LensInverse& c, const T& t, bool exact, T& r, MaskOf<T> solve) {
   using M = MaskOf<T>;
   static const double kNoTable[2] = {0, 0};
-  const double* radius = c.cells > 0 ? c.inverseRadius : kNoTable;
-  const double* slope = c.cells > 0 ? c.inverseSlope : kNoTable;
+  const int cells = c.cells();
+  const double* radius = cells > 0 ? c.inverseRadius.data() : kNoTable;
+  const double* slope = cells > 0 ? c.inverseSlope.data() : kNoTable;
   const M wanted = solve & maskOf(t >= 0.0);
   const M zero = wanted & maskOf(t == 0.0);
   const M live = wanted & ~zero & (c.bounded ? maskOf(t < c.maxDistorted) : allOf<M>(true));
   // The bracket [lo, hi] (ρ(lo) <= t <= ρ(hi)) and the first guess: the table's cell of t with
   // cubic Hermite interpolation, past the table from its end to the fold, or by doubling where
   // nothing bounds r.
-  const T cell = c.cells > 0 ? t / c.step : splat<T>(kInf);
-  const M inTable = maskOf(cell < double(c.cells));
+  const T cell = cells > 0 ? t / c.step : splat<T>(kInf);
+  const M inTable = maskOf(cell < double(cells));
   T tableLo, tableHi, slopeLo, slopeHi, s;
   tableCells(radius, slope, select(inTable, cell, splat<T>(0.0)), tableLo, tableHi, slopeLo,
              slopeHi, s);
@@ -200,7 +201,7 @@ MaskOf<T> invertRadial(const LensInverse& c, const T& t, bool exact, T& r, MaskO
   const T guess = (1 + 2 * s) * (1 - s) * (1 - s) * tableLo + s * (1 - s) * (1 - s) * w * slopeLo +
                   s * s * (3 - 2 * s) * tableHi + s * s * (s - 1) * w * slopeHi;
   const M firstGuess = live & inTable & allOf<M>(!exact);
-  T lo = select(inTable, tableLo, splat<T>(radius[c.cells]));
+  T lo = select(inTable, tableLo, splat<T>(radius[cells]));
   T hi = select(inTable, tableHi, splat<T>(c.maxUndistorted));
   r = select(zero, splat<T>(0.0),
              select(firstGuess, minOf(maxOf(guess, tableLo), tableHi), select(inTable, guess, t)));

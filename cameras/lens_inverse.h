@@ -7,6 +7,7 @@
 // in the same order: IEEE +, −, ×, ÷ and √ round the same in every vector width, and the build
 // contracts no FMA.
 #include <cstdint>
+#include <vector>
 
 namespace aperture {
 
@@ -83,8 +84,8 @@ inline void distortPoint(const DistortionTerms& t, T u, T v, T& du, T& dv, bool 
   dv = g * v + 2 * t.p2 * uv + t.p1 * (s + 2 * vv) + t.sy1 * s;
 }
 
-/// What the inverse reads of a lens: its terms, intrinsics, valid region and the radial
-/// inverse's first-guess table (views into the Lens, valid while it lives).
+/// Everything the inverse reads of a lens, made once with it (Lens::inverse_): its terms,
+/// intrinsics, valid region and the radial inverse's first-guess table.
 struct LensInverse {
   DistortionTerms terms;
   double fx = 1, fy = 1, cx = 0, cy = 0;
@@ -95,11 +96,11 @@ struct LensInverse {
   /// maxDistorted plus how far the tangential and thin-prism terms reach: no distorted point
   /// beyond it has a preimage (Lens::nonRadialReach).
   double nonRadialLimit = 0;
-  /// The radial inverse's table: r and dr/dt at t = k·step, k = 0..cells (cells 0: none).
-  const double* inverseRadius = nullptr;
-  const double* inverseSlope = nullptr;
-  int cells = 0;
+  /// The radial inverse's table: r and dr/dt at t = k·step, k = 0..cells() (empty: none, as
+  /// for a lens without distortion or while the table is being made).
+  std::vector<double> inverseRadius, inverseSlope;
   double step = 0;
+  int cells() const { return inverseRadius.empty() ? 0 : int(inverseRadius.size()) - 1; }
 };
 
 /// Pixels unprojectEight solves side by side.

@@ -76,21 +76,27 @@ Lens::Lens(LensModelId model, std::vector<double> params)
       throw Error(cat("camera model ", m.name, ": parameter ", m.paramNames[i], " is ", params_[i],
                       " (must be finite)"));
   const bool single = m.singleFocal();
-  fx_ = params_[0], fy_ = params_[single ? 0 : 1];
-  cx_ = params_[single ? 1 : 2], cy_ = params_[single ? 2 : 3];
-  fisheye_ = m.fisheye;
-  if (fx_ <= 0 || fy_ <= 0)
+  LensInverse& c = inverse_;
+  c.fx = params_[0], c.fy = params_[single ? 0 : 1];
+  c.cx = params_[single ? 1 : 2], c.cy = params_[single ? 2 : 3];
+  c.fisheye = m.fisheye;
+  if (c.fx <= 0 || c.fy <= 0)
     throw Error(
-        cat("camera model ", m.name, ": focal length must be > 0 (got ", fx_, ", ", fy_, ")"));
-  terms_ = termsOf(model_, distortion());
+        cat("camera model ", m.name, ": focal length must be > 0 (got ", c.fx, ", ", c.fy, ")"));
+  c.terms = termsOf(model_, distortion());
   valid_ = findValidRegion();
+  c.bounded = valid_.bounded();
+  c.maxUndistorted = valid_.maxUndistorted;
+  c.maxDistorted = valid_.maxDistorted;
+  c.nonRadialLimit =
+      c.bounded ? valid_.maxDistorted + nonRadialReach() : std::numeric_limits<double>::infinity();
   tabulateInverse();
 }
 
-double Lens::fx() const { return fx_; }
-double Lens::fy() const { return fy_; }
-double Lens::cx() const { return cx_; }
-double Lens::cy() const { return cy_; }
+double Lens::fx() const { return inverse_.fx; }
+double Lens::fy() const { return inverse_.fy; }
+double Lens::cx() const { return inverse_.cx; }
+double Lens::cy() const { return inverse_.cy; }
 
 std::vector<double> Lens::distortion() const {
   return {params_.begin() + (info().singleFocal() ? 3 : 4), params_.end()};
@@ -176,13 +182,13 @@ DistortionTerms Lens::termsOf(LensModelId model, const std::vector<double>& k) {
 }
 
 glm::dvec2 Lens::distort(const glm::dvec2& p, glm::dmat2* jacobian) const {
-  if (terms_.identity) {
+  if (inverse_.terms.identity) {
     if (jacobian) *jacobian = glm::dmat2(1.0);
     return p;
   }
   glm::dvec2 d;
   double j[4] = {};
-  distortPoint(terms_, p.x, p.y, d.x, d.y, jacobian != nullptr, j);
+  distortPoint(inverse_.terms, p.x, p.y, d.x, d.y, jacobian != nullptr, j);
   if (jacobian) *jacobian = glm::dmat2(j[0], j[1], j[2], j[3]);  // column by column
   return d;
 }
@@ -194,12 +200,12 @@ LensValidRegion Lens::findValidRegion() const {
   const bool fisheye = info().fisheye;
   LensValidRegion region;
   region.maxUndistorted = region.maxDistorted = fisheye ? kPi : kInf;
-  if (terms_.identity) return region;
+  if (inverse_.terms.identity) return region;
 
   const auto invertible = [this](double r) {
-    if (terms_.rational) {
+    if (inverse_.terms.rational) {
       double dd = 0;
-      if (!(polynomialAt<4>(terms_.den, r * r, dd) > 0)) return false;
+      if (!(polynomialAt<4>(inverse_.terms.den, r * r, dd) > 0)) return false;
     }
     double rho = 0, drho = 0;
     radialProfile(r, rho, drho);
@@ -228,8 +234,8 @@ LensValidRegion Lens::findValidRegion() const {
 }
 
 void Lens::tabulateInverse() {
-  inverseRadius_.clear(), inverseSlope_.clear();
-  if (terms_.identity) return;
+  inverse_.inverseRadius.clear(), inverse_.inverseSlope.clear();  // none while it is made
+  if (inverse_.terms.identity) return;
   const double end = std::min(kInverseTableEnd, valid_.maxDistorted * (1 - 1e-6));
   std::vector<double> radius(kInverseTableCells + 1), slope(kInverseTableCells + 1);
   for (int k = 0; k <= kInverseTableCells; ++k) {
@@ -239,31 +245,13 @@ void Lens::tabulateInverse() {
     radialProfile(*r, rho, drho);
     radius[k] = *r, slope[k] = 1 / drho;
   }
-  inverseStep_ = end / kInverseTableCells;
-  inverseRadius_ = std::move(radius), inverseSlope_ = std::move(slope);
-}
-
-LensInverse Lens::inverse() const {
-  LensInverse c;
-  c.terms = terms_;
-  c.fx = fx_, c.fy = fy_, c.cx = cx_, c.cy = cy_;
-  c.fisheye = fisheye_;
-  c.bounded = valid_.bounded();
-  c.maxUndistorted = valid_.maxUndistorted;
-  c.maxDistorted = valid_.maxDistorted;
-  c.nonRadialLimit = c.bounded ? valid_.maxDistorted + nonRadialReach() : kInf;
-  if (!inverseRadius_.empty()) {
-    c.inverseRadius = inverseRadius_.data();
-    c.inverseSlope = inverseSlope_.data();
-    c.cells = int(inverseRadius_.size()) - 1;
-    c.step = inverseStep_;
-  }
-  return c;
+  inverse_.step = end / kInverseTableCells;
+  inverse_.inverseRadius = std::move(radius), inverse_.inverseSlope = std::move(slope);
 }
 
 std::optional<double> Lens::invertRadialProfile(double t, bool exact) const {
   double r = 0;
-  if (!invertRadialOne(inverse(), t, exact, r)) return std::nullopt;
+  if (!invertRadialOne(inverse_, t, exact, r)) return std::nullopt;
   return r;
 }
 
@@ -273,19 +261,21 @@ std::optional<double> Lens::invertRadialProfile(double t, bool exact) const {
 // out than their sum has no preimage in the valid region.
 double Lens::nonRadialReach() const {
   const double s = valid_.maxUndistorted * valid_.maxUndistorted;
-  return (4 * (std::abs(terms_.p1) + std::abs(terms_.p2)) + std::hypot(terms_.sx1, terms_.sy1)) * s;
+  return (4 * (std::abs(inverse_.terms.p1) + std::abs(inverse_.terms.p2)) +
+          std::hypot(inverse_.terms.sx1, inverse_.terms.sy1)) *
+         s;
 }
 
 std::optional<glm::dvec2> Lens::undistort(const glm::dvec2& distorted) const {
   glm::dvec2 u;
-  if (!undistortOne(inverse(), distorted.x, distorted.y, u.x, u.y)) return std::nullopt;
+  if (!undistortOne(inverse_, distorted.x, distorted.y, u.x, u.y)) return std::nullopt;
   return u;
 }
 
 std::optional<glm::dvec2> Lens::project(const glm::dvec3& dir) const {
   if (!std::isfinite(dir.x) || !std::isfinite(dir.y) || !std::isfinite(dir.z)) return std::nullopt;
   glm::dvec2 undistorted(0.0);
-  if (fisheye_) {
+  if (inverse_.fisheye) {
     // θ from atan2, not atan(r/z): the fisheyes see beyond 90° off-axis.
     const double rxy = std::hypot(dir.x, dir.y);
     if (rxy == 0 && !(dir.z > 0)) return std::nullopt;  // the zero vector, or straight back
@@ -300,21 +290,21 @@ std::optional<glm::dvec2> Lens::project(const glm::dvec3& dir) const {
   // With tangential or thin-prism terms the map can fold in 2D inside the radial region:
   // project only where unproject would return the direction.
   glm::dmat2 jacobian(1.0);
-  const glm::dvec2 d = distort(undistorted, terms_.radialOnly ? nullptr : &jacobian);
+  const glm::dvec2 d = distort(undistorted, inverse_.terms.radialOnly ? nullptr : &jacobian);
   if (!(glm::determinant(jacobian) > 0)) return std::nullopt;
-  const glm::dvec2 pixel(fx_ * d.x + cx_, fy_ * d.y + cy_);
+  const glm::dvec2 pixel(fx() * d.x + cx(), fy() * d.y + cy());
   if (!isFinite(pixel)) return std::nullopt;
   return pixel;
 }
 
 std::optional<glm::dvec3> Lens::unproject(const glm::dvec2& pixel) const {
   double dir[3];
-  if (!unprojectOne(inverse(), pixel.x, pixel.y, dir)) return std::nullopt;
+  if (!unprojectOne(inverse_, pixel.x, pixel.y, dir)) return std::nullopt;
   return glm::dvec3(dir[0], dir[1], dir[2]);
 }
 
 void Lens::unprojectBatch(int n, const glm::dvec2* pixels, glm::dvec3* dirs, bool* hasRay) const {
-  const LensInverse c = inverse();
+  const LensInverse& c = inverse_;
   if (n == 1) {  // one lane, not eight with seven idle
     double dir[3];
     hasRay[0] = unprojectOne(c, pixels[0].x, pixels[0].y, dir);

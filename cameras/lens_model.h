@@ -117,29 +117,24 @@ class Lens {
   static DistortionTerms termsOf(LensModelId model, const std::vector<double>& distortion);
   /// The radial profile ρ(r) = r·g(r²) and its derivative.
   void radialProfile(double r, double& rho, double& drho) const {
-    radialProfileOf(terms_, r, rho, drho);
+    radialProfileOf(inverse_.terms, r, rho, drho);
   }
   /// The r in the valid region with ρ(r) = t (t >= 0), by bracketed Newton; nothing past it.
   /// Not `exact`: the table's first guess where it has one (for the 2D Newton to refine).
   std::optional<double> invertRadialProfile(double t, bool exact = true) const;
-  /// Fills inverseRadius_ and inverseSlope_ (after valid_).
+  /// Fills the first-guess table of inverse_ (after the rest of it).
   void tabulateInverse();
-  /// What the inverse (cameras/lens_inverse.h) reads: views into this lens.
-  LensInverse inverse() const;
   LensValidRegion findValidRegion() const;
   /// How far the tangential and thin-prism terms can move a point of the valid region.
   double nonRadialReach() const;
 
   LensModelId model_;
   std::vector<double> params_;
-  double fx_ = 0, fy_ = 0, cx_ = 0, cy_ = 0;  ///< from params_, read per pixel
-  bool fisheye_ = false;
-  DistortionTerms terms_;
   LensValidRegion valid_;
-  /// The radial profile's inverse r(t) and dr/dt at evenly spaced distorted radii t = k·step:
-  /// the first guess of Newton's method (empty for a lens without distortion).
-  std::vector<double> inverseRadius_, inverseSlope_;
-  double inverseStep_ = 0;
+  /// Everything the inverse reads (cameras/lens_inverse.h), from params_ and valid_: the
+  /// intrinsics, the terms, the region's radii and the radial inverse's first-guess table,
+  /// made once by the constructor and the one copy of each.
+  LensInverse inverse_;
 };
 
 }  // namespace aperture

@@ -669,8 +669,9 @@ void storeColor(const ImagePlan& plan, const PacketRequest& req, const BlockColo
 /// storage rather than on the frame loop's stack: TBB keeps its task-tree nodes on the stack
 /// below a parallel loop's caller and may touch them after the caller resumed (core/parallel.h),
 /// and ThreadSanitizer reported those late touches as races with the packets written there
-/// (1 in about 20 CI runs, in a render subprocess; the worker's stack not restorable, so no
-/// suppression matches). A thread renders one tile at a time, so one pair per thread suffices.
+/// (twice in this project's CI rehearsals, in a render subprocess; the worker's stack not
+/// restorable, so no suppression matches). A thread renders one tile at a time, so one pair per
+/// thread suffices.
 template <int N>
 PacketState<N>* threadPackets() {
   static thread_local PacketState<N> packets[2];
