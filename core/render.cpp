@@ -7,6 +7,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <deque>
 #include <limits>
@@ -14,6 +15,7 @@
 #include <mutex>
 #include <optional>
 #include <type_traits>
+#include <utility>
 
 #include "core/coverage_mask.h"
 #include "core/error.h"
@@ -118,6 +120,27 @@ std::optional<CoverageMask> coverageFor(const Scene& scene, const Camera& camera
 
 struct ImagePlan;
 
+/// A framebuffer channel the frame loop stores pixels into: its pixel 0 and the bytes of a
+/// pixel.
+struct WrittenChannel {
+  const char* pixels;
+  size_t bytesPerPixel;
+};
+
+/// The per-pixel channels of `fb` the frame loop stores into: every allocated one but the
+/// layered hits (layer-major, written by traceLayers).
+std::vector<WrittenChannel> writtenChannels(const Framebuffer& fb) {
+  std::vector<WrittenChannel> out;
+  const auto add = [&](const auto& v, size_t valuesPerPixel) {
+    if (!v.empty())
+      out.push_back({reinterpret_cast<const char*>(v.data()), valuesPerPixel * sizeof(v[0])});
+  };
+  add(fb.rgba, 4), add(fb.depth, 1), add(fb.distance, 1), add(fb.normal, 3);
+  add(fb.position, 3), add(fb.primId, 1), add(fb.geomId, 1), add(fb.shadingNormal, 3);
+  for (const PropertyChannel& c : fb.properties) add(c.values, 1);
+  return out;
+}
+
 struct TileCounters {
   uint64_t traced = 0, skipped = 0, outsideBox = 0, hits = 0;
 };
@@ -172,6 +195,8 @@ struct ImagePlan {
   int colorSamples;
   bool geometryFromSample;
   int passes;
+  /// Every per-pixel channel of `fb` the frame loop stores into (writtenChannels).
+  std::vector<WrittenChannel> written;
   /// The packet width and trace mode, chosen here once, so no packet tests them.
   TileRenderer renderTile;
   /// RenderSettings::nullTrace: the fake primID of lane k (k mod object 0's triangle count).
@@ -216,6 +241,7 @@ ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSet
       colorSamples(color ? settings_.spp : 0),
       geometryFromSample(anyGeometry && color && settings_.spp == 1),
       passes(colorSamples + (anyGeometry && !geometryFromSample ? 1 : 0)),
+      written(writtenChannels(fb_)),
       renderTile(tileRendererFor(settings_)) {
   if (layers) layers->place(width, pixelOffset);
   if (settings.nullTrace) {
@@ -700,6 +726,8 @@ class PacketPipeline {
 
   /// Whether packets are left.
   bool more() const { return more_; }
+  /// The top row of the next packet's block.
+  int nextBlockRow() const { return next_.y0; }
   /// The next packet's request and its state, holding its rays; generates the packet after
   /// it into the other buffer. The state stays valid until the next call.
   PacketState<N>& advance(PacketRequest& req) {
@@ -759,6 +787,55 @@ void renderBlock(const ImagePlan& plan, PacketPipeline<N>& packets, TileCounters
   if (plan.color) storeColor<N>(plan, {req.x0, req.y0, req.blockW, req.blockH, 0}, color);
 }
 
+/// Asks for the cache lines of pixels [x0, x1) of rows [y0, y1) of every channel the frame
+/// loop writes (ImagePlan::written), into L2 (prefetcht1: the lines stay out of the L1 that
+/// Embree's traversal works in). A frame's framebuffer does not stay cached, so the AOV stores
+/// of a block would otherwise miss: on Intel the missing stores fill the store buffer and
+/// stall the stores that follow, Embree's among them (bench/RESULTS.md, issue 13, eighth
+/// session, measured on a Xeon).
+inline void prefetchPixelRows(const ImagePlan& plan, int x0, int x1, int y0, int y1) {
+  // Inline assembly, volatile: GCC deems __builtin_prefetch free of side effects, so it found
+  // this function without any (ipa-pure-const) and deleted every call to it.
+  const auto prefetchIntoL2 = [](const char* line) {
+#if defined(__x86_64__)
+    asm volatile("prefetcht1 %0" : : "m"(*line));
+#else
+    __builtin_prefetch(line, 1, 2);
+#endif
+  };
+  constexpr size_t kLine = 64;
+  for (const WrittenChannel& c : plan.written)
+    for (int y = y0; y < y1; ++y) {
+      const size_t first = plan.pixelOffset + size_t(y) * size_t(plan.width) + size_t(x0);
+      const char* begin = c.pixels + first * c.bytesPerPixel;
+      const char* end = begin + size_t(x1 - x0) * c.bytesPerPixel;
+      begin -= reinterpret_cast<uintptr_t>(begin) % kLine;
+      for (const char* line = begin; line < end; line += kLine) prefetchIntoL2(line);
+    }
+}
+
+/// The columns [x0, x1) of the blocks of the block row at y in columns [tx0, tx1) that may
+/// write pixels: from the first to the last block the coverage mask keeps (every block without
+/// one); empty (x0 == x1) when it keeps none.
+template <int N>
+std::pair<int, int> writtenSpanOfBlockRow(const ImagePlan& plan, int y, int tx0, int tx1) {
+  if (!plan.skipUncovered) return {tx0, tx1};
+  constexpr int kBW = blockWidthFor(N);
+  int first = tx1, last = tx0;
+  for (int x = tx0; x < tx1; x += kBW)
+    if (plan.coverage->covers(y, x)) first = std::min(first, x), last = x + kBW;
+  return first < last ? std::pair{first, std::min(last, tx1)} : std::pair{tx0, tx0};
+}
+
+/// Prefetches the framebuffer rows of the block row at y (prefetchPixelRows), where blocks may
+/// write; nothing past the tile's last row y1.
+template <int N>
+void prefetchBlockRow(const ImagePlan& plan, int y, int x0, int x1, int y1) {
+  if (y >= y1) return;
+  const auto [first, last] = writtenSpanOfBlockRow<N>(plan, y, x0, x1);
+  if (first < last) prefetchPixelRows(plan, first, last, y, std::min(y1, y + blockHeightFor(N)));
+}
+
 /// Renders the tile of columns [x0, x1) and rows [y0, y1), block by block (a TileRenderer).
 /// A per-ISA kernel (core/vector_kernel.h): the whole block loop, stores included, is
 /// compiled for each x86-64 level.
@@ -774,7 +851,17 @@ APERTURE_VECTOR_KERNEL void renderTile(const ImagePlan& plan, int x0, int y0, in
   // with it. The packets themselves are thread-local (threadPackets). Compiled out otherwise.
   APERTURE_TSAN_FORGET_STACK_BELOW(__builtin_frame_address(0));
   PacketPipeline<N> packets(plan, x0, y0, x1, y1);
-  while (packets.more()) renderBlock<N, kNull>(plan, packets, count);
+  // The framebuffer lines of the block row after the one being rendered are prefetched.
+  constexpr int kBH = blockHeightFor(N);
+  prefetchBlockRow<N>(plan, y0, x0, x1, y1);
+  prefetchBlockRow<N>(plan, y0 + kBH, x0, x1, y1);
+  for (int row = y0; packets.more();) {
+    if (packets.nextBlockRow() != row) {
+      row = packets.nextBlockRow();
+      prefetchBlockRow<N>(plan, row + kBH, x0, x1, y1);
+    }
+    renderBlock<N, kNull>(plan, packets, count);
+  }
 }
 
 template <bool kNull>
