@@ -706,9 +706,9 @@ PacketState<N>* threadPackets() {
 
 /// A tile's packets in render order, block by block (rows of blocks, left to right) and
 /// within a block pass by pass, with the rays of the next packet generated before the current
-/// one is traced: the camera's long dependency chain (a double √ and ÷ per ray) then overlaps
-/// the tracing and stores of the packet before it instead of stalling them. Cameras are pure
-/// functions of the request, so the order of generation changes no ray.
+/// one is traced: the camera's long dependency chain (square roots and divides per ray) then
+/// overlaps the tracing and stores of the packet before it instead of stalling them. Cameras are
+/// pure functions of the request, so the order of generation changes no ray.
 template <int N>
 class PacketPipeline {
  public:

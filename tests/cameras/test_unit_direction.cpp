@@ -139,4 +139,39 @@ TEST(UnitDirection, PerspectiveKernelEqualsRayAtOnMillionsOfRaysTheUnsureInclude
   EXPECT_GT(unsureRays, 0) << "no unsure lane: the fallback went untested";
 }
 
+// Pixels whose direction the fast path alone rounds differently from rayAt (about one ray in
+// 10^9): found by running the kernel without its fallback over random 1920x1080 cameras until
+// four turned up. Their blocks must take the reference expressions; without the fallback this
+// test fails.
+TEST(UnitDirection, PixelsWhereOnlyTheFallbackRoundsAsRayAt) {
+  struct Case {
+    const char* flags;
+    int row, column;
+  };
+  const Case cases[] = {
+      {"--eye 1.310,4.258,-1.816 --dir -4.915,4.986,-7 --fov 33.42", 539, 67},
+      {"--eye -3.273,-0.031,1.228 --dir 2.676,-3.274,-7 --fov 50.49", 906, 1703},
+      {"--eye 3.376,-2.920,0.936 --dir 4.030,-1.163,-7 --fov 94.62", 262, 79},
+      {"--eye -0.419,1.791,-0.554 --dir -1.661,3.702,-7 --fov 114.11", 654, 814},
+  };
+  for (const Case& c : cases) {
+    const CameraParams p = test::cameraParamsFromFlags(std::string(c.flags) + " --size 1920,1080");
+    const auto cam = makeCameraModel(p, glm::dvec3(0.0));
+    test::PacketBuffer buf(16);
+    int valid[16];
+    const PacketRequest req{c.column / 4 * 4, c.row / 4 * 4, 4, 4, 0};
+    cam->generate(req, buf.lanes(), valid);
+    const RayLanes& l = buf.lanes();
+    for (int k = 0; k < 16; ++k) {
+      double x, y;
+      cam->samplePosition(req.pixel(k).row, req.pixel(k).column, 0, x, y);
+      glm::dvec3 org, dir;
+      ASSERT_TRUE(cam->ray(x, y, 0.5, 0.5, org, dir));
+      EXPECT_EQ(l.dirX[k], float(dir.x)) << c.flags << " lane " << k;
+      EXPECT_EQ(l.dirY[k], float(dir.y)) << c.flags << " lane " << k;
+      EXPECT_EQ(l.dirZ[k], float(dir.z)) << c.flags << " lane " << k;
+    }
+  }
+}
+
 }  // namespace
