@@ -7,7 +7,6 @@
 #include <limits>
 
 #include "cameras/models.h"
-#include "cameras/unit_direction.h"
 #include "core/error.h"
 #include "core/units.h"
 #include "core/vector_kernel.h"
@@ -31,28 +30,9 @@ PerspectiveCamera::PerspectiveCamera(const CameraParams& p, const glm::dvec3& re
 
 namespace {
 
-/// The reference directions of pinholeCentreRays' lanes: rayAt's pinhole branch term by term,
-/// (u·U + v·V) − d·W times 1 / its length, in double with one √ and one ÷ a ray, rounded once.
-template <int kLanes>
-void exactPinholeDirections(const PinholeConstants& in, const double* us, const double* vs,
-                            float* dx, float* dy, float* dz) {
-  const glm::dvec3 U = in.u, V = in.v, dW = in.dW;
-  for (int k = 0; k < kLanes; ++k) {
-    const double u = us[k], v = vs[k];
-    const double px = (u * U.x + v * V.x) - dW.x;
-    const double py = (u * U.y + v * V.y) - dW.y;
-    const double pz = (u * U.z + v * V.z) - dW.z;
-    const double invLen = 1.0 / std::sqrt((px * px + py * py) + pz * pz);
-    dx[k] = float(px * invLen);
-    dy[k] = float(py * invLen);
-    dz[k] = float(pz * invLen);
-  }
-}
-
-/// The pinhole rays of the kBW x kBH block at (x0, y0), bit for bit exactPinholeDirections'
-/// without its √ and ÷ (cameras/unit_direction.h): the block is computed again by the
-/// reference expressions when a lane's rounding is unsure (about one ray in a million). A
-/// per-ISA kernel (core/vector_kernel.h): constant trip counts, vector stores.
+/// The pinhole rays of the kBW x kBH block at (x0, y0): rayAt's pinhole branch term by term,
+/// (u·U + v·V) − d·W times 1 / its length, in double, rounded once. A per-ISA kernel
+/// (core/vector_kernel.h): no divide but the reciprocal, constant trip counts, vector stores.
 template <int kBW, int kBH>
 APERTURE_VECTOR_KERNEL void pinholeCentreRays(const PinholeConstants& in,
                                               const PixelCentreTable& centres, int x0, int y0,
@@ -64,23 +44,17 @@ APERTURE_VECTOR_KERNEL void pinholeCentreRays(const PinholeConstants& in,
   alignas(64) double us[kLanes], vs[kLanes];
   spreadOverLanes<kBW, kBH>(columnU, rowV, us, vs);
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
-  uint64_t unsure = 0;
   APERTURE_LANE_LOOP
   for (int k = 0; k < kLanes; ++k) {
     const double u = us[k], v = vs[k];
     const double px = (u * U.x + v * V.x) - dW.x;
     const double py = (u * U.y + v * V.y) - dW.y;
     const double pz = (u * U.z + v * V.z) - dW.z;
-    const double len2 = (px * px + py * py) + pz * pz;
-    const double invLen = refinedInverseSqrt(len2);
-    const double x = px * invLen, y = py * invLen, z = pz * invLen;
-    unsure |= uint64_t(!inverseSqrtInRange(len2)) | unsureFloatRounding(x) |
-              unsureFloatRounding(y) | unsureFloatRounding(z);
-    dx[k] = float(x);
-    dy[k] = float(y);
-    dz[k] = float(z);
+    const double invLen = 1.0 / std::sqrt((px * px + py * py) + pz * pz);
+    dx[k] = float(px * invLen);
+    dy[k] = float(py * invLen);
+    dz[k] = float(pz * invLen);
   }
-  if (unsure) exactPinholeDirections<kLanes>(in, us, vs, dx, dy, dz);
   writeBlockLanesFromOrigin<kLanes>(out, in.eye, dx, dy, dz);
   writeBlockInImage<kBW, kBH>(x0, y0, in.width, in.height, valid);
 }
