@@ -795,22 +795,23 @@ void renderBlock(const ImagePlan& plan, PacketPipeline<N>& packets, TileCounters
 /// session, measured on a Xeon).
 inline void prefetchPixelRows(const ImagePlan& plan, int x0, int x1, int y0, int y1) {
   // Inline assembly, volatile: GCC deems __builtin_prefetch free of side effects, so it found
-  // this function without any (ipa-pure-const) and deleted every call to it.
-  const auto prefetchIntoL2 = [](const char* line) {
+  // this function without any (ipa-pure-const) and deleted every call to it. Elsewhere than
+  // x86-64 the builtin stays, and GCC may drop it there.
+  const auto prefetchIntoL2 = [](uintptr_t line) {
 #if defined(__x86_64__)
-    asm volatile("prefetcht1 %0" : : "m"(*line));
+    asm volatile("prefetcht1 %0" : : "m"(*reinterpret_cast<const char*>(line)));
 #else
-    __builtin_prefetch(line, 1, 2);
+    __builtin_prefetch(reinterpret_cast<const char*>(line), 1, 2);
 #endif
   };
-  constexpr size_t kLine = 64;
+  constexpr uintptr_t kLine = 64;
   for (const WrittenChannel& c : plan.written)
     for (int y = y0; y < y1; ++y) {
       const size_t first = plan.pixelOffset + size_t(y) * size_t(plan.width) + size_t(x0);
-      const char* begin = c.pixels + first * c.bytesPerPixel;
-      const char* end = begin + size_t(x1 - x0) * c.bytesPerPixel;
-      begin -= reinterpret_cast<uintptr_t>(begin) % kLine;
-      for (const char* line = begin; line < end; line += kLine) prefetchIntoL2(line);
+      // Addresses as integers: the first line may begin before the channel's first pixel.
+      const uintptr_t begin = reinterpret_cast<uintptr_t>(c.pixels + first * c.bytesPerPixel);
+      const uintptr_t end = begin + size_t(x1 - x0) * c.bytesPerPixel;
+      for (uintptr_t line = begin - begin % kLine; line < end; line += kLine) prefetchIntoL2(line);
     }
 }
 
