@@ -315,8 +315,17 @@ MemoryEstimate estimateMemory(const std::vector<std::string>& meshSpecs, uint64_
                               const BuildOptions& build) {
   MemoryEstimate e;
   const uint64_t chunk = build.effectiveChunkTriangles();
+  const uint64_t bvh = build.compact ? kCompactBvhBytesPerTriangle : kBvhBytesPerTriangle;
+  const uint64_t building =
+      build.compact ? kCompactBvhBuildBytesPerTriangle : kBvhBuildBytesPerTriangle;
+  // Embree's bytes as Scene builds: each chunk of a chunked mesh in turn, beside the BVHs
+  // built before it (Scene::attachChunks), then the top-level BVH of the other triangles.
+  uint64_t resident = 0;
+  const auto buildOf = [&](uint64_t triangles) {
+    e.bvhBuildBytes = std::max(e.bvhBuildBytes, resident + building * triangles);
+    resident += bvh * triangles;
+  };
   uint64_t wholeTriangles = 0;  // in the top-level BVH, built in one go
-  uint64_t largestChunk = 0;
   for (const std::string& spec : meshSpecs) {
     const MeshSizeEstimate m = estimateMeshSize(spec);
     // Meshes load one after the other: the ones before are kept while this one loads.
@@ -324,19 +333,16 @@ MemoryEstimate estimateMemory(const std::vector<std::string>& meshSpecs, uint64_
     e.meshBytes += m.meshBytes;
     e.triangles += m.triangles;
     if (chunk > 0 && m.triangles > chunk) {
-      largestChunk = chunk;
+      for (uint64_t first = 0; first < m.triangles; first += chunk)
+        buildOf(std::min(chunk, m.triangles - first));
       // Unless known to be in order, it may be put in spatial order: Mesh::sourceTriangles.
       if (!m.spatiallyOrdered) e.meshBytes += sizeof(uint32_t) * m.triangles;
     } else {
       wholeTriangles += m.triangles;
     }
   }
-  const uint64_t bvh = build.compact ? kCompactBvhBytesPerTriangle : kBvhBytesPerTriangle;
-  const uint64_t references =
-      (build.compact ? kCompactBvhBuildBytesPerTriangle : kBvhBuildBytesPerTriangle) - bvh;
-  e.bvhBytes = e.triangles * bvh;
-  // Every BVH is resident at the end; the references are those of the largest single build.
-  e.bvhBuildBytes = e.bvhBytes + references * std::max(wholeTriangles, largestChunk);
+  buildOf(wholeTriangles);
+  e.bvhBytes = resident;
   e.runtimeBytes = kRuntimeBytes;
   // Sizes are validated before this is called, so the product does not overflow.
   e.framebufferBytes = width * height * (framebufferBytesPerPixel(aovs) + extraBytesPerPixel);

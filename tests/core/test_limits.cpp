@@ -127,10 +127,14 @@ TEST(LimitsEstimate, ThePeakIsTheLargestPhase) {
       estimateMemory({"procedural:spheres?tris=100000000"}, 64, 64, kAovDepth);
   const uint64_t mesh = 12 * big.vertices + 4 * kVertexPaddingFloats + 12 * big.triangles;
   EXPECT_EQ(build.meshBytes, mesh);
-  const uint64_t references = kBvhBuildBytesPerTriangle - kBvhBytesPerTriangle;
-  EXPECT_EQ(build.total(), kRuntimeBytes + mesh + kBvhBytesPerTriangle * big.triangles +
-                               references * kBvhChunkTriangles)
-      << "100M triangles: the build (mesh, BVH and one chunk's primitive references) is the peak";
+  // Six chunks, the last one short: it is built beside the five full chunks' BVHs.
+  const uint64_t n = big.triangles, c = kBvhChunkTriangles, last = n - c * ((n - 1) / c);
+  ASSERT_EQ((n - last) / c, 5u);
+  const uint64_t lastBuild = kBvhBytesPerTriangle * (n - last) + kBvhBuildBytesPerTriangle * last;
+  const uint64_t fullBuild = kBvhBytesPerTriangle * (n - last - c) + kBvhBuildBytesPerTriangle * c;
+  EXPECT_EQ(build.total(), kRuntimeBytes + mesh + std::max(lastBuild, fullBuild))
+      << "100M triangles: the build (mesh, the BVHs built before and one chunk's build) is the "
+         "peak";
   EXPECT_TRUE(estimateMeshSize("procedural:spheres?tris=100000000").spatiallyOrdered);
   BuildOptions whole;
   whole.bvhChunkTriangles = 0;
@@ -170,8 +174,22 @@ TEST(LimitsEstimate, ALargeFileIsEstimatedInSpatialOrderAndInChunks) {
   chunks.bvhChunkTriangles = 1024;
   const MemoryEstimate e = estimateMemory({path}, 64, 64, kAovDepth, 0, chunks);
   EXPECT_EQ(e.meshBytes, m.meshBytes + 4 * m.triangles);
-  const uint64_t references = kBvhBuildBytesPerTriangle - kBvhBytesPerTriangle;
-  EXPECT_EQ(e.bvhBuildBytes, kBvhBytesPerTriangle * m.triangles + references * 1024);
+  // Chunks of 1024 and a last one of the rest, each built beside the BVHs of the ones before:
+  // the peak is the last chunk's build or the last full one's, whichever is larger.
+  const uint64_t n = m.triangles, last = n - 1024 * ((n - 1) / 1024);
+  ASSERT_LT(last, 1024u);  // a short last chunk, so the two candidates differ
+  EXPECT_EQ(e.bvhBuildBytes,
+            std::max(kBvhBytesPerTriangle * (n - last) + kBvhBuildBytesPerTriangle * last,
+                     kBvhBytesPerTriangle * (n - last - 1024) + kBvhBuildBytesPerTriangle * 1024));
+  EXPECT_EQ(e.bvhBytes, kBvhBytesPerTriangle * n);
+  // A mesh no larger than a chunk is built after the chunks, beside all their BVHs.
+  const MeshSizeEstimate small = estimateMeshSize("procedural:spheres?tris=1000");
+  ASSERT_LE(small.triangles, 1024u);
+  const MemoryEstimate both =
+      estimateMemory({path, "procedural:spheres?tris=1000"}, 64, 64, kAovDepth, 0, chunks);
+  EXPECT_EQ(both.bvhBuildBytes,
+            std::max(e.bvhBuildBytes,
+                     kBvhBytesPerTriangle * n + kBvhBuildBytesPerTriangle * small.triangles));
   // The same triangles from the generator, known to be in order, keep no loaded indices.
   EXPECT_EQ(
       estimateMemory({"procedural:spheres?tris=20000"}, 64, 64, kAovDepth, 0, chunks).meshBytes,
