@@ -58,9 +58,14 @@ for part in "${parts[@]}"; do
       build asan address "-O0 -DNDEBUG"
       # Leak checking stays on; Embree/TBB/OpenEXR/OIIO are uninstrumented but their heap
       # allocations still go through ASan's malloc.
+      # Every test but one: NumericsTranslation.CameraRelativeIsInvariantWorldSpaceErrorIsMeasured
+      # loads and builds the procedural city nine times and took 302 s under ASan on an Intel
+      # Xeon (2026-11-26), holding its shard at 420 s while the others took 247-330 s; the
+      # loader, placement and frame loop it runs are under ASan in the other tests, and it runs
+      # in the normal suite.
       ASAN_OPTIONS=detect_leaks=1:exitcode=86 \
       UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1:exitcode=87 \
-        run_shards asan
+        run_shards asan --gtest_filter='-NumericsTranslation.CameraRelativeIsInvariantWorldSpaceErrorIsMeasured'
       ;;
     tsan)
       build tsan thread "-O0 -g -DNDEBUG"
