@@ -127,17 +127,18 @@ struct WrittenChannel {
   size_t bytesPerPixel;
 };
 
-/// The per-pixel channels of `fb` the frame loop stores into: every allocated one but the
-/// layered hits (layer-major, written by traceLayers).
+/// The per-pixel channels of `fb` the frame loop stores into: every AOV the framebuffer holds
+/// (aovNames, aovView: its one list of channels), but the layered hits of more than one layer,
+/// whose pixels lie layer after layer.
 std::vector<WrittenChannel> writtenChannels(const Framebuffer& fb) {
   std::vector<WrittenChannel> out;
-  const auto add = [&](const auto& v, size_t valuesPerPixel) {
-    if (!v.empty())
-      out.push_back({reinterpret_cast<const char*>(v.data()), valuesPerPixel * sizeof(v[0])});
-  };
-  add(fb.rgba, 4), add(fb.depth, 1), add(fb.distance, 1), add(fb.normal, 3);
-  add(fb.position, 3), add(fb.primId, 1), add(fb.geomId, 1), add(fb.shadingNormal, 3);
-  for (const PropertyChannel& c : fb.properties) add(c.values, 1);
+  for (const std::string& name : aovNames(fb)) {
+    const ImageView v = aovView(fb, name);
+    if (v.layers > 1) continue;
+    const char* pixels =
+        v.f32 ? reinterpret_cast<const char*>(v.f32) : reinterpret_cast<const char*>(v.u32);
+    out.push_back({pixels, sizeof(float) * size_t(v.channels)});
+  }
   return out;
 }
 
