@@ -4,28 +4,59 @@
 // a large, serial part of a binary PLY load (the crown's 63 MB: 10-15 ms on 4 KB pages, ~3 ms
 // on 2 MB pages, of a ~45 ms load). Where the kernel offers transparent huge pages only on request
 // (`madvise` mode, Debian's default), asking for them before the first touch takes that cost
-// down; elsewhere the request changes nothing.
+// down; elsewhere the request changes nothing. A LargeBuffer goes further: its resize does not
+// write the new elements, so the pages are first touched by the (parallel) code that fills them.
 #include <cstddef>
+#include <memory>
+#include <utility>
 #include <vector>
 
 namespace aperture {
+
+/// std::allocator, except that growing a vector (resize) leaves the new elements
+/// default-initialised, which for numbers means unwritten: a buffer that its first writer
+/// fills in parallel is then touched once, by that writer, instead of first zeroed by one
+/// thread. Elements given a value (resize(n, v), assign, insert) are written as ever.
+template <class T>
+struct DefaultInitAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = DefaultInitAllocator<U>;
+  };
+  DefaultInitAllocator() = default;
+  template <class U>
+  DefaultInitAllocator(const DefaultInitAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+
+/// A large numeric buffer whose resize does not write the new elements (DefaultInitAllocator).
+template <class T>
+using LargeBuffer = std::vector<T, DefaultInitAllocator<T>>;
 
 /// Asks the kernel to back the whole 2 MB pages inside [data, data + bytes) with transparent
 /// huge pages (madvise MADV_HUGEPAGE). Only a hint: ignored where unsupported or refused.
 void adviseHugePages(const void* data, size_t bytes);
 
 /// v.reserve(n), new storage advised onto huge pages before anything touches it.
-template <class T>
-void reserveOnHugePages(std::vector<T>& v, size_t n) {
+template <class T, class A>
+void reserveOnHugePages(std::vector<T, A>& v, size_t n) {
   if (n <= v.capacity()) return;
   v.reserve(n);
   adviseHugePages(v.data(), v.capacity() * sizeof(T));
 }
 
 /// v.resize(n), new storage advised onto huge pages before the resize first touches it.
-/// Elements are value-initialised and the old ones kept, as std::vector::resize does.
-template <class T>
-void resizeOnHugePages(std::vector<T>& v, size_t n) {
+/// The old elements are kept and the new ones initialised as the vector's resize does: zeroed
+/// in a std::vector, left unwritten in a LargeBuffer.
+template <class T, class A>
+void resizeOnHugePages(std::vector<T, A>& v, size_t n) {
   reserveOnHugePages(v, n);
   v.resize(n);
 }

@@ -176,7 +176,7 @@ size_t markNonFiniteVertices(const WorldVertices& world, size_t n, std::vector<u
 }
 
 /// How many triangles repeat an index (counted in parallel; nothing is dropped).
-size_t countDegenerateTriangles(const std::vector<uint32_t>& indices) {
+size_t countDegenerateTriangles(const LargeBuffer<uint32_t>& indices) {
   const size_t triangles = indices.size() / 3;
   std::vector<size_t> chunks(chunkCount(triangles), 0);
   forEachChunk(triangles, [&](size_t c, size_t b, size_t e) {

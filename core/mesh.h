@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/framebuffer.h"
+#include "core/huge_pages.h"
 
 namespace aperture {
 
@@ -40,10 +41,12 @@ struct MeshProperty {
 /// The anchor is chosen at load (the bounding-box centre in camera-relative mode, the origin
 /// in world-space mode) and kept in double so far-from-origin meshes keep float precision.
 struct Mesh {
-  std::string name;               ///< file path or procedural spec it came from
-  glm::dvec3 anchor{0.0};         ///< world-space origin of `positions`, scene units
-  std::vector<float> positions;   ///< 3 * vertexCount floats, then kVertexPaddingFloats zeros
-  std::vector<uint32_t> indices;  ///< 3 per triangle, each < vertexCount
+  std::string name;        ///< file path or procedural spec it came from
+  glm::dvec3 anchor{0.0};  ///< world-space origin of `positions`, scene units
+  /// 3 * vertexCount floats, then kVertexPaddingFloats zeros. A LargeBuffer, as are the
+  /// indices: the loaders size them without writing them, then fill them in parallel.
+  LargeBuffer<float> positions;
+  LargeBuffer<uint32_t> indices;  ///< 3 per triangle, each < vertexCount
   size_t vertexCount = 0;
   /// Optional: loaders of double-precision sources (PLY double properties, procedural scenes)
   /// fill this instead of `positions`; finishMesh() anchors it in double and clears it.

@@ -88,7 +88,7 @@ class CellMarks {
 /// Marks the cells of the triangles of one placed object, its vertices taken to render space
 /// by `renderFromLocal` (the identity for an object Embree holds as stored), each triangle's
 /// box grown by `pad`.
-void markObject(CellMarks& marks, const Mesh& m, const std::vector<uint32_t>& indices,
+void markObject(CellMarks& marks, const Mesh& m, const LargeBuffer<uint32_t>& indices,
                 const glm::dmat4& renderFromLocal, double pad) {
   const bool identity = renderFromLocal == glm::dmat4(1.0);
   const float* p = m.positions.data();
@@ -134,7 +134,7 @@ std::optional<Occupancy> occupancyOf(const std::vector<SceneObject>& objects,
   CellMarks marks(grid);
   for (const SceneObject& o : objects) {
     const Mesh& m = *o.mesh;
-    const std::vector<uint32_t>& indices = o.subset ? o.subset->indices : m.indices;
+    const LargeBuffer<uint32_t>& indices = o.subset ? o.subset->indices : m.indices;
     const glm::dmat4 renderFromLocal = glm::translate(glm::dmat4(1.0), -renderOrigin) *
                                        o.worldFromMesh * glm::translate(glm::dmat4(1.0), m.anchor);
     markObject(marks, m, indices, renderFromLocal, pad);

@@ -484,7 +484,7 @@ uint32_t checkedIndex(const std::string& path, int64_t v, const std::string& whe
   return uint32_t(v);
 }
 
-void emitFan(std::vector<uint32_t>& out, const uint32_t* poly, size_t n) {
+void emitFan(LargeBuffer<uint32_t>& out, const uint32_t* poly, size_t n) {
   for (size_t k = 1; k + 1 < n; ++k) {
     out.push_back(poly[0]);
     out.push_back(poly[k]);

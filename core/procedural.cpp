@@ -73,7 +73,7 @@ long asCount(const std::string& spec, const char* key, double v, long lo, long h
 /// Appends to a mesh under construction; vertices are double triples.
 struct Builder {
   std::vector<double>& pos;
-  std::vector<uint32_t>& idx;
+  LargeBuffer<uint32_t>& idx;
   uint32_t addVertex(double x, double y, double z) {
     pos.push_back(x);
     pos.push_back(y);

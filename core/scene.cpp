@@ -288,7 +288,7 @@ Scene::Scene(const Device& device, const std::vector<SceneObject>& objects,
       // Nothing of this object is kept: leave its geomID unused.
       if (placed == 0) continue;
     }
-    const std::vector<uint32_t>& indices = subset ? subset->indices : m.indices;
+    const LargeBuffer<uint32_t>& indices = subset ? subset->indices : m.indices;
     if (direct[k] && chunkTriangles > 0 && placed > chunkTriangles) {
       const double shared = chunksPerCell(m, indices.data(), placed, chunkTriangles);
       stats_.chunksPerCell = std::max(stats_.chunksPerCell, shared);
@@ -354,7 +354,7 @@ RTCScene Scene::buildSubScene(const Mesh& m, const uint32_t* indices, size_t tri
 // Each chunk's BVH is committed before the next chunk's geometry is made, so Embree holds
 // the primitive references of one chunk at a time. Chunk 0's instance takes the object's own
 // geomID; the others take geomIDs after the last object's.
-void Scene::attachChunks(unsigned object, const Mesh& m, const std::vector<uint32_t>& indices,
+void Scene::attachChunks(unsigned object, const Mesh& m, const LargeBuffer<uint32_t>& indices,
                          size_t chunkTriangles, RTCBuildQuality quality, RTCSceneFlags flags) {
   const size_t triangles = indices.size() / 3;
   const size_t chunks = (triangles + chunkTriangles - 1) / chunkTriangles;

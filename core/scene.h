@@ -123,7 +123,7 @@ double chunksPerCell(const Mesh& m, const uint32_t* indices, size_t triangles,
 /// Some of a mesh's triangles (for view-volume culling, core/cull.h): the kept triangles'
 /// vertex indices in their original order, and the original index of each kept triangle.
 struct TriangleSubset {
-  std::vector<uint32_t> indices;  ///< 3 per kept triangle, into the mesh's vertex buffer
+  LargeBuffer<uint32_t> indices;  ///< 3 per kept triangle, into the mesh's vertex buffer
   std::vector<uint32_t> primIds;  ///< primIds[k] = the mesh's index of kept triangle k
   size_t triangleCount() const { return primIds.size(); }
 };
@@ -241,7 +241,7 @@ class Scene {
   RTCScene buildSubScene(const Mesh& m, const uint32_t* indices, size_t triangles,
                          RTCBuildQuality quality, RTCSceneFlags flags, const std::string& what);
 
-  void attachChunks(unsigned object, const Mesh& m, const std::vector<uint32_t>& indices,
+  void attachChunks(unsigned object, const Mesh& m, const LargeBuffer<uint32_t>& indices,
                     size_t chunkTriangles, RTCBuildQuality quality, RTCSceneFlags flags);
 };
 

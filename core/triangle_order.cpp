@@ -71,7 +71,8 @@ void sortTriangles(Mesh& mesh, const std::vector<uint16_t>& keys) {
   const size_t n = mesh.triangleCount();
   std::vector<size_t> next = firstDestinations(keys);
   // One counting-sort pass: each block moves its triangles to their destinations in order.
-  std::vector<uint32_t> indices, from(n);
+  std::vector<uint32_t> from(n);
+  LargeBuffer<uint32_t> indices;
   resizeOnHugePages(indices, 3 * n);
   parallelForChunks(n, kTrianglesPerBlock, [&](size_t b, size_t begin, size_t end) {
     size_t* at = &next[b * kBuckets];

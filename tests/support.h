@@ -18,6 +18,13 @@
 
 namespace aperture::test {
 
+/// A buffer of another allocator (a mesh's LargeBuffer) as a std::vector, to compare it with
+/// expected values.
+template <class T, class Allocator>
+std::vector<T> asVector(const std::vector<T, Allocator>& v) {
+  return {v.begin(), v.end()};
+}
+
 /// ../shared beside the project (absolute), as configured by CMake.
 std::string sharedDir();
 /// Path of a mesh under ../shared/meshes, or "" when ../shared is absent.

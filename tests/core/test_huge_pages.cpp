@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/huge_pages.h"
+#include "tests/support.h"
 
 namespace aperture {
 namespace {
@@ -33,8 +34,9 @@ TEST(HugePages, ReserveLeavesTheSize) {
   EXPECT_GE(v.capacity(), size_t(1) << 22);
 }
 
-/// The VmFlags of the mapping holding `address` (/proc/self/smaps), or "" when none does.
-std::string mappingFlags(const void* address) {
+/// The line starting with `field` of the mapping holding `address` (/proc/self/smaps), or ""
+/// when no mapping holds it.
+std::string mappingField(const void* address, const std::string& field) {
   const uintptr_t a = reinterpret_cast<uintptr_t>(address);
   std::ifstream smaps("/proc/self/smaps");
   std::string line;
@@ -47,9 +49,17 @@ std::string mappingFlags(const void* address) {
       inside = begin <= a && a < end;
       continue;
     }
-    if (inside && line.rfind("VmFlags:", 0) == 0) return line;
+    if (inside && line.rfind(field, 0) == 0) return line;
   }
   return "";
+}
+
+std::string mappingFlags(const void* address) { return mappingField(address, "VmFlags:"); }
+
+/// Resident KiB of the mapping holding `address`, or -1 when no mapping holds it.
+long residentKb(const void* address) {
+  const std::string rss = mappingField(address, "Rss:");
+  return rss.empty() ? -1 : std::stol(rss.substr(4));
 }
 
 // Where the kernel has transparent huge pages, the buffer's mapping carries the request
@@ -63,6 +73,26 @@ TEST(HugePages, TheNewBufferIsAdvisedWhereTheKernelHasThem) {
   ASSERT_FALSE(flags.empty()) << "no mapping in /proc/self/smaps holds the buffer";
   const bool kernelHasThp = std::ifstream("/sys/kernel/mm/transparent_hugepage/enabled").good();
   EXPECT_EQ(flags.find(" hg") != std::string::npos, kernelHasThp) << flags;
+}
+
+// A LargeBuffer grows without writing its new elements, so its pages stay untouched until
+// their first writer (the parallel loaders) fills them. The same resize of a std::vector
+// touches every page, which shows that the measure can tell them apart.
+TEST(HugePages, ALargeBufferGrowsWithoutTouchingItsPages) {
+  constexpr size_t kCount = size_t(16) << 20;  // 64 MB: a mapping of its own
+  LargeBuffer<uint32_t> large;
+  resizeOnHugePages(large, kCount);
+  ASSERT_EQ(large.size(), kCount);
+  EXPECT_LT(residentKb(large.data() + kCount / 2), 4096);
+  std::vector<uint32_t> plain;
+  resizeOnHugePages(plain, kCount);
+  EXPECT_GE(residentKb(plain.data() + kCount / 2), long(kCount * sizeof(uint32_t) / 1024) - 4096);
+  // Elements given a value are written as with std::vector.
+  large.resize(kCount + 2, 7u);
+  EXPECT_EQ(large[kCount], 7u);
+  EXPECT_EQ(large[kCount + 1], 7u);
+  LargeBuffer<float> copied = {1.5f, 2.5f};
+  EXPECT_EQ(test::asVector(copied), (std::vector<float>{1.5f, 2.5f}));
 }
 
 }  // namespace

@@ -41,10 +41,10 @@ Outcome load(const std::string& bytes, const std::string& name, const LoadOption
   return out;
 }
 
-template <class T>
-bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
+template <class Buffer>
+bool sameBits(const Buffer& a, const Buffer& b) {
   return a.size() == b.size() &&
-         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0);
 }
 
 void expectSameMesh(const Mesh& a, const Mesh& b, const std::string& what) {

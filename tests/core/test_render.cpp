@@ -27,7 +27,7 @@ Mesh meshFrom(const std::vector<glm::dvec3>& verts, const std::vector<uint32_t>&
   for (const auto& v : verts)
     for (int c = 0; c < 3; ++c) m.positions.push_back(float(v[c] - anchor[c]));
   m.positions.resize(m.positions.size() + kVertexPaddingFloats, 0.0f);
-  m.indices = idx;
+  m.indices.assign(idx.begin(), idx.end());
   return m;
 }
 
@@ -223,7 +223,7 @@ TEST(RenderInstances, RepeatedMeshMatchesCopiesAndReportsObjectIds) {
     std::vector<glm::dvec3> v;
     for (size_t k = 0; k < sphere.vertexCount; ++k)
       v.push_back(glm::dvec3(m * glm::dvec4(glm::dvec3(sphere.vertex(k)), 1.0)));
-    return meshFrom(v, sphere.indices, glm::dvec3(0.0));
+    return meshFrom(v, {sphere.indices.begin(), sphere.indices.end()}, glm::dvec3(0.0));
   };
   Mesh a = baked(left), b = baked(right);
   // Both copies are anchored at the origin, used once and untransformed: attached directly.

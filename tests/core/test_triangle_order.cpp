@@ -42,7 +42,7 @@ Mesh scatteredSpheres() {
   std::vector<uint32_t> indices(3 * n);
   for (size_t k = 0; k < n; ++k)
     for (size_t c = 0; c < 3; ++c) indices[3 * k + c] = m.indices[3 * order[k] + c];
-  m.indices = indices;
+  m.indices.assign(indices.begin(), indices.end());
   MeshProperty part{PropertyDomain::Face, "part", {}}, id{PropertyDomain::Vertex, "id", {}};
   for (size_t t = 0; t < n; ++t) part.values.push_back(uint32_t(t) * 2654435761u);
   for (size_t v = 0; v < m.vertexCount; ++v) id.values.push_back(uint32_t(v));

@@ -50,7 +50,7 @@ struct MeshBuilder {
     for (const glm::dvec3& v : vertices)
       for (int c = 0; c < 3; ++c) m.positions.push_back(float(v[c] - anchor[c]));
     m.positions.resize(m.positions.size() + kVertexPaddingFloats, 0.0f);
-    m.indices = indices;
+    m.indices.assign(indices.begin(), indices.end());
     return m;
   }
 };
@@ -564,7 +564,7 @@ TEST(Visibility, TransposeRowsOfAHandMadeExample) {
   r.indices = {1, 3, 0, 1, 3};
   const SparseRows t = transposeRows(r, 5);
   EXPECT_EQ(t.indptr, (std::vector<uint64_t>{0, 1, 3, 3, 5, 5}));
-  EXPECT_EQ(t.indices, (std::vector<uint32_t>{2, 0, 2, 0, 3}));
+  EXPECT_EQ(test::asVector(t.indices), (std::vector<uint32_t>{2, 0, 2, 0, 3}));
   const std::string e = test::errorOf([&] { transposeRows(r, 3); });
   EXPECT_NE(e.find("index 3"), std::string::npos) << e;
 }
