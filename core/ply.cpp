@@ -864,6 +864,33 @@ bool readVerticesParallel(const PlyElement& e, BinaryReader& r, Mesh& mesh,
   return true;
 }
 
+/// Writes faces [b, end) of `items` (a uchar count, then `corners` 32-bit indices in host
+/// order) to `out` as fans; false when a count differs from `corners` or an index has
+/// `signBit` set (a negative signed index). kCorners, when not 0, is `corners` known at
+/// compile time: for triangles, the common case, each face is then three loads and three
+/// stores, without a call or an inner loop.
+template <size_t kCorners>
+bool readFanRange(const char* items, size_t corners, uint32_t signBit, size_t b, size_t end,
+                  uint32_t* out) {
+  if (kCorners) corners = kCorners;
+  const size_t itemBytes = 1 + 4 * corners;
+  uint32_t poly[255];
+  bool regular = true;
+  for (size_t i = b; i < end; ++i) {
+    const char* item = items + i * itemBytes;
+    std::memcpy(poly, item + 1, 4 * corners);
+    uint32_t bits = 0;
+    for (size_t k = 0; k < corners; ++k) bits |= poly[k];
+    regular &= static_cast<unsigned char>(*item) == corners && !(bits & signBit);
+    for (size_t k = 1; k + 1 < corners; ++k) {
+      *out++ = poly[0];
+      *out++ = poly[k];
+      *out++ = poly[k + 1];
+    }
+  }
+  return regular;
+}
+
 /// Parallel reader of the layout readFacesFast reads (one list: uchar count, 32-bit indices in
 /// host order) when every face has the count of the first, so items have a fixed size: each
 /// task checks its counts and indices and writes its fans in place. False, with the mesh as it
@@ -888,22 +915,9 @@ bool readFacesParallel(const PlyElement& e, BinaryReader& r, Mesh& mesh) {
   std::atomic<bool> irregular{false};
   parallelFor(faces, kRecordsPerTask, [&](size_t b, size_t end) {
     uint32_t* out = mesh.indices.data() + before + indicesPerFace * b;
-    uint32_t poly[255];
-    for (size_t i = b; i < end; ++i) {
-      const char* item = items + i * itemBytes;
-      std::memcpy(poly, item + 1, 4 * corners);
-      uint32_t bits = 0;
-      for (size_t k = 0; k < corners; ++k) bits |= poly[k];
-      if (static_cast<unsigned char>(*item) != corners || (bits & signBit)) {
-        irregular.store(true, std::memory_order_relaxed);
-        return;
-      }
-      for (size_t k = 1; k + 1 < corners; ++k) {
-        *out++ = poly[0];
-        *out++ = poly[k];
-        *out++ = poly[k + 1];
-      }
-    }
+    const bool regular = corners == 3 ? readFanRange<3>(items, corners, signBit, b, end, out)
+                                      : readFanRange<0>(items, corners, signBit, b, end, out);
+    if (!regular) irregular.store(true, std::memory_order_relaxed);
   });
   if (irregular.load()) {
     mesh.indices.resize(before);
