@@ -5,6 +5,9 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "core/error.h"
 #include "core/huge_pages.h"
@@ -82,6 +85,16 @@ class WorldVertices {
   WorldVertices(const Mesh& mesh, const LoadOptions& options, bool fromDouble)
       : mesh_(mesh), options_(options), fromDouble_(fromDouble) {}
 
+  /// Float positions placed without a transform: world coordinate a of vertex k is
+  /// scale * positions[3k + a] + translate[a], which the loops below compute directly.
+  bool plain() const { return !fromDouble_ && !options_.transform; }
+  double plainCoordinate(size_t k, int a) const {
+    return options_.scale * double(mesh_.positions[3 * k + size_t(a)]) + options_.translate[a];
+  }
+  const float* plainPositions() const { return mesh_.positions.data(); }
+  double plainScale() const { return options_.scale; }
+  glm::dvec3 plainTranslate() const { return options_.translate; }
+
   glm::dvec3 operator()(size_t k) const {
     const glm::dvec3 v =
         options_.scale * glm::dvec3(coord(3 * k), coord(3 * k + 1), coord(3 * k + 2)) +
@@ -112,31 +125,102 @@ void forEachChunk(size_t n, const Body& body) {
   parallelForChunks(n, kItemsPerChunk, body);
 }
 
-/// Throws Error naming the mesh, how many indices are >= vertexCount and the first of them.
-void checkIndicesInRange(const Mesh& mesh) {
-  struct Bad {
-    size_t count = 0;
-    size_t first = 0;  ///< position in mesh.indices of the chunk's first bad index
-  };
+/// What one pass over a mesh's indices finds.
+struct IndexScan {
+  size_t outOfRange = 0;       ///< indices >= vertexCount
+  size_t firstOutOfRange = 0;  ///< position in mesh.indices of the first of them
+  size_t degenerate = 0;       ///< triangles that repeat an index
+};
+
+/// Reads every index once, in parallel: the out-of-range ones and the degenerate triangles.
+IndexScan scanIndices(const Mesh& mesh) {
   const size_t n = mesh.vertexCount;
-  std::vector<Bad> chunks(chunkCount(mesh.indices.size()));
-  forEachChunk(mesh.indices.size(), [&](size_t c, size_t b, size_t e) {
-    for (size_t i = b; i < e; ++i)
-      if (mesh.indices[i] >= n && chunks[c].count++ == 0) chunks[c].first = i;
-  });
-  size_t badIndices = 0;
-  size_t firstBadAt = 0;
-  uint32_t firstBad = 0;
-  for (const Bad& chunk : chunks) {
-    if (chunk.count && badIndices == 0) {
-      firstBad = mesh.indices[chunk.first];
-      firstBadAt = chunk.first / 3;
+  const size_t triangles = mesh.indices.size() / 3;
+  std::vector<IndexScan> chunks(chunkCount(triangles));
+  forEachChunk(triangles, [&](size_t c, size_t b, size_t e) {
+    IndexScan s;
+    for (size_t t = b; t < e; ++t) {
+      const uint32_t* v = &mesh.indices[3 * t];
+      for (size_t k = 0; k < 3; ++k)
+        if (v[k] >= n && s.outOfRange++ == 0) s.firstOutOfRange = 3 * t + k;
+      s.degenerate += (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) ? 1 : 0;
     }
-    badIndices += chunk.count;
+    chunks[c] = s;
+  });
+  IndexScan all;
+  for (const IndexScan& s : chunks) {
+    if (s.outOfRange && all.outOfRange == 0) all.firstOutOfRange = s.firstOutOfRange;
+    all.outOfRange += s.outOfRange;
+    all.degenerate += s.degenerate;
   }
-  if (badIndices)
-    throw Error(cat(mesh.name, ": ", badIndices, " vertex indices out of range (the mesh has ", n,
-                    " vertices); the first is ", firstBad, " in triangle ", firstBadAt));
+  return all;
+}
+
+/// Throws Error naming the mesh, how many indices are >= vertexCount and the first of them.
+void checkIndicesInRange(const Mesh& mesh, const IndexScan& scan) {
+  if (scan.outOfRange == 0) return;
+  throw Error(cat(mesh.name, ": ", scan.outOfRange, " vertex indices out of range (the mesh has ",
+                  mesh.vertexCount, " vertices); the first is ", mesh.indices[scan.firstOutOfRange],
+                  " in triangle ", scan.firstOutOfRange / 3));
+}
+
+/// The bounding box of a chunk's finite vertices, and how many are not finite.
+struct Box {
+  glm::dvec3 lo{std::numeric_limits<double>::max()};
+  glm::dvec3 hi{-std::numeric_limits<double>::max()};
+  size_t nonFinite = 0;
+};
+
+/// The box of world vertices [b, e) of a plain placement (WorldVertices::plain), without the
+/// per-vertex tests; false when a coordinate is not finite, and the per-vertex pass, which
+/// leaves such vertices out, decides. Otherwise the box is the one that pass finds: the same
+/// comparisons of the same values in the same order (so even a zero bound's sign is the
+/// same; the compiler may not reorder them).
+bool plainChunkBox(const WorldVertices& world, size_t b, size_t e, Box& box) {
+#if defined(__SSE2__)
+  // The #else branch's loop, with x and y side by side. minpd(v, lo) is exactly v < lo ? v : lo (lo
+  // when they are equal or unordered), and maxpd likewise; GCC compiles the scalar form to
+  // compares and integer moves instead, at twice the time.
+  const float* p = world.plainPositions();
+  const __m128d scale = _mm_set1_pd(world.plainScale());
+  const glm::dvec3 t = world.plainTranslate();
+  const __m128d tXY = _mm_set_pd(t.y, t.x), tZ = _mm_set_sd(t.z);
+  __m128d loXY = _mm_set_pd(box.lo.y, box.lo.x), hiXY = _mm_set_pd(box.hi.y, box.hi.x);
+  __m128d loZ = _mm_set_sd(box.lo.z), hiZ = _mm_set_sd(box.hi.z);
+  __m128d poisonXY = _mm_setzero_pd(), poisonZ = _mm_setzero_pd();
+  for (size_t k = b; k < e; ++k) {
+    const float* v = p + 3 * k;
+    const __m128 xyFloat = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(v)));
+    const __m128d xy = _mm_add_pd(_mm_mul_pd(scale, _mm_cvtps_pd(xyFloat)), tXY);
+    const __m128d z =
+        _mm_add_sd(_mm_mul_sd(scale, _mm_cvtss_sd(_mm_setzero_pd(), _mm_load_ss(v + 2))), tZ);
+    loXY = _mm_min_pd(xy, loXY);
+    hiXY = _mm_max_pd(xy, hiXY);
+    loZ = _mm_min_sd(z, loZ);
+    hiZ = _mm_max_sd(z, hiZ);
+    poisonXY = _mm_add_pd(poisonXY, _mm_sub_pd(xy, xy));
+    poisonZ = _mm_add_sd(poisonZ, _mm_sub_sd(z, z));
+  }
+  double lo[3], hi[3], poison[3];
+  _mm_storeu_pd(lo, loXY), _mm_store_sd(lo + 2, loZ);
+  _mm_storeu_pd(hi, hiXY), _mm_store_sd(hi + 2, hiZ);
+  _mm_storeu_pd(poison, poisonXY), _mm_store_sd(poison + 2, poisonZ);
+#else
+  double lo[3] = {box.lo.x, box.lo.y, box.lo.z}, hi[3] = {box.hi.x, box.hi.y, box.hi.z};
+  double poison[3] = {0.0, 0.0, 0.0};  // v - v: 0 for a finite v, NaN otherwise; one sum per
+                                       // axis, so the additions do not wait for each other
+  for (size_t k = b; k < e; ++k)
+    for (int a = 0; a < 3; ++a) {
+      const double v = world.plainCoordinate(k, a);
+      lo[a] = v < lo[a] ? v : lo[a];
+      hi[a] = hi[a] < v ? v : hi[a];
+      poison[a] += v - v;
+    }
+#endif
+  if (!(poison[0] == 0.0 && poison[1] == 0.0 && poison[2] == 0.0)) return false;
+  box.lo = {lo[0], lo[1], lo[2]};
+  box.hi = {hi[0], hi[1], hi[2]};
+  return true;
 }
 
 /// Sets bad[k] for the n vertices with a non-finite world position and returns how many there
@@ -144,14 +228,13 @@ void checkIndicesInRange(const Mesh& mesh) {
 /// the same glm::min/max, so even the sign of a zero bound is that of one serial pass.
 size_t markNonFiniteVertices(const WorldVertices& world, size_t n, std::vector<uint8_t>& bad,
                              glm::dvec3& lo, glm::dvec3& hi) {
-  struct Box {
-    glm::dvec3 lo{std::numeric_limits<double>::max()};
-    glm::dvec3 hi{-std::numeric_limits<double>::max()};
-    size_t nonFinite = 0;
-  };
   std::vector<Box> chunks(chunkCount(n));
   forEachChunk(n, [&](size_t c, size_t b, size_t e) {
     Box box;
+    if (world.plain() && plainChunkBox(world, b, e, box)) {
+      chunks[c] = box;
+      return;
+    }
     for (size_t k = b; k < e; ++k) {
       glm::dvec3 v = world(k);
       if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
@@ -175,30 +258,14 @@ size_t markNonFiniteVertices(const WorldVertices& world, size_t n, std::vector<u
   return all.nonFinite;
 }
 
-/// How many triangles repeat an index (counted in parallel; nothing is dropped).
-size_t countDegenerateTriangles(const LargeBuffer<uint32_t>& indices) {
-  const size_t triangles = indices.size() / 3;
-  std::vector<size_t> chunks(chunkCount(triangles), 0);
-  forEachChunk(triangles, [&](size_t c, size_t b, size_t e) {
-    size_t degenerate = 0;
-    for (size_t t = b; t < e; ++t) {
-      const uint32_t a = indices[3 * t], bb = indices[3 * t + 1], cc = indices[3 * t + 2];
-      degenerate += (a == bb || bb == cc || a == cc) ? 1 : 0;
-    }
-    chunks[c] = degenerate;
-  });
-  size_t degenerate = 0;
-  for (size_t d : chunks) degenerate += d;
-  return degenerate;
-}
-
 /// Drops the triangles using a bad vertex (when `anyBad`), with their face property values,
 /// and counts, but keeps, degenerate ones (a repeated index); both counts go to the mesh's
-/// stats.
-void dropTrianglesOfBadVertices(Mesh& mesh, const std::vector<uint8_t>& bad, bool anyBad) {
+/// stats. `scan` counted the degenerate triangles before anything was dropped.
+void dropTrianglesOfBadVertices(Mesh& mesh, const std::vector<uint8_t>& bad, bool anyBad,
+                                const IndexScan& scan) {
   if (!anyBad) {
     mesh.stats.droppedTriangles = 0;
-    mesh.stats.degenerateTriangles = countDegenerateTriangles(mesh.indices);
+    mesh.stats.degenerateTriangles = scan.degenerate;
     return;
   }
   size_t out = 0, dropped = 0, degenerate = 0;
@@ -226,12 +293,19 @@ void dropTrianglesOfBadVertices(Mesh& mesh, const std::vector<uint8_t>& bad, boo
 /// are stored as 0 (no triangle uses them). Float sources are rewritten in place: vertex k is
 /// read before it is overwritten.
 void writeAnchoredPositions(Mesh& mesh, const WorldVertices& world, const std::vector<uint8_t>& bad,
-                            bool fromDouble) {
+                            bool anyBad, bool fromDouble) {
   const size_t n = mesh.vertexCount;
   if (fromDouble) mesh.positions.clear();  // every float is rewritten: nothing to keep
   resizeOnHugePages(mesh.positions, 3 * n + kVertexPaddingFloats);
   std::fill(mesh.positions.begin() + 3 * n, mesh.positions.end(), 0.0f);
+  const bool plain = world.plain() && !anyBad;
   forEachChunk(n, [&](size_t, size_t b, size_t e) {
+    if (plain) {  // the same arithmetic, without the per-vertex tests
+      for (size_t k = b; k < e; ++k)
+        for (int a = 0; a < 3; ++a)
+          mesh.positions[3 * k + size_t(a)] = float(world.plainCoordinate(k, a) - mesh.anchor[a]);
+      return;
+    }
     for (size_t k = b; k < e; ++k) {
       glm::dvec3 v = bad[k] ? glm::dvec3(0.0) : world(k) - mesh.anchor;
       for (int a = 0; a < 3; ++a) mesh.positions[3 * k + a] = float(v[a]);
@@ -284,7 +358,8 @@ void finishMesh(Mesh& mesh, const LoadOptions& options) {
   }
   APERTURE_CHECK_OP(mesh.indices.size() % 3, ==, 0u);
   // Index range check before anything else touches the vertices.
-  checkIndicesInRange(mesh);
+  const IndexScan scan = scanIndices(mesh);
+  checkIndicesInRange(mesh, scan);
   checkPropertySizes(mesh);
 
   const WorldVertices world(mesh, options, fromDouble);
@@ -292,13 +367,13 @@ void finishMesh(Mesh& mesh, const LoadOptions& options) {
   glm::dvec3 lo, hi;
   const size_t nonFinite = markNonFiniteVertices(world, n, bad, lo, hi);
   mesh.stats.nonFiniteVertices = nonFinite;
-  dropTrianglesOfBadVertices(mesh, bad, nonFinite > 0);
+  dropTrianglesOfBadVertices(mesh, bad, nonFinite > 0, scan);
 
   if (options.placement == Placement::WorldSpace || nonFinite == n)
     mesh.anchor = glm::dvec3(0.0);
   else
     mesh.anchor = 0.5 * (lo + hi);
-  writeAnchoredPositions(mesh, world, bad, fromDouble);
+  writeAnchoredPositions(mesh, world, bad, nonFinite > 0, fromDouble);
   transformVertexNormals(mesh, options);
   mesh.positionsDouble.clear();
   mesh.positionsDouble.shrink_to_fit();

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <random>
 #include <sstream>
 #include <vector>
 
@@ -361,6 +362,66 @@ TEST(FinishMesh, OutOfRangeIndexNamesTheMeshAndCountsBadIndices) {
     EXPECT_NE(msg.find("soup: 2 vertex indices out of range"), std::string::npos) << msg;
     EXPECT_NE(msg.find("the first is 7 in triangle 0"), std::string::npos) << msg;
   }
+}
+
+/// Compares bit for bit what finishMesh makes of float positions `m` with `o` (no transform:
+/// its plain path, box and positions without per-vertex tests) with the definition, computed
+/// here vertex by vertex in order: the box of the finite world vertices
+/// (scale * p + translate) by glm::min and glm::max, its centre as the anchor, and each finite
+/// vertex minus the anchor rounded to float (0 for the others).
+void expectFinishedAsDefined(const Mesh& m, const LoadOptions& o) {
+  glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+  std::vector<glm::dvec3> world;
+  for (size_t k = 0; k < m.vertexCount; ++k) {
+    const glm::dvec3 p(m.positions[3 * k], m.positions[3 * k + 1], m.positions[3 * k + 2]);
+    world.push_back(o.scale * p + o.translate);
+    if (std::isfinite(world[k].x) && std::isfinite(world[k].y) && std::isfinite(world[k].z))
+      lo = glm::min(lo, world[k]), hi = glm::max(hi, world[k]);
+  }
+  const glm::dvec3 anchor =
+      o.placement == Placement::WorldSpace ? glm::dvec3(0.0) : 0.5 * (lo + hi);
+  Mesh finished = m;
+  finishMesh(finished, o);
+  EXPECT_EQ(std::memcmp(&finished.anchor, &anchor, sizeof(glm::dvec3)), 0)
+      << "anchor " << finished.anchor.x << " " << finished.anchor.y << " " << finished.anchor.z
+      << ", defined " << anchor.x << " " << anchor.y << " " << anchor.z;
+  size_t differ = 0;
+  for (size_t k = 0; k < m.vertexCount; ++k) {
+    const bool finite =
+        std::isfinite(world[k].x) && std::isfinite(world[k].y) && std::isfinite(world[k].z);
+    const glm::vec3 want = finite ? glm::vec3(world[k] - anchor) : glm::vec3(0.0f);
+    differ += std::memcmp(&finished.positions[3 * k], &want, sizeof(glm::vec3)) != 0;
+  }
+  EXPECT_EQ(differ, 0u) << "vertices whose anchored position differs";
+}
+
+// Over several of finishMesh's chunks: a flat mesh (y = 0, both signs of zero, kept by a
+// translate of -0, so the order of the comparisons decides the sign of the y bounds and of
+// the anchored y), scaled and moved, camera-relative and in world space, then with a
+// non-finite vertex in one chunk (which that chunk's per-vertex pass leaves out). Taking the
+// last of equal values instead of the first fails it.
+TEST(FinishMesh, FloatPositionsWithoutTransformMatchTheGeneralPath) {
+  std::mt19937 random(5);
+  std::uniform_real_distribution<float> coordinate(-3.0f, 7.0f);
+  Mesh m;
+  m.name = "plain";
+  m.vertexCount = 200000;
+  for (size_t k = 0; k < m.vertexCount; ++k) {
+    m.positions.push_back(coordinate(random));
+    m.positions.push_back(random() % 2 ? 0.0f : -0.0f);
+    m.positions.push_back(coordinate(random));
+  }
+  for (size_t t = 0; t < 150000; ++t)
+    for (int c = 0; c < 3; ++c) m.indices.push_back(uint32_t(random() % m.vertexCount));
+  LoadOptions o;
+  o.scale = 0.75;
+  o.translate = {1e3, -0.0, 3.0};
+  expectFinishedAsDefined(m, o);
+  o.placement = Placement::WorldSpace;
+  expectFinishedAsDefined(m, o);
+  m.positions[3 * 140000 + 2] = std::numeric_limits<float>::infinity();
+  o.placement = Placement::CameraRelative;
+  expectFinishedAsDefined(m, o);
 }
 
 TEST(FinishMesh, FarFromOriginKeepsRelativePrecision) {
