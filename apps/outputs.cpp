@@ -40,7 +40,7 @@ fs::path nearestExisting(const fs::path& dir) {
 }
 
 /// Z = dot(corner − eye, view axis) over the box's corners, for one camera: updates lo, hi.
-void extendDepthRange(const CameraDescription& c, const glm::dvec3& boxLo, const glm::dvec3& boxHi,
+void extendDepthRange(const WorldView& c, const glm::dvec3& boxLo, const glm::dvec3& boxHi,
                       double& lo, double& hi) {
   const glm::dvec3 axis = -c.w;
   for (int k = 0; k < 8; ++k) {
@@ -191,7 +191,7 @@ std::optional<glm::dvec2> depthRangeOfBox(const glm::dvec3& lo, const glm::dvec3
                                           const std::vector<CameraParams>& cameras) {
   double nearZ = INFINITY, farZ = -INFINITY;
   for (const CameraParams& p : cameras)
-    extendDepthRange(makeCamera(p)->describe(), lo, hi, nearZ, farZ);
+    extendDepthRange(makeCamera(p)->worldView(), lo, hi, nearZ, farZ);
   nearZ = std::max(nearZ, 0.0);
   if (!(farZ > nearZ) || !std::isfinite(farZ)) return std::nullopt;
   return glm::dvec2(nearZ, farZ);

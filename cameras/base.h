@@ -36,6 +36,7 @@ class CameraBase : public Camera {
   glm::vec3 viewAxis() const override { return viewAxis_; }
   bool stochastic() const override { return spp_ > 1; }
   CameraDescription describe() const override;
+  WorldView worldView() const override { return {frame_.e, frame_.w}; }
 
   /// The ray through raster position (x, y) (column, row, continuous; pixel (i, j) centre at
   /// (j + ½, i + ½)) with lens sample (lensX, lensY) in [0, 1)² (ignored by pinhole and

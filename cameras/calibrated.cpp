@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <mutex>
 
 #include "cameras/direction_table.h"
 #include "cameras/models.h"
@@ -282,9 +283,7 @@ class CalibratedCamera final : public CameraBase {
     vw_ = width_ / lens.fx();
     vh_ = height_ / lens.fy();
     shift_ = ImageWindow::shiftForPrincipalPoint(pp.x, pp.y, width_, height_);
-    if (readsDirectionTable(lens))
-      table_ = DirectionTable::of(sensor_);
-    else
+    if (!readsDirectionTable(lens))
       pinhole_ = PinholeLens{lens.fx(), lens.fy(), lens.cx(), lens.cy(),
                              sensor_.pixelCentre == PixelCentre::Integer ? -0.5 : 0.0};
   }
@@ -295,17 +294,18 @@ class CalibratedCamera final : public CameraBase {
   /// A distorted lens at 1 spp: every ray is a pixel centre's, whose direction the table holds.
   std::optional<LensBlockBounds> lensBlockBounds() const override {
     static_assert(DirectionTable::kBlock == 4, "LensBlockBounds::blocks are 4 x 4 pixels");
-    if (!table_ || spp_ != 1) return std::nullopt;
+    if (pinhole_ || spp_ != 1) return std::nullopt;
+    const DirectionTable& table = this->table();
     LensBlockBounds b;
     // The table's camera space from render space: the inverse of worldDirection's rotation.
     b.cameraFromRender = openCvCameraFromFrame(frame_.u, frame_.v, frame_.w, renderEyeD_);
     b.eye = renderEyeD_;
     b.width = width_;
     b.height = height_;
-    b.blocks = table_->planeBounds().data();
-    b.blockRays = table_->blockRays().data();
-    b.extent = table_->planeExtent();
-    b.minCosine = table_->minCosine();
+    b.blocks = table.planeBounds().data();
+    b.blockRays = table.blockRays().data();
+    b.extent = table.planeExtent();
+    b.minCosine = table.minCosine();
     return b;
   }
 
@@ -318,12 +318,13 @@ class CalibratedCamera final : public CameraBase {
     APERTURE_CHECK_OP(req.lanes(), <=, kMaxLanes);
     glm::dvec2 samples[kMaxLanes];  // source pixel positions of the lanes left to the lens
     int laneOf[kMaxLanes], left = 0;
+    const DirectionTable* table = centres && !pinhole_ ? &this->table() : nullptr;
     for (int k = 0; k < req.lanes(); ++k) {
       const LanePixel px = req.pixel(k);
-      if (centres && table_ && px.inImage(width_, height_)) {
+      if (table && px.inImage(width_, height_)) {
         // The table holds exactly what rayAt computes here; (0, 0, 1) where there is no ray.
-        valid[k] = table_->valid(px.row, px.column) ? -1 : 0;
-        setLane(out, k, renderEyeD_, worldDirection(table_->at(px.row, px.column)));
+        valid[k] = table->valid(px.row, px.column) ? -1 : 0;
+        setLane(out, k, renderEyeD_, worldDirection(table->at(px.row, px.column)));
         continue;
       }
       double x, y;
@@ -415,13 +416,13 @@ class CalibratedCamera final : public CameraBase {
     if (!whole || req.x0 % kB + req.blockW > kB) return false;
     return withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
       constexpr int kBW = decltype(bw)::value, kBH = decltype(bh)::value;
-      tableCentres<kBW, kBH>(f, *table_, req.x0, req.y0, out, valid);
+      tableCentres<kBW, kBH>(f, table(), req.x0, req.y0, out, valid);
     });
   }
 
   /// Pixels with a ray: every pixel of an undistorted pinhole (its inverse refuses none).
   size_t validPixels() const {
-    return table_ ? table_->validCount() : size_t(width_) * size_t(height_);
+    return pinhole_ ? size_t(width_) * size_t(height_) : table().validCount();
   }
 
   bool rayAt(double x, double y, glm::dvec3& dir) const {
@@ -430,10 +431,20 @@ class CalibratedCamera final : public CameraBase {
     return d.has_value();
   }
 
+  /// The distorted lens's direction table, taken from the cache or built at the first call
+  /// (from any thread; the others wait for it): a camera made only to be checked or described,
+  /// as a job's cameras are when it is read and for the automatic preview range, builds none.
+  const DirectionTable& table() const {
+    std::call_once(tableOnce_, [this] { table_ = DirectionTable::of(sensor_); });
+    return *table_;
+  }
+
   CalibratedSensor sensor_;
-  /// The undistorted pinhole in closed form, or else the table of the distorted lens.
+  /// The undistorted pinhole in closed form, or else the distorted lens, whose rays are its
+  /// table's (table()).
   std::optional<PinholeLens> pinhole_;
-  std::shared_ptr<const DirectionTable> table_;
+  mutable std::once_flag tableOnce_;
+  mutable std::shared_ptr<const DirectionTable> table_;
 };
 
 std::unique_ptr<CameraBase> makeCalibratedCamera(const CameraParams& p,

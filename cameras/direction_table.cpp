@@ -133,13 +133,35 @@ size_t DirectionTable::peakBytes(const std::vector<CalibratedSensor>& sensors) {
   return std::min(all, kCacheBytes + largest);
 }
 
+namespace {
+
+/// The cache of DirectionTable::of. A batch renders image after image; images of one sensor
+/// usually come together (COLMAP sorts by image id), so a few recent tables suffice. A 1080p
+/// table holds 54 MB, a 24 Mpx DSLR's 630 MB: the cache keeps the most recent tables up to
+/// 1 GiB (at least one).
+struct TableCache {
+  std::mutex mutex;
+  std::list<std::shared_ptr<const DirectionTable>> recent;  // most recent first
+};
+
+TableCache& tableCache() {
+  static TableCache cache;
+  return cache;
+}
+
+}  // namespace
+
+bool DirectionTable::cached(const CalibratedSensor& sensor) {
+  TableCache& cache = tableCache();
+  std::lock_guard<std::mutex> lock(cache.mutex);
+  return std::any_of(cache.recent.begin(), cache.recent.end(),
+                     [&](const auto& table) { return table->sensor() == sensor; });
+}
+
 std::shared_ptr<const DirectionTable> DirectionTable::of(const CalibratedSensor& sensor) {
-  // A batch renders image after image; images of one sensor usually come together (COLMAP
-  // sorts by image id), so a few recent tables suffice. A 1080p table holds 54 MB, a 24 Mpx
-  // DSLR's 630 MB: the cache keeps the most recent tables up to 1 GiB (at least one).
-  static std::mutex mutex;
-  static std::list<std::shared_ptr<const DirectionTable>> recent;  // most recent first
-  std::lock_guard<std::mutex> lock(mutex);
+  TableCache& cache = tableCache();
+  std::lock_guard<std::mutex> lock(cache.mutex);
+  std::list<std::shared_ptr<const DirectionTable>>& recent = cache.recent;
   for (auto it = recent.begin(); it != recent.end(); ++it)
     if ((*it)->sensor() == sensor) {
       recent.splice(recent.begin(), recent, it);

@@ -17,6 +17,8 @@ class DirectionTable {
   /// The table of `sensor`: from a small process-wide cache (the most recently used sensors),
   /// or computed in parallel and added to it. Thread-safe.
   static std::shared_ptr<const DirectionTable> of(const CalibratedSensor& sensor);
+  /// Whether the cache of `of` holds the table of `sensor` (built and not yet dropped).
+  static bool cached(const CalibratedSensor& sensor);
   /// What the cache of `of` keeps: the most recent tables up to this many bytes (and the most
   /// recent one whatever its size).
   static constexpr size_t kCacheBytes = size_t(1) << 30;

@@ -181,6 +181,12 @@ struct LensBlockBounds {
   double minCosine = 0;    ///< the least cosine of a ray with the frame's z axis
 };
 
+/// A camera's eye and W (pointing backwards, away from the view) in world space, in double.
+struct WorldView {
+  glm::dvec3 eye{0.0};
+  glm::dvec3 w{0.0, 0.0, 1.0};
+};
+
 class Camera {
  public:
   virtual ~Camera() = default;
@@ -190,6 +196,12 @@ class Camera {
   virtual glm::vec3 renderEye() const = 0;
   virtual glm::vec3 viewAxis() const = 0;
   virtual CameraDescription describe() const = 0;
+  /// describe()'s eye and w without the rest of the description, some of which costs work
+  /// (a distorted lens counts the pixels its direction table gives a ray).
+  virtual WorldView worldView() const {
+    const CameraDescription c = describe();
+    return {c.eye, c.w};
+  }
   /// True when generate() uses random numbers (spp > 1 or a lens); the frame loop skips
   /// sample bookkeeping otherwise.
   virtual bool stochastic() const = 0;

@@ -287,6 +287,34 @@ TEST(CalibratedCamera, DescriptionCarriesTheLensAndNdcOnlyWhenProjective) {
 namespace aperture {
 namespace {
 
+// A distorted camera builds its direction table at its first ray, not when it is made or
+// asked where it looks: a job's cameras are made when the job is read, and again for the
+// automatic preview range, so 100 distinct sensors had every table built twice
+// (bench/RESULTS.md). Its description, which counts the pixels with a ray, builds it.
+TEST(CalibratedCamera, BuildsItsTableAtItsFirstRayNotWhenMade) {
+  CameraParams p = calibratedPinhole(30, 31, 18.5, 11.5);
+  p.lensModel = "OPENCV";
+  p.distortion = std::vector<double>{-0.2, 0.01, 1e-3, 2.5e-4};  // a sensor of this test only
+  const CalibratedSensor sensor = calibratedSensorOf(p);
+  ASSERT_FALSE(DirectionTable::cached(sensor));
+  const auto camera = makeCamera(p);
+  const WorldView view = camera->worldView();
+  EXPECT_FALSE(DirectionTable::cached(sensor));
+  float buf[12][16];
+  unsigned ubuf[3][16];
+  RayLanes l{16,     buf[0], buf[1], buf[2],  buf[3],  buf[4], buf[5],
+             buf[6], buf[7], buf[8], ubuf[0], ubuf[1], ubuf[2]};
+  int valid[16];
+  camera->generate({0, 0, 4, 4, 0}, l, valid);
+  EXPECT_TRUE(DirectionTable::cached(sensor));
+  // The packet's rays are the table's, which is the lens's inverse at the pixel centres.
+  const glm::dvec3 d = *sensor.lens.unproject(glm::dvec2(0.5, 0.5));
+  EXPECT_EQ(DirectionTable::of(sensor)->at(0, 0), d);
+  const CameraDescription described = camera->describe();
+  EXPECT_EQ(view.eye, described.eye);
+  EXPECT_EQ(view.w, described.w);
+}
+
 // Images of one sensor share its table (set up once); another lens or size gets its own, and
 // the table holds exactly the lens's inverse at every pixel centre.
 TEST(CalibratedCamera, ImagesOfOneSensorShareOneTable) {
