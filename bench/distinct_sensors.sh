@@ -6,7 +6,9 @@
 # it with `batch --cameras` (depth only), alternating two builds, ROUNDS times; prints each
 # run's wall time and peak resident size.
 #   BEFORE=/tmp/before/build/apps/aperture bash bench/distinct_sensors.sh
-#   (AFTER=build/apps/aperture N=100 ROUNDS=2 by default; SHARED=../shared)
+#   (AFTER=build/apps/aperture N=100 ROUNDS=2 by default; SHARED=../shared; FLAGS: more batch
+#   flags for both builds, e.g. FLAGS=--preview, whose automatic depth range locates every
+#   camera before the first image)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 : "${BEFORE:?BEFORE=path of the aperture binary to compare with}"
@@ -32,8 +34,9 @@ for round in $(seq 1 "${ROUNDS:-2}"); do
     bin=$BEFORE
     [[ $side == after ]] && bin=$AFTER
     rm -rf "$work/out"
+    # shellcheck disable=SC2086 # FLAGS are words
     /usr/bin/time -f "$side round $round: %e s wall, %M KiB peak" "$bin" batch --quiet \
-      --mesh "$mesh" --cameras "$work/sparse" --out "$work/out" --aov depth 2>&1 >/dev/null |
+      --mesh "$mesh" --cameras "$work/sparse" --out "$work/out" --aov depth ${FLAGS:-} 2>&1 >/dev/null |
       tail -1
   done
 done
