@@ -432,8 +432,9 @@ class CalibratedCamera final : public CameraBase {
   }
 
   /// The distorted lens's direction table, taken from the cache or built at the first call
-  /// (from any thread; the others wait for it): a camera made only to be checked or described,
-  /// as a job's cameras are when it is read and for the automatic preview range, builds none.
+  /// (from any thread; the others wait for it). A camera made only to be checked, as a job's
+  /// cameras are when it is read, or located (worldView, the automatic preview range) builds
+  /// none; its first ray and its description (the valid-pixel count) do.
   const DirectionTable& table() const {
     std::call_once(tableOnce_, [this] { table_ = DirectionTable::of(sensor_); });
     return *table_;
