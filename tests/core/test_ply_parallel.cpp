@@ -41,10 +41,10 @@ Outcome load(const std::string& bytes, const std::string& name, const LoadOption
   return out;
 }
 
-template <class Buffer>
-bool sameBits(const Buffer& a, const Buffer& b) {
+template <class T, class Allocator>
+bool sameBits(const std::vector<T, Allocator>& a, const std::vector<T, Allocator>& b) {
   return a.size() == b.size() &&
-         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0);
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
 void expectSameMesh(const Mesh& a, const Mesh& b, const std::string& what) {
