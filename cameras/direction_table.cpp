@@ -7,6 +7,7 @@
 #include <mutex>
 #include <set>
 
+#include "core/huge_pages.h"
 #include "core/parallel.h"
 
 namespace aperture {
@@ -19,33 +20,48 @@ DirectionTable::DirectionTable(const CalibratedSensor& sensor)
     : sensor_(sensor), blocksPerRow_(size_t((sensor.width + kBlock - 1) / kBlock)) {
   const size_t blockRows = size_t((sensor.height + kBlock - 1) / kBlock);
   const size_t n = blockRows * blocksPerRow_ * size_t(kBlock * kBlock);
-  x_.assign(n, 0.0);
-  y_.assign(n, 0.0);
-  z_.assign(n, 1.0);
-  valid_.assign(n, 0);
+  // Sized without being written (LargeBuffers): the rows' tasks below write every entry,
+  // the blocks' padding past the image's edges included, so the pages (50 MB for 1080p) are
+  // first touched by those tasks, in parallel, and written once.
+  resizeOnHugePages(x_, n);
+  resizeOnHugePages(y_, n);
+  resizeOnHugePages(z_, n);
+  resizeOnHugePages(valid_, n);
+  const auto noRay = [&](size_t k) {
+    x_[k] = 0.0, y_[k] = 0.0, z_[k] = 1.0;
+    valid_[k] = 0;
+  };
+  const int paddedWidth = int(blocksPerRow_) * kBlock;
   // sensorDirection of every pixel centre, kBatch pixels of a row at a time (the lens solves
   // them side by side, with the same result).
   constexpr int kBatch = Lens::kBatch;
-  parallelFor(size_t(sensor.height), 8, [&](size_t rowBegin, size_t rowEnd) {
+  parallelFor(blockRows * kBlock, 8, [&](size_t rowBegin, size_t rowEnd) {
     glm::dvec2 pixels[kBatch];
     glm::dvec3 dirs[kBatch];
     bool hasRay[kBatch];
-    for (size_t i = rowBegin; i < rowEnd; ++i)
-      for (int j0 = 0; j0 < sensor_.width; j0 += kBatch) {
-        const int count = std::min(kBatch, sensor_.width - j0);
+    for (size_t i = rowBegin; i < rowEnd; ++i) {
+      const int row = int(i);
+      const int width = row < sensor_.height ? sensor_.width : 0;  // padding rows: no pixel
+      for (int j0 = 0; j0 < width; j0 += kBatch) {
+        const int count = std::min(kBatch, width - j0);
         for (int c = 0; c < count; ++c)
           pixels[c] =
               sourcePixelOfRaster(glm::dvec2(j0 + c + 0.5, double(i) + 0.5), sensor_.pixelCentre);
         sensor_.lens.unprojectBatch(count, pixels, dirs, hasRay);
         for (int c = 0; c < count; ++c) {
-          if (!hasRay[c]) continue;
-          const size_t k = index(int(i), j0 + c);
+          const size_t k = index(row, j0 + c);
+          if (!hasRay[c]) {
+            noRay(k);
+            continue;
+          }
           x_[k] = dirs[c].x;
           y_[k] = dirs[c].y;
           z_[k] = dirs[c].z;
           valid_[k] = 1;
         }
       }
+      for (int j = width; j < paddedWidth; ++j) noRay(index(row, j));
+    }
   });
   boundPlaneCrossings(blockRows);
 }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cameras/calibration.h"
+#include "core/huge_pages.h"
 
 namespace aperture {
 
@@ -81,8 +82,8 @@ class DirectionTable {
 
   CalibratedSensor sensor_;
   size_t blocksPerRow_ = 0;
-  std::vector<double> x_, y_, z_;
-  std::vector<unsigned char> valid_;
+  LargeBuffer<double> x_, y_, z_;
+  LargeBuffer<unsigned char> valid_;
   std::vector<glm::vec4> planeBounds_;
   std::vector<uint16_t> blockRays_;
   glm::dvec4 planeExtent_{0.0};

@@ -316,7 +316,9 @@ TEST(CalibratedCamera, BuildsItsTableAtItsFirstRayNotWhenMade) {
 }
 
 // Images of one sensor share its table (set up once); another lens or size gets its own, and
-// the table holds exactly the lens's inverse at every pixel centre.
+// the table holds exactly the lens's inverse at every pixel centre, and the optical axis, with
+// no ray, wherever there is none: the blocks' padding past the image's edges included (the
+// table's buffers are sized without being written, so each entry must be written by its row).
 TEST(CalibratedCamera, ImagesOfOneSensorShareOneTable) {
   CameraParams p = calibratedPinhole(30, 31, 18.5, 11.5);
   p.lensModel = "OPENCV";
@@ -334,9 +336,15 @@ TEST(CalibratedCamera, ImagesOfOneSensorShareOneTable) {
       const std::optional<glm::dvec3> d =
           sensor.lens.unproject(glm::dvec2(j + 0.5, i + 0.5));  // half-integer convention
       ASSERT_EQ(a->valid(i, j), d.has_value());
-      if (d) {
-        ASSERT_EQ(a->at(i, j), *d) << i << "," << j;
-      }
+      ASSERT_EQ(a->at(i, j), d.value_or(glm::dvec3(0.0, 0.0, 1.0))) << i << "," << j;
+    }
+  const int kB = DirectionTable::kBlock;
+  ASSERT_TRUE(p.width % kB != 0 && p.height % kB != 0) << "the test wants padding on both sides";
+  for (int i = 0; i < (p.height + kB - 1) / kB * kB; ++i)
+    for (int j = 0; j < (p.width + kB - 1) / kB * kB; ++j) {
+      if (i < p.height && j < p.width) continue;
+      ASSERT_FALSE(a->valid(i, j)) << i << "," << j;
+      ASSERT_EQ(a->at(i, j), glm::dvec3(0.0, 0.0, 1.0)) << i << "," << j;
     }
 }
 
