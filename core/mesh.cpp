@@ -172,15 +172,14 @@ struct Box {
 };
 
 /// The box of world vertices [b, e) of a plain placement (WorldVertices::plain), without the
-/// per-vertex tests; false when a coordinate is not finite, and the per-vertex pass, which
-/// leaves such vertices out, decides. Otherwise the box is the one that pass finds: the same
-/// comparisons of the same values in the same order (so even a zero bound's sign is the
-/// same; the compiler may not reorder them).
+/// per-vertex tests, on x86-64; false when a coordinate is not finite (or without SSE2), and
+/// the per-vertex pass, which leaves non-finite vertices out, decides. Otherwise the box is
+/// the one that pass finds: the same comparisons of the same values in the same order (so
+/// even a zero bound's sign is the same). minpd(v, lo) is exactly v < lo ? v : lo (lo when
+/// they are equal or unordered), and maxpd likewise, with x and y side by side; GCC compiles
+/// the scalar form to compares and integer moves instead, at twice the time.
 bool plainChunkBox(const WorldVertices& world, size_t b, size_t e, Box& box) {
 #if defined(__SSE2__)
-  // The #else branch's loop, with x and y side by side. minpd(v, lo) is exactly v < lo ? v : lo (lo
-  // when they are equal or unordered), and maxpd likewise; GCC compiles the scalar form to
-  // compares and integer moves instead, at twice the time.
   const float* p = world.plainPositions();
   const __m128d scale = _mm_set1_pd(world.plainScale());
   const glm::dvec3 t = world.plainTranslate();
@@ -205,22 +204,14 @@ bool plainChunkBox(const WorldVertices& world, size_t b, size_t e, Box& box) {
   _mm_storeu_pd(lo, loXY), _mm_store_sd(lo + 2, loZ);
   _mm_storeu_pd(hi, hiXY), _mm_store_sd(hi + 2, hiZ);
   _mm_storeu_pd(poison, poisonXY), _mm_store_sd(poison + 2, poisonZ);
-#else
-  double lo[3] = {box.lo.x, box.lo.y, box.lo.z}, hi[3] = {box.hi.x, box.hi.y, box.hi.z};
-  double poison[3] = {0.0, 0.0, 0.0};  // v - v: 0 for a finite v, NaN otherwise; one sum per
-                                       // axis, so the additions do not wait for each other
-  for (size_t k = b; k < e; ++k)
-    for (int a = 0; a < 3; ++a) {
-      const double v = world.plainCoordinate(k, a);
-      lo[a] = v < lo[a] ? v : lo[a];
-      hi[a] = hi[a] < v ? v : hi[a];
-      poison[a] += v - v;
-    }
-#endif
   if (!(poison[0] == 0.0 && poison[1] == 0.0 && poison[2] == 0.0)) return false;
   box.lo = {lo[0], lo[1], lo[2]};
   box.hi = {hi[0], hi[1], hi[2]};
   return true;
+#else
+  (void)world, (void)b, (void)e, (void)box;
+  return false;
+#endif
 }
 
 /// Sets bad[k] for the n vertices with a non-finite world position and returns how many there

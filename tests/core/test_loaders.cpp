@@ -372,11 +372,13 @@ TEST(FinishMesh, OutOfRangeIndexNamesTheMeshAndCountsBadIndices) {
 void expectFinishedAsDefined(const Mesh& m, const LoadOptions& o) {
   glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
   std::vector<glm::dvec3> world;
+  std::vector<bool> finite;
   for (size_t k = 0; k < m.vertexCount; ++k) {
     const glm::dvec3 p(m.positions[3 * k], m.positions[3 * k + 1], m.positions[3 * k + 2]);
     world.push_back(o.scale * p + o.translate);
-    if (std::isfinite(world[k].x) && std::isfinite(world[k].y) && std::isfinite(world[k].z))
-      lo = glm::min(lo, world[k]), hi = glm::max(hi, world[k]);
+    finite.push_back(std::isfinite(world[k].x) && std::isfinite(world[k].y) &&
+                     std::isfinite(world[k].z));
+    if (finite[k]) lo = glm::min(lo, world[k]), hi = glm::max(hi, world[k]);
   }
   const glm::dvec3 anchor =
       o.placement == Placement::WorldSpace ? glm::dvec3(0.0) : 0.5 * (lo + hi);
@@ -387,9 +389,7 @@ void expectFinishedAsDefined(const Mesh& m, const LoadOptions& o) {
       << ", defined " << anchor.x << " " << anchor.y << " " << anchor.z;
   size_t differ = 0;
   for (size_t k = 0; k < m.vertexCount; ++k) {
-    const bool finite =
-        std::isfinite(world[k].x) && std::isfinite(world[k].y) && std::isfinite(world[k].z);
-    const glm::vec3 want = finite ? glm::vec3(world[k] - anchor) : glm::vec3(0.0f);
+    const glm::vec3 want = finite[k] ? glm::vec3(world[k] - anchor) : glm::vec3(0.0f);
     differ += std::memcmp(&finished.positions[3 * k], &want, sizeof(glm::vec3)) != 0;
   }
   EXPECT_EQ(differ, 0u) << "vertices whose anchored position differs";
