@@ -434,7 +434,9 @@ class CalibratedCamera final : public CameraBase {
   /// The distorted lens's direction table, taken from the cache or built at the first call
   /// (from any thread; the others wait for it). A camera made only to be checked, as a job's
   /// cameras are when it is read, or located (worldView, the automatic preview range) builds
-  /// none; its first ray and its description (the valid-pixel count) do.
+  /// none; its first ray and its description (the valid-pixel count) do. The frame loop's
+  /// ImagePlan describes the camera on the caller's thread, so the table (built by a parallel
+  /// loop) is never first asked for by a worker inside the frame loop.
   const DirectionTable& table() const {
     std::call_once(tableOnce_, [this] { table_ = DirectionTable::of(sensor_); });
     return *table_;
