@@ -4,28 +4,43 @@
 // a large, serial part of a binary PLY load (the crown's 63 MB: 10-15 ms on 4 KB pages, ~3 ms
 // on 2 MB pages, of a ~45 ms load). Where the kernel offers transparent huge pages only on request
 // (`madvise` mode, Debian's default), asking for them before the first touch takes that cost
-// down; elsewhere the request changes nothing. A LargeBuffer goes further: its resize does not
-// write the new elements, so the pages are first touched by the (parallel) code that fills them.
+// down; elsewhere the request changes nothing. A LargeBuffer goes further: its storage starts on
+// a 2 MB boundary, so all of it can be on huge pages (malloc's start 16 bytes past a 4 KB page,
+// which leaves up to 2 MB at each end on 4 KB pages: half of the bathroom's index buffer), and
+// its resize does not write the new elements, so the pages are first touched by the (parallel)
+// code that fills them.
 #include <cstddef>
-#include <memory>
+#include <limits>
+#include <new>
 #include <utility>
 #include <vector>
 
 namespace aperture {
 
-/// std::allocator, except that growing a vector (resize) leaves the new elements
-/// default-initialised, which for numbers means unwritten: a buffer that its first writer
-/// fills in parallel is then touched once, by that writer, instead of first zeroed by one
-/// thread. Elements given a value (resize(n, v), assign, insert) are written as ever.
+/// Storage of `bytes` bytes for a LargeBuffer. From 2 MB up it is mapped on a 2 MB boundary,
+/// its length rounded up to whole 2 MB pages, and advised onto huge pages; smaller storage
+/// comes from operator new. Under AddressSanitizer all of it comes from the aligned operator
+/// new, which ASan checks to the byte, and is advised the same way.
+void* allocateLargeBuffer(size_t bytes);
+/// Gives back storage from allocateLargeBuffer(bytes).
+void deallocateLargeBuffer(void* data, size_t bytes) noexcept;
+
+/// The allocator of LargeBuffer: storage from allocateLargeBuffer, and growing a vector
+/// (resize) leaves the new elements default-initialised, which for numbers means unwritten: a
+/// buffer that its first writer fills in parallel is then touched once, by that writer, instead
+/// of first zeroed by one thread. Elements given a value (resize(n, v), assign, insert) are
+/// written as ever.
 template <class T>
-struct DefaultInitAllocator : std::allocator<T> {
+struct LargeBufferAllocator {
+  using value_type = T;
+  LargeBufferAllocator() = default;
   template <class U>
-  struct rebind {
-    using other = DefaultInitAllocator<U>;
-  };
-  DefaultInitAllocator() = default;
-  template <class U>
-  DefaultInitAllocator(const DefaultInitAllocator<U>&) noexcept {}
+  LargeBufferAllocator(const LargeBufferAllocator<U>&) noexcept {}
+  T* allocate(size_t n) {
+    if (n > std::numeric_limits<size_t>::max() / sizeof(T)) throw std::bad_array_new_length();
+    return static_cast<T*>(allocateLargeBuffer(n * sizeof(T)));
+  }
+  void deallocate(T* p, size_t n) noexcept { deallocateLargeBuffer(p, n * sizeof(T)); }
   template <class U>
   void construct(U* p) noexcept {
     ::new (static_cast<void*>(p)) U;
@@ -34,11 +49,20 @@ struct DefaultInitAllocator : std::allocator<T> {
   void construct(U* p, Args&&... args) {
     ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
   }
+  template <class U>
+  bool operator==(const LargeBufferAllocator<U>&) const noexcept {
+    return true;
+  }
+  template <class U>
+  bool operator!=(const LargeBufferAllocator<U>&) const noexcept {
+    return false;
+  }
 };
 
-/// A large numeric buffer whose resize does not write the new elements (DefaultInitAllocator).
+/// A large numeric buffer on huge pages whose resize does not write the new elements
+/// (LargeBufferAllocator).
 template <class T>
-using LargeBuffer = std::vector<T, DefaultInitAllocator<T>>;
+using LargeBuffer = std::vector<T, LargeBufferAllocator<T>>;
 
 /// Asks the kernel to back the whole 2 MB pages inside [data, data + bytes) with transparent
 /// huge pages (madvise MADV_HUGEPAGE). Only a hint: ignored where unsupported or refused.

@@ -75,6 +75,30 @@ TEST(HugePages, TheNewBufferIsAdvisedWhereTheKernelHasThem) {
   EXPECT_EQ(flags.find(" hg") != std::string::npos, kernelHasThp) << flags;
 }
 
+// A LargeBuffer of 2 MB or more starts on a 2 MB boundary, so its first bytes are advised
+// too: malloc's storage starts 16 bytes past a 4 KB page, and the whole 2 MB pages inside it
+// begin up to 2 MB later (a plain std::allocator fails the alignment). Growing it moves it to
+// new storage of the same kind, with the old elements; a small one needs no alignment.
+TEST(HugePages, ALargeBufferStartsOnAHugePageBoundary) {
+  constexpr uintptr_t kHugePage = uintptr_t(2) << 20;
+  LargeBuffer<uint32_t> v;
+  v.resize((kHugePage + 4096) / sizeof(uint32_t));  // one huge page and a bit
+  EXPECT_EQ(reinterpret_cast<uintptr_t>(v.data()) % kHugePage, 0u);
+  const bool kernelHasThp = std::ifstream("/sys/kernel/mm/transparent_hugepage/enabled").good();
+  const std::string flags = mappingFlags(v.data());
+  ASSERT_FALSE(flags.empty()) << "no mapping in /proc/self/smaps holds the buffer";
+  EXPECT_EQ(flags.find(" hg") != std::string::npos, kernelHasThp) << flags;
+  v.front() = 11u;
+  v.back() = 12u;
+  const size_t n = v.size();
+  v.resize(4 * n);
+  EXPECT_EQ(reinterpret_cast<uintptr_t>(v.data()) % kHugePage, 0u);
+  EXPECT_EQ(v.front(), 11u);
+  EXPECT_EQ(v[n - 1], 12u);
+  LargeBuffer<uint32_t> small(7, 5u);
+  EXPECT_EQ(test::asVector(small), std::vector<uint32_t>(7, 5u));
+}
+
 // A LargeBuffer grows without writing its new elements, so its pages stay untouched until
 // their first writer (the parallel loaders) fills them. The same resize of a std::vector
 // touches every page, which shows that the measure can tell them apart.
