@@ -13,6 +13,7 @@
 #include "core/huge_pages.h"
 #include "core/parallel.h"
 #include "core/spelling.h"
+#include "core/vector_kernel.h"
 
 namespace aperture {
 
@@ -88,9 +89,6 @@ class WorldVertices {
   /// Float positions placed without a transform: world coordinate a of vertex k is
   /// scale * positions[3k + a] + translate[a], which the loops below compute directly.
   bool plain() const { return !fromDouble_ && !options_.transform; }
-  double plainCoordinate(size_t k, int a) const {
-    return options_.scale * double(mesh_.positions[3 * k + size_t(a)]) + options_.translate[a];
-  }
   const float* plainPositions() const { return mesh_.positions.data(); }
   double plainScale() const { return options_.scale; }
   glm::dvec3 plainTranslate() const { return options_.translate; }
@@ -132,19 +130,34 @@ struct IndexScan {
   size_t degenerate = 0;       ///< triangles that repeat an index
 };
 
+/// Counts, over the `triangles` triangles at `indices`, the indices >= n and the triangles
+/// that repeat an index: comparisons without branches, which the loop vectoriser takes.
+APERTURE_VECTOR_KERNEL void countBadIndices(const uint32_t* indices, size_t triangles, uint64_t n,
+                                            IndexScan& scan) {
+  size_t outOfRange = 0, degenerate = 0;
+  for (size_t t = 0; t < triangles; ++t) {
+    const uint32_t a = indices[3 * t], b = indices[3 * t + 1], c = indices[3 * t + 2];
+    outOfRange += size_t(a >= n) + size_t(b >= n) + size_t(c >= n);
+    degenerate += size_t((a == b) | (b == c) | (a == c));
+  }
+  scan.outOfRange = outOfRange;
+  scan.degenerate = degenerate;
+}
+
 /// Reads every index once, in parallel: the out-of-range ones and the degenerate triangles.
+/// A chunk with an index out of range (a file the load then rejects) finds the first one again.
 IndexScan scanIndices(const Mesh& mesh) {
   const size_t n = mesh.vertexCount;
   const size_t triangles = mesh.indices.size() / 3;
   std::vector<IndexScan> chunks(chunkCount(triangles));
   forEachChunk(triangles, [&](size_t c, size_t b, size_t e) {
     IndexScan s;
-    for (size_t t = b; t < e; ++t) {
-      const uint32_t* v = &mesh.indices[3 * t];
-      for (size_t k = 0; k < 3; ++k)
-        if (v[k] >= n && s.outOfRange++ == 0) s.firstOutOfRange = 3 * t + k;
-      s.degenerate += (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) ? 1 : 0;
-    }
+    countBadIndices(mesh.indices.data() + 3 * b, e - b, n, s);
+    if (s.outOfRange)
+      s.firstOutOfRange = size_t(std::find_if(mesh.indices.begin() + ptrdiff_t(3 * b),
+                                              mesh.indices.begin() + ptrdiff_t(3 * e),
+                                              [&](uint32_t v) { return v >= n; }) -
+                                 mesh.indices.begin());
     chunks[c] = s;
   });
   IndexScan all;
@@ -280,6 +293,39 @@ void dropTrianglesOfBadVertices(Mesh& mesh, const std::vector<uint8_t>& bad, boo
   mesh.stats.degenerateTriangles = degenerate;
 }
 
+/// The arithmetic of a plain placement (WorldVertices::plain) relative to an anchor, laid out
+/// for four vertices (twelve floats) at a time: coordinate j of such a block becomes
+/// float((scale * double(x) + translate[j]) - anchor[j]), with translate and anchor repeated
+/// per vertex: the operations of WorldVertices, in the same order.
+struct PlainPlacement {
+  static constexpr size_t kBlock = 12;
+  double scale;
+  double translate[kBlock], anchor[kBlock];
+  PlainPlacement(const WorldVertices& world, const glm::dvec3& anchorOf)
+      : scale(world.plainScale()) {
+    const glm::dvec3 t = world.plainTranslate();
+    for (size_t j = 0; j < kBlock; ++j) {
+      translate[j] = t[int(j % 3)];
+      anchor[j] = anchorOf[int(j % 3)];
+    }
+  }
+};
+
+/// Rewrites the `count` vertices at `xyz` in place, placed and anchored by `p`: whole blocks of
+/// four vertices with a twelve-wide inner loop that the loop vectoriser takes, then the rest.
+APERTURE_VECTOR_KERNEL void placePlainVertices(const PlainPlacement& p, float* xyz, size_t count) {
+  constexpr size_t kBlock = PlainPlacement::kBlock;
+  const size_t floats = 3 * count, whole = floats - floats % kBlock;
+  for (size_t i = 0; i < whole; i += kBlock) {
+    float* block = xyz + i;
+    APERTURE_LANE_LOOP
+    for (size_t j = 0; j < kBlock; ++j)
+      block[j] = float((p.scale * double(block[j]) + p.translate[j]) - p.anchor[j]);
+  }
+  for (size_t i = whole; i < floats; ++i)
+    xyz[i] = float((p.scale * double(xyz[i]) + p.translate[i % 3]) - p.anchor[i % 3]);
+}
+
 /// Writes the float positions relative to mesh.anchor, padded for Embree. Non-finite vertices
 /// are stored as 0 (no triangle uses them). Float sources are rewritten in place: vertex k is
 /// read before it is overwritten.
@@ -290,11 +336,10 @@ void writeAnchoredPositions(Mesh& mesh, const WorldVertices& world, const std::v
   resizeOnHugePages(mesh.positions, 3 * n + kVertexPaddingFloats);
   std::fill(mesh.positions.begin() + 3 * n, mesh.positions.end(), 0.0f);
   const bool plain = world.plain() && !anyBad;
+  const PlainPlacement placement(world, mesh.anchor);
   forEachChunk(n, [&](size_t, size_t b, size_t e) {
     if (plain) {  // the same arithmetic, without the per-vertex tests
-      for (size_t k = b; k < e; ++k)
-        for (int a = 0; a < 3; ++a)
-          mesh.positions[3 * k + size_t(a)] = float(world.plainCoordinate(k, a) - mesh.anchor[a]);
+      placePlainVertices(placement, mesh.positions.data() + 3 * b, e - b);
       return;
     }
     for (size_t k = b; k < e; ++k) {
