@@ -242,6 +242,9 @@ std::string mixedFile(bool bigEndian, size_t (*countOf)(size_t), size_t badAt) {
 size_t mixedPolygons(size_t f) { return 3 + f % 3; }
 size_t trianglesThenAQuad(size_t f) { return f + 1 == kFaces ? 4 : 3; }
 size_t triangles(size_t) { return 3; }
+/// A quad, then a face of two corners (17 + 9 bytes: as long as two triangles), midway through
+/// one of the parallel reader's tasks; triangles elsewhere.
+size_t aQuadThenTwoCornersMidway(size_t f) { return f == 70000 ? 4 : f == 70001 ? 2 : 3; }
 
 TEST(PlyParallel, MixedPolygonsAndBigEndianMatchSerial) {
   for (bool bigEndian : {false, true}) {
@@ -259,6 +262,12 @@ TEST(PlyParallel, MixedPolygonsAndBigEndianMatchSerial) {
   ASSERT_TRUE(last.ok) << last.error;
   EXPECT_EQ(last.mesh.indices.size(), 3 * (kFaces - 1) + 6);
   EXPECT_EQ(last.mesh.stats.sourceFaces, kFaces);
+  // The faces after the pair sit where the triangles' would, so only their counts tell the
+  // parallel reader to give up.
+  const Outcome pair =
+      expectSameOutcome(mixedFile(false, aQuadThenTwoCornersMidway, kFaces), "pair.ply");
+  ASSERT_TRUE(pair.ok) << pair.error;
+  EXPECT_EQ(pair.mesh.indices.size(), 3 * (kFaces - 2) + 6);
 }
 
 TEST(PlyParallel, BadIndicesAndTruncationGiveTheSerialErrors) {
