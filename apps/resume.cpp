@@ -36,10 +36,12 @@ std::string differsVec(const char* what, const glm::dvec3& file, const glm::dvec
   return file == job ? "" : cat(what, " ", show(file), ", job wants ", show(job));
 }
 
-/// The camera extras as sorted "name=value" items (files return them sorted by name).
+/// The camera extras as sorted "name=value" items (files return them sorted by name), without
+/// the counted ones (isCountedExtra): they follow from the lens and size compared elsewhere.
 std::vector<std::string> sortedExtras(const CameraDescription& c) {
   std::vector<std::string> items;
-  for (const auto& [name, value] : c.extra) items.push_back(name + "=" + value);
+  for (const auto& [name, value] : c.extra)
+    if (!isCountedExtra(name)) items.push_back(name + "=" + value);
   std::sort(items.begin(), items.end());
   return items;
 }
@@ -83,7 +85,7 @@ std::string headerMismatch(const Job& job, const JobImage& image) {
   std::sort(have.begin(), have.end());
   if (have != want) return cat("channels ", joined(have), ", job wants ", joined(want));
   // World-space attributes only, so the scene's render origin plays no part.
-  const CameraDescription wanted = makeCamera(p)->describe();
+  const CameraDescription wanted = makeCamera(p)->describeWithoutCounts();
   const std::string camera = cameraDifference(header.meta.camera, wanted);
   return camera.empty() ? "" : "camera " + camera;
 }

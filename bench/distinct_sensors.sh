@@ -8,7 +8,8 @@
 #   BEFORE=/tmp/before/build/apps/aperture bash bench/distinct_sensors.sh
 #   (AFTER=build/apps/aperture N=100 ROUNDS=2 by default; SHARED=../shared; FLAGS: more batch
 #   flags for both builds, e.g. FLAGS=--preview, whose automatic depth range locates every
-#   camera before the first image)
+#   camera before the first image; RESUME=1: after each render, time `--resume` of the same
+#   build, which finds every image up to date)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 : "${BEFORE:?BEFORE=path of the aperture binary to compare with}"
@@ -34,9 +35,13 @@ for round in $(seq 1 "${ROUNDS:-2}"); do
     bin=$BEFORE
     [[ $side == after ]] && bin=$AFTER
     rm -rf "$work/out"
-    # shellcheck disable=SC2086 # FLAGS are words
-    /usr/bin/time -f "$side round $round: %e s wall, %M KiB peak" "$bin" batch --quiet \
-      --mesh "$mesh" --cameras "$work/sparse" --out "$work/out" --aov depth ${FLAGS:-} 2>&1 >/dev/null |
-      tail -1
+    runs=("")
+    [[ ${RESUME:-0} == 1 ]] && runs+=(--resume)
+    for resume in "${runs[@]}"; do
+      # shellcheck disable=SC2086 # FLAGS are words
+      /usr/bin/time -f "$side round $round${resume:+ $resume}: %e s wall, %M KiB peak" "$bin" \
+        batch --quiet $resume --mesh "$mesh" --cameras "$work/sparse" --out "$work/out" \
+        --aov depth ${FLAGS:-} 2>&1 >/dev/null | tail -1
+    done
   done
 done

@@ -243,6 +243,12 @@ glm::dmat4 CameraBase::ndcFromPlane() const {
 }
 
 CameraDescription CameraBase::describe() const {
+  CameraDescription c = describeWithoutCounts();
+  describeCounts(c);
+  return c;
+}
+
+CameraDescription CameraBase::describeWithoutCounts() const {
   CameraDescription c;
   c.type = type_;
   c.eye = frame_.e;

@@ -36,6 +36,7 @@ class CameraBase : public Camera {
   glm::vec3 viewAxis() const override { return viewAxis_; }
   bool stochastic() const override { return spp_ > 1; }
   CameraDescription describe() const override;
+  CameraDescription describeWithoutCounts() const override;
   WorldView worldView() const override { return {frame_.e, frame_.w}; }
 
   /// The ray through raster position (x, y) (column, row, continuous; pixel (i, j) centre at
@@ -110,6 +111,8 @@ class CameraBase : public Camera {
   /// and where they differ from the planar defaults, the screen window, the pixel aspect ratio
   /// and the panorama projection.
   virtual void describeExtra(CameraDescription&) const {}
+  /// The extras describe() counts over the image (isCountedExtra), appended after the others.
+  virtual void describeCounts(CameraDescription&) const {}
   /// Throws Error naming the model if a shift, a Blender shift, the architectural flag or a
   /// clip was given (parameters of the perspective and thin-lens models only).
   void rejectShift() const;

@@ -388,7 +388,10 @@ class CalibratedCamera final : public CameraBase {
     lp.pixelCentre = pixelCentreName(sensor_.pixelCentre);
     c.lens = lp;
     c.extra.emplace_back("valid_region", lens.validRegion().text(lens.info().fisheye));
-    c.extra.emplace_back("valid_pixels",
+  }
+
+  void describeCounts(CameraDescription& c) const override {
+    c.extra.emplace_back(kValidPixelsExtra,
                          cat(validPixels(), " of ", size_t(width_) * size_t(height_)));
   }
 

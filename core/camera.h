@@ -24,6 +24,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace aperture {
@@ -144,6 +145,14 @@ struct CameraDescription {
   std::vector<std::pair<std::string, std::string>> extra;
 };
 
+/// The extra of a distorted lens's pixels with a ray, "N of W·H" (its direction table's count).
+inline constexpr std::string_view kValidPixelsExtra = "valid_pixels";
+
+/// Whether an extra of CameraDescription is counted over the image rather than stated by the
+/// camera's parameters: it follows from those parameters (a lens compared exactly, the image
+/// size), so comparisons of cameras leave it out, and describeWithoutCounts() does not count it.
+inline bool isCountedExtra(std::string_view name) { return name == kValidPixelsExtra; }
+
 /// The one definition of OpenEXR's camera space (see CameraDescription::cameraFromWorld) from
 /// the frame e, U (right), V (up), W (backwards): rows U, V, −W and translation (−U·e, −V·e,
 /// W·e). Column-vector GLM convention.
@@ -196,6 +205,10 @@ class Camera {
   virtual glm::vec3 renderEye() const = 0;
   virtual glm::vec3 viewAxis() const = 0;
   virtual CameraDescription describe() const = 0;
+  /// describe() without the extras it counts over the image (isCountedExtra): what the
+  /// camera's parameters state, at no cost beyond them (a distorted lens builds no direction
+  /// table for it). What --resume compares with a file's header.
+  virtual CameraDescription describeWithoutCounts() const { return describe(); }
   /// describe()'s eye and w without the rest of the description, some of which costs work
   /// (a distorted lens counts the pixels its direction table gives a ray).
   virtual WorldView worldView() const {

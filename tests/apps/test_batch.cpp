@@ -20,7 +20,11 @@
 #include <sstream>
 
 #include "apps/job.h"
+#include "apps/resume.h"
 #include "apps/shard.h"
+#include "cameras/calibrated.h"
+#include "cameras/direction_table.h"
+#include "cameras/registry.h"
 #include "core/error.h"
 #include "core/exr.h"
 #include "core/image.h"
@@ -679,6 +683,38 @@ TEST(BatchResume, UnchangedOutputsAreAllKeptAndNothingIsLoaded) {
   EXPECT_EQ(out.find("aperture: loaded"), std::string::npos) << out;
   EXPECT_NE(out.find("resume: 7 of 7 images up to date, 0 stale, 0 missing"), std::string::npos)
       << out;
+}
+
+// A distorted camera's EXR records how many of its pixels have a ray, which only the lens's
+// direction table counts. That count follows from the lens and the size, which --resume
+// compares as they are, so it checks the file without building the table (COLMAP's default
+// of one camera per image would otherwise build one per image). In this process the sensor's
+// table is not cached before, and checkOutput keeps the file and leaves it unbuilt; asking
+// the camera for its whole description (as the check did before) builds it.
+TEST(BatchResume, ADistortedCameraIsCheckedWithoutBuildingItsDirectionTable) {
+  const std::string dir = scratchDir();
+  const std::string jobPath = writeJob(dir, json::parse(R"({
+    "scene": {"meshes": [{"path": "procedural:sphere"}]},
+    "cameras": [{"name": "cal", "eye": [0, 0, 5], "at": [0, 0, 0],
+                 "intrinsics": [20.5, 21, 16, 12], "lens_model": "OPENCV",
+                 "distortion": [-0.2, 0.03, 0.0011, -0.0007]}],
+    "size": [32, 24], "aovs": "depth", "output": "out/{camera}.exr"})"));
+  std::string out;
+  ASSERT_EQ(batch("--quiet", jobPath, &out), 0) << out;
+  const Job job = app::parseJob(jobPath);
+  ASSERT_EQ(job.images.size(), 1u);
+  const app::JobImage& image = job.images[0];
+  const CalibratedSensor sensor = calibratedSensorOf(image.params);
+  ASSERT_FALSE(DirectionTable::cached(sensor));
+  const app::OutputCheck check = app::checkOutput(job, image);
+  EXPECT_EQ(check.state, app::OutputCheck::State::Reusable) << check.reason;
+  EXPECT_FALSE(DirectionTable::cached(sensor));
+  const auto& recorded = readExrHeader(image.output).meta.camera.extra;
+  EXPECT_TRUE(std::any_of(recorded.begin(), recorded.end(), [](const auto& e) {
+    return e.first == kValidPixelsExtra && e.second == "768 of 768";
+  }));
+  (void)makeCamera(image.params)->describe();
+  EXPECT_TRUE(DirectionTable::cached(sensor));
 }
 
 TEST(BatchResume, EachKindOfStaleOutputIsRenderedAgainAndOnlyThat) {

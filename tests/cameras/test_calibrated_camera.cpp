@@ -287,10 +287,11 @@ TEST(CalibratedCamera, DescriptionCarriesTheLensAndNdcOnlyWhenProjective) {
 namespace aperture {
 namespace {
 
-// A distorted camera builds its direction table at its first ray, not when it is made or
-// asked where it looks: a job's cameras are made when the job is read, and again for the
-// automatic preview range, so 100 distinct sensors had every table built twice
-// (bench/RESULTS.md). Its description, which counts the pixels with a ray, builds it.
+// A distorted camera builds its direction table at its first ray, not when it is made, asked
+// where it looks or described without counts (what --resume compares): a job's cameras are
+// made when the job is read, and again for the automatic preview range, so 100 distinct
+// sensors had every table built twice (bench/RESULTS.md). Its whole description, which counts
+// the pixels with a ray, builds it.
 TEST(CalibratedCamera, BuildsItsTableAtItsFirstRayNotWhenMade) {
   CameraParams p = calibratedPinhole(30, 31, 18.5, 11.5);
   p.lensModel = "OPENCV";
@@ -299,6 +300,7 @@ TEST(CalibratedCamera, BuildsItsTableAtItsFirstRayNotWhenMade) {
   ASSERT_FALSE(DirectionTable::cached(sensor));
   const auto camera = makeCamera(p);
   const WorldView view = camera->worldView();
+  const CameraDescription stated = camera->describeWithoutCounts();
   EXPECT_FALSE(DirectionTable::cached(sensor));
   float buf[12][16];
   unsigned ubuf[3][16];
@@ -313,6 +315,19 @@ TEST(CalibratedCamera, BuildsItsTableAtItsFirstRayNotWhenMade) {
   const CameraDescription described = camera->describe();
   EXPECT_EQ(view.eye, described.eye);
   EXPECT_EQ(view.w, described.w);
+  // The description without counts is the description but for its counted extras.
+  std::vector<std::pair<std::string, std::string>> uncounted;
+  for (const auto& e : described.extra)
+    if (!isCountedExtra(e.first)) uncounted.push_back(e);
+  EXPECT_EQ(stated.extra, uncounted);
+  EXPECT_EQ(uncounted.size() + 1, described.extra.size());  // valid_pixels
+  EXPECT_EQ(stated.eye, described.eye);
+  EXPECT_EQ(stated.u, described.u);
+  EXPECT_EQ(stated.w, described.w);
+  EXPECT_EQ(stated.d, described.d);
+  EXPECT_EQ(stated.cameraFromWorld, described.cameraFromWorld);
+  ASSERT_TRUE(stated.lens && described.lens);
+  EXPECT_EQ(stated.lens->params, described.lens->params);
 }
 
 // Images of one sensor share its table (set up once); another lens or size gets its own, and
