@@ -3,6 +3,8 @@
 # every file once with each binary (alternating, a fresh process each time, file in page
 # cache after the first round), and the table gives the median MB/s of the rounds (file bytes
 # over the loader's wall time, as `aperture bench` prints it) and the ratio.
+# The host's share of each CPU (bench/host_steal.py, 2 s) is printed before and after the
+# rounds: a load of a few milliseconds that meets one of its gaps is slower by all of it.
 #   BEFORE=/tmp/before/build/apps/aperture bash bench/load_before_after.sh
 #   (AFTER=build/apps/aperture ROUNDS=5 by default; SHARED=../shared)
 set -euo pipefail
@@ -15,6 +17,9 @@ out=${OUT:-/tmp/load_before_after}
 rm -rf "$out"
 mkdir -p "$out"
 for f in "${files[@]}"; do cat "$f" >/dev/null; done  # page cache
+steal=$(dirname "$0")/host_steal.py
+echo "host before the rounds:"
+python3 "$steal" 2
 for round in $(seq 0 "${ROUNDS:-5}"); do  # round 0 is a warm-up, not counted
   for f in "${files[@]}"; do
     for side in before after; do
@@ -25,6 +30,8 @@ for round in $(seq 0 "${ROUNDS:-5}"); do  # round 0 is a warm-up, not counted
     done
   done
 done
+echo "host after the rounds:"
+python3 "$steal" 2
 python3 - "$out" <<'PY'
 import glob, json, statistics, sys
 rows = {}
