@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <limits>
 #include <new>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -68,12 +69,14 @@ using LargeBuffer = std::vector<T, LargeBufferAllocator<T>>;
 /// huge pages (madvise MADV_HUGEPAGE). Only a hint: ignored where unsupported or refused.
 void adviseHugePages(const void* data, size_t bytes);
 
-/// v.reserve(n), new storage advised onto huge pages before anything touches it.
+/// v.reserve(n), new storage advised onto huge pages before anything touches it (a
+/// LargeBuffer's allocator has advised it already).
 template <class T, class A>
 void reserveOnHugePages(std::vector<T, A>& v, size_t n) {
   if (n <= v.capacity()) return;
   v.reserve(n);
-  adviseHugePages(v.data(), v.capacity() * sizeof(T));
+  if constexpr (!std::is_same_v<A, LargeBufferAllocator<T>>)
+    adviseHugePages(v.data(), v.capacity() * sizeof(T));
 }
 
 /// v.resize(n), new storage advised onto huge pages before the resize first touches it.

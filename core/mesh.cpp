@@ -309,6 +309,10 @@ struct PlainPlacement {
       anchor[j] = anchorOf[int(j % 3)];
     }
   }
+  /// Coordinate x at slot j of a block (or axis j of a vertex: the first three slots).
+  float placed(float x, size_t j) const {
+    return float((scale * double(x) + translate[j]) - anchor[j]);
+  }
 };
 
 /// Rewrites the `count` vertices at `xyz` in place, placed and anchored by `p`: whole blocks of
@@ -319,11 +323,9 @@ APERTURE_VECTOR_KERNEL void placePlainVertices(const PlainPlacement& p, float* x
   for (size_t i = 0; i < whole; i += kBlock) {
     float* block = xyz + i;
     APERTURE_LANE_LOOP
-    for (size_t j = 0; j < kBlock; ++j)
-      block[j] = float((p.scale * double(block[j]) + p.translate[j]) - p.anchor[j]);
+    for (size_t j = 0; j < kBlock; ++j) block[j] = p.placed(block[j], j);
   }
-  for (size_t i = whole; i < floats; ++i)
-    xyz[i] = float((p.scale * double(xyz[i]) + p.translate[i % 3]) - p.anchor[i % 3]);
+  for (size_t i = whole; i < floats; ++i) xyz[i] = p.placed(xyz[i], i % 3);
 }
 
 /// Writes the float positions relative to mesh.anchor, padded for Embree. Non-finite vertices
