@@ -4,13 +4,7 @@
 
 #include <cstdint>
 
-#if defined(__SANITIZE_ADDRESS__)
-#define APERTURE_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define APERTURE_ASAN 1
-#endif
-#endif
+#include "core/sanitizers.h"
 
 namespace aperture {
 

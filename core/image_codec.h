@@ -67,10 +67,11 @@ class ImageCodec {
 inline constexpr const char* kImageCodecEntry =
     APERTURE_IMAGE_CODEC_NAME(APERTURE_IMAGE_CODEC_ENTRY);
 
-/// The codec, loaded at the first call: libaperture_oiio.so from the folder of the program
-/// or Python module that holds aperture, else from the build tree it was built in, or only
-/// the file $APERTURE_IMAGE_CODEC names when it is set. Throws Error, naming the paths tried,
-/// when none loads.
+/// The codec: the one the program links in (aperture_oiio_linked, in the test and fuzz
+/// programs of sanitizer and fuzz builds), else, loaded at the first call, libaperture_oiio.so
+/// from the folder of the program or Python module that holds aperture, else from the build
+/// tree it was built in, or only the file $APERTURE_IMAGE_CODEC names when it is set. Throws
+/// Error, naming the paths tried, when none loads.
 const ImageCodec& imageCodec();
 
 /// imageCodec().encode, throwing Error with the codec's message when it fails.
