@@ -58,7 +58,6 @@ TEST(Cli, DefaultSceneRendersExrAndPreview) {
   EXPECT_TRUE(test::fileExists(dir + "/d.png"));
 }
 
-#ifndef APERTURE_SANITIZED  // sanitizer builds link the image codec in (core/CMakeLists.txt)
 /// The shared libraries the dynamic loader loaded for `args` (LD_DEBUG=files), one line each.
 std::string librariesLoadedBy(const std::string& args, const std::string& dir) {
   const std::string log = dir + "/ld";
@@ -126,7 +125,6 @@ TEST(Cli, AMissingImageCodecFailsBeforeTheMeshLoadsAndNamesTheFile) {
             0)
       << out;
 }
-#endif
 
 TEST(Cli, BadFlagValuesNameTheFlagAndValueAndWriteNothing) {
   const std::string dir = scratchDir(), exr = dir + "/x.exr";

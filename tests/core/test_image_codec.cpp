@@ -1,6 +1,8 @@
-// The image codec (core/image_codec.h), the OpenImageIO plugin loaded on first use: what it
-// encodes reads back, and its comparison statistics match their closed forms.
+// The image codec (core/image_codec.h), the OpenImageIO plugin loaded on first use (linked into
+// the test program of a sanitizer build): what it encodes reads back, and its comparison
+// statistics match their closed forms.
 #include <gtest/gtest.h>
+#include <link.h>
 
 #include <cmath>
 #include <cstdint>
@@ -44,6 +46,40 @@ TEST(ImageCodec, EncodedPngReadsBackWithItsSizeAndPixels) {
     std::memcpy(&v, wide.data() + 2 * k, 2);
     EXPECT_EQ(v, 257 * rgb[k]) << k;
   }
+}
+
+/// Whether a shared object whose path contains `name` is loaded in this process.
+bool sharedObjectLoaded(const std::string& name) {
+  struct Search {
+    const std::string* name;
+    bool found;
+  } search{&name, false};
+  dl_iterate_phdr(
+      [](dl_phdr_info* info, size_t, void* data) {
+        auto* s = static_cast<Search*>(data);
+        if (info->dlpi_name && std::string(info->dlpi_name).find(*s->name) != std::string::npos)
+          s->found = true;
+        return 0;
+      },
+      &search);
+  return search.found;
+}
+
+TEST(ImageCodec, ACodecLinkedInIsTakenOverThePlugin) {
+  // Sanitizer builds link the codec into this program (aperture_oiio_linked) and imageCodec()
+  // takes it over the plugin; every other build loads the plugin. Either way, after a first
+  // encode, exactly one of the two is what this process runs.
+  std::vector<unsigned char> bytes;
+  std::string error;
+  const unsigned char pixel[3] = {1, 2, 3};
+  ASSERT_TRUE(imageCodec().encode("x.png", {1, 1, 3, SampleType::UInt8, pixel, {}}, bytes, error))
+      << error;
+#ifdef APERTURE_SANITIZED
+  EXPECT_FALSE(sharedObjectLoaded("libaperture_oiio.so"));
+  EXPECT_TRUE(sharedObjectLoaded("libOpenImageIO.so")) << "linked into the test program";
+#else
+  EXPECT_TRUE(sharedObjectLoaded("libaperture_oiio.so"));
+#endif
 }
 
 TEST(ImageCodec, FailuresReturnAnErrorInsteadOfThrowing) {
