@@ -220,12 +220,7 @@ std::vector<ColmapImage> readImagesText(const std::string& path) {
     for (int i = 0; i < 3; ++i) im.t[i] = numberToken(tok[5 + i], context, names[4 + i]);
     im.cameraId = uint32_t(integerToken(tok[8], context, "CAMERA_ID", 0, kMaxColmapId));
     // The name is the rest of the line (COLMAP's names hold no spaces; ours may).
-    size_t pos = 0;
-    for (int skip = 0; skip < 9; ++skip) {
-      pos = line.find_first_not_of(" \t", pos);
-      pos = line.find_first_of(" \t", pos);
-    }
-    im.name = line.substr(line.find_first_not_of(" \t", pos));
+    im.name = afterTokens(line, 9);
     im.context = context;
     images.push_back(std::move(im));
     ++k;  // the 2D points line, whatever it holds (it may be empty or absent at the end)

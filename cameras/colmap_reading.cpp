@@ -32,10 +32,19 @@ std::vector<std::pair<int, std::string>> textLines(const std::string& text) {
 
 std::vector<std::string> tokensOf(const std::string& line) {
   std::vector<std::string> tokens;
-  std::istringstream in(line);
-  std::string t;
-  while (in >> t) tokens.push_back(t);
+  for (size_t begin = line.find_first_not_of(kTokenSeparators); begin != std::string::npos;) {
+    const size_t end = line.find_first_of(kTokenSeparators, begin);
+    tokens.push_back(line.substr(begin, end - begin));
+    begin = line.find_first_not_of(kTokenSeparators, end);
+  }
   return tokens;
+}
+
+std::string afterTokens(const std::string& line, size_t count) {
+  size_t pos = line.find_first_not_of(kTokenSeparators);
+  for (size_t k = 0; k < count && pos != std::string::npos; ++k)
+    pos = line.find_first_not_of(kTokenSeparators, line.find_first_of(kTokenSeparators, pos));
+  return pos == std::string::npos ? std::string() : line.substr(pos);
 }
 
 bool isDataLine(const std::string& line) { return !line.empty() && line[0] != '#'; }

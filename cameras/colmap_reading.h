@@ -19,8 +19,13 @@ std::string readWholeFile(const std::string& path);
 
 /// The file's lines, each with its number (1-based), trimmed of spaces, tabs and '\r'.
 std::vector<std::pair<int, std::string>> textLines(const std::string& text);
-/// The whitespace-separated tokens of a line.
+/// What separates the tokens of a line: the C locale's white space.
+inline constexpr const char* kTokenSeparators = " \t\n\v\f\r";
+/// The tokens of a line, split at kTokenSeparators.
 std::vector<std::string> tokensOf(const std::string& line);
+/// The rest of `line` after its first `count` tokens and the separators after them ("" when
+/// nothing follows): a last field that may hold separators, such as a COLMAP image's name.
+std::string afterTokens(const std::string& line, size_t count);
 /// Not empty and not a '#' comment.
 bool isDataLine(const std::string& line);
 

@@ -244,6 +244,26 @@ TEST(CameraFileColmap, HalfTurnsGoThroughEveryQuaternionBranch) {
   expectSamePoses(readCameraFile(dir), f, 1e-15);
 }
 
+TEST(CameraFileColmap, ImageLinesSplitAtEveryWhiteSpaceTheTokensDo) {
+  // The fields split at any white space, a '\r' inside the line included, and the name is the
+  // rest of the line after the ninth field. fuzz_cameras found a line with a '\r' inside
+  // (tests/fuzz/regressions/cameras/colmap_carriage_return_inside_an_image_line): the fields
+  // split there, and the name's search, which skipped only spaces and tabs, ran off the line's
+  // end into std::out_of_range.
+  const std::string dir = scratchDir() + "/whitespace";
+  fs::create_directories(dir);
+  writeFile(dir + "/cameras.txt", "1 PINHOLE 10 10 5 5 5 5\n");
+  writeFile(dir + "/images.txt",
+            "4 1\t0\v0\f0 0\r0 0 1 my image.png\n\n"
+            "6 1 0 0 0\r0 0 0 1 b.png\n\n");
+  const CameraFile f = readCameraFile(dir);
+  ASSERT_EQ(f.images.size(), 2u);
+  EXPECT_EQ(f.imageIds, (std::vector<std::string>{"4", "6"}));
+  EXPECT_EQ(f.images[0].name, "my image.png");
+  EXPECT_EQ(f.images[1].name, "b.png");
+  EXPECT_EQ(f.images[0].worldToCamera, glm::dmat4(1.0));
+}
+
 TEST(CameraFileColmap, MalformedFilesNameTheFileAndTheEntry) {
   const std::string dir = scratchDir();
   const auto textModel = [&](const std::string& name, const std::string& cameras,
