@@ -30,20 +30,26 @@ std::vector<std::pair<int, std::string>> textLines(const std::string& text) {
   return lines;
 }
 
+namespace {
+
+/// Where the token after the one that starts at `pos` starts (npos when none).
+size_t nextTokenStart(const std::string& line, size_t pos) {
+  return line.find_first_not_of(kTokenSeparators, line.find_first_of(kTokenSeparators, pos));
+}
+
+}  // namespace
+
 std::vector<std::string> tokensOf(const std::string& line) {
   std::vector<std::string> tokens;
-  for (size_t begin = line.find_first_not_of(kTokenSeparators); begin != std::string::npos;) {
-    const size_t end = line.find_first_of(kTokenSeparators, begin);
-    tokens.push_back(line.substr(begin, end - begin));
-    begin = line.find_first_not_of(kTokenSeparators, end);
-  }
+  for (size_t begin = line.find_first_not_of(kTokenSeparators); begin != std::string::npos;
+       begin = nextTokenStart(line, begin))
+    tokens.push_back(line.substr(begin, line.find_first_of(kTokenSeparators, begin) - begin));
   return tokens;
 }
 
 std::string afterTokens(const std::string& line, size_t count) {
   size_t pos = line.find_first_not_of(kTokenSeparators);
-  for (size_t k = 0; k < count && pos != std::string::npos; ++k)
-    pos = line.find_first_not_of(kTokenSeparators, line.find_first_of(kTokenSeparators, pos));
+  for (size_t k = 0; k < count && pos != std::string::npos; ++k) pos = nextTokenStart(line, pos);
   return pos == std::string::npos ? std::string() : line.substr(pos);
 }
 
