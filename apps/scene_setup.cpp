@@ -49,7 +49,10 @@ void addSceneOptions(CLI::App& app, SceneOptions& o) {
       "--mesh", o.meshes,
       "Mesh file (.ply, .obj) or procedural:NAME?k=v (e.g. procedural:spheres?tris=2000000);"
       " repeatable. Default: the procedural default scene");
-  app.add_option("--bvh-quality", o.quality, "Embree BVH build quality: low, medium, high")
+  app.add_option("--bvh-quality", o.quality,
+                 "Embree BVH build quality: low, medium, high (high adds spatial splits, which "
+                 "Embree leaves out of robust builds: with --robust, the default, high builds "
+                 "what medium does)")
       ->capture_default_str();
   // One option under two names, so an explicit --no-robust counts as given (--robust) and
   // wins over a preset.
