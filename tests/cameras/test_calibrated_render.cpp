@@ -37,7 +37,9 @@
 namespace aperture {
 namespace {
 
+using test::apertureBinary;
 using test::differingAovs;
+using test::runCommand;
 using test::scratchDir;
 using test::writeFile;
 
@@ -68,7 +70,9 @@ const Scene& bunnyScene(const std::string& path) {
   APERTURE_REQUIRE_SHARED_MESH(bunnyPath_, "stanford/bun_zipper.ply"); \
   const Scene& scene = bunnyScene(bunnyPath_)
 
-Framebuffer render(const Scene& scene, const CameraParams& p, int packetWidth = 16) {
+/// Every AOV of the camera `p` on `scene`, traced `packetWidth` rays at a time. Named apart
+/// from test::render, which files sharing this one's unity batch call with an AovMask.
+Framebuffer renderAllAovs(const Scene& scene, const CameraParams& p, int packetWidth = 16) {
   const std::unique_ptr<Camera> camera = makeCamera(p, scene.renderOrigin());
   RenderSettings settings;
   settings.packetWidth = packetWidth;
@@ -229,8 +233,8 @@ TEST(CalibratedRenderColmap, EveryModelReprojectsOntoPixelCentresAndTextEqualsBi
     ASSERT_EQ(text.images[k].name, written.images[k].name);
     ASSERT_TRUE(text.sensors[size_t(text.images[k].sensor)] == sensor);
     const CameraParams p = paramsOfImage(text, k);
-    const Framebuffer fb = render(scene, p);
-    EXPECT_EQ(differingAovs(fb, render(scene, paramsOfImage(binary, k))), "")
+    const Framebuffer fb = renderAllAovs(scene, p);
+    EXPECT_EQ(differingAovs(fb, renderAllAovs(scene, paramsOfImage(binary, k))), "")
         << "COLMAP text and binary must render the same image";
 
     const std::unique_ptr<CameraBase> camera = makeCameraModel(p, glm::dvec3(0.0));
@@ -269,10 +273,10 @@ TEST(CalibratedRenderFold, PixelsPastTheFoldAreMissesAndPixelsJustInsideHit) {
                           PixelCentre::HalfInteger};
   const Frame inside = frameOf({-0.025, 0.09, 0.0}, {-0.1, 0.09, -0.02}, {0, 1, 0});
   const CameraParams p = calibratedCameraParams(sensor, worldToCameraCv(inside));
-  const Framebuffer reference = render(scene, p);
+  const Framebuffer reference = renderAllAovs(scene, p);
   for (int width : {1, 4, 8, 16}) {
     SCOPED_TRACE(width);
-    const Framebuffer fb = width == 16 ? reference : render(scene, p, width);
+    const Framebuffer fb = width == 16 ? reference : renderAllAovs(scene, p, width);
     size_t beyond = 0, rim = 0;
     for (int i = 0; i < kH; ++i)
       for (int j = 0; j < kW; ++j) {
@@ -358,7 +362,7 @@ void expectReprojectsByOwnReading(const Scene& scene, const std::string& path, c
   const CameraFile file = readCameraFile(path);
   EXPECT_EQ(file.format, format);
   ASSERT_EQ(file.images.size(), 1u);
-  const Framebuffer fb = render(scene, paramsOfImage(file, 0));
+  const Framebuffer fb = renderAllAovs(scene, paramsOfImage(file, 0));
   const auto check = [&](Slip slip) {
     return reprojection(
         fb, [&](const glm::dvec3& p) { return expectedRaster(f, k, centreOffset, slip, p); });
@@ -566,7 +570,7 @@ TEST(CalibratedRenderRoundTrip, LectureCameraThroughEveryWriterRendersAsItself) 
     const std::optional<CalibratedView> view = calibratedViewOf(lecture);
     ASSERT_TRUE(view) << label;
     EXPECT_EQ(view->sensor.lens.model(), LensModelId::Pinhole);
-    const Framebuffer reference = render(scene, lecture);
+    const Framebuffer reference = renderAllAovs(scene, lecture);
     EXPECT_GE(hitCount(reference), 500u) << label;
     CameraFile file;
     file.sensors = {view->sensor};
@@ -577,7 +581,7 @@ TEST(CalibratedRenderRoundTrip, LectureCameraThroughEveryWriterRendersAsItself) 
       w.write(file, path);
       const CameraFile back = readCameraFile(path);
       ASSERT_EQ(back.images.size(), 1u);
-      const Framebuffer fb = render(scene, paramsOfImage(back, 0));
+      const Framebuffer fb = renderAllAovs(scene, paramsOfImage(back, 0));
       const RenderDifference d = differenceOf(reference, fb);
       std::printf("[ CalibratedRender ] %-14s %-22s %s\n", w.name, label.c_str(), d.text().c_str());
       EXPECT_EQ(d.pixels, 0u) << w.name << " " << label << ": " << d.text();
@@ -588,7 +592,8 @@ TEST(CalibratedRenderRoundTrip, LectureCameraThroughEveryWriterRendersAsItself) 
     q[2] += 0.5;
     slipped.sensor.lens = Lens(LensModelId::Pinhole, q);
     const RenderDifference d = differenceOf(
-        reference, render(scene, calibratedCameraParams(slipped.sensor, slipped.worldToCamera)));
+        reference,
+        renderAllAovs(scene, calibratedCameraParams(slipped.sensor, slipped.worldToCamera)));
     EXPECT_GT(d.pixels, hitCount(reference) / 2) << "a half-pixel slip: " << d.text();
   }
 }
