@@ -456,6 +456,7 @@ int runBatch(const BatchArgs& a) {
   if (a.dryRun) return printDryRun(plan);
 
   ThreadLimit threads(plan.jobs.scenes.front().threads);
+  const ExrEncodingThreads encoding(threads.threads(), plan.jobs.scenes.front().exr.compression);
   Device device;
   BatchRun run = describeRun(plan, a);
   run.threads = threads.threads();

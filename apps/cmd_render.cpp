@@ -88,6 +88,7 @@ int runRender(const RenderArgs& a) {
   if (given.has("eye") || unframed.worldToCamera || unframed.cameraToWorld) makeCamera(unframed);
 
   ThreadLimit threads(a.render.threads);
+  const ExrEncodingThreads encoding(threads.threads(), exr.compression);
   Device device;
   CameraParams params;
   LoadedScene loaded =

@@ -44,7 +44,9 @@ void addRenderOptions(CLI::App& app, RenderOptions& o) {
       ->capture_default_str();
   app.add_option("--tile", o.tile, "Tile size in pixels: a multiple of 4 in [4, 4096]")
       ->capture_default_str();
-  app.add_option("--threads", o.threads, "Worker threads in [0, 4096] (0 = all cores)")
+  app.add_option("--threads", o.threads,
+                 "Worker threads in [0, 4096] (0 = all cores): rendering, BVH builds and "
+                 "OpenEXR's encoding of the files")
       ->capture_default_str();
 }
 

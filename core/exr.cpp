@@ -14,6 +14,7 @@
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStandardAttributes.h>
 #include <OpenEXR/ImfStringAttribute.h>
+#include <OpenEXR/ImfThreading.h>
 #include <OpenEXR/ImfVecAttribute.h>
 
 #include <cstddef>
@@ -302,6 +303,23 @@ std::string exrCompressionName(ExrCompression c) {
     if (entry.value == c) return entry.name;
   throw Error(cat("invalid EXR compression value ", int(c)));
 }
+
+int exrThreads() { return Imf::globalThreadCount(); }
+
+namespace {
+/// Sets OpenEXR's pool to `threads` (no work when it has that many already); returns the
+/// count it had.
+int setExrThreads(int threads) {
+  const int previous = Imf::globalThreadCount();
+  if (threads != previous) Imf::setGlobalThreadCount(threads);
+  return previous;
+}
+}  // namespace
+
+ExrEncodingThreads::ExrEncodingThreads(int threads, ExrCompression compression)
+    : previous_(setExrThreads(threads > 1 && compression != ExrCompression::None ? threads : 0)) {}
+
+ExrEncodingThreads::~ExrEncodingThreads() { setExrThreads(previous_); }
 
 void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata& meta,
               const ExrOptions& options) {

@@ -43,6 +43,27 @@ struct ExrMetadata {
 void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata& meta,
               const ExrOptions& options = {});
 
+/// The threads of OpenEXR's global pool, which encodes and decodes the chunks of every file
+/// the process writes or reads (0: each file in the thread that writes or reads it).
+int exrThreads();
+
+/// While alive, OpenEXR's pool has `threads` threads for writing files with `compression`:
+/// with zip, the default, encoding is the slowest part of a batch (a 1080p depth,normal image
+/// takes it 0.4 s on one thread), and the pool shares it out (1.46x faster batches on 2
+/// cores, bench/RESULTS.md, twelfth session). None for one thread, and none for an
+/// uncompressed file: there the pool only hands each scanline to another thread, which made a
+/// batch 4 % slower. Restores the count it found. Pixels and file bytes do not depend on it.
+class ExrEncodingThreads {
+ public:
+  ExrEncodingThreads(int threads, ExrCompression compression);
+  ~ExrEncodingThreads();
+  ExrEncodingThreads(const ExrEncodingThreads&) = delete;
+  ExrEncodingThreads& operator=(const ExrEncodingThreads&) = delete;
+
+ private:
+  int previous_;
+};
+
 /// Reads an EXR written by writeExr back into a Framebuffer (AOVs from the channel names;
 /// half channels widened to float; property channels, UINT "face.*" / "vertex.*", in the
 /// file's channel order, which OpenEXR sorts by name). With `meta`, the header comes back as

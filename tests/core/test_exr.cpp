@@ -255,6 +255,54 @@ TEST(Exr, EveryCompressionWritesAReadableFile) {
   }
 }
 
+TEST(Exr, FileBytesDoNotDependOnOpenExrThreads) {
+  // OpenEXR's pool (exrThreads) encodes chunks in parallel and writes them in line order: the
+  // file is the one the writer's thread alone makes. Every compression, lossy ones included.
+  const std::string dir = test::scratchDir();
+  const Framebuffer fb = patterned(96, 80);  // several chunks for every compression
+  for (const char* name :
+       {"none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa", "dwab"}) {
+    SCOPED_TRACE(name);
+    ExrOptions options;
+    options.compression = parseExrCompression(name);
+    const std::string alone = dir + "/" + name + "-alone.exr", pooled = dir + "/" + name + ".exr";
+    {
+      const ExrEncodingThreads none(1, ExrCompression::Zip);
+      ASSERT_EQ(exrThreads(), 0);
+      writeExr(alone, fb, ExrMetadata{}, options);
+    }
+    {
+      const ExrEncodingThreads three(3, ExrCompression::Zip);
+      ASSERT_EQ(exrThreads(), 3);
+      writeExr(pooled, fb, ExrMetadata{}, options);
+    }
+    const std::string bytes = readBytes(alone);
+    EXPECT_FALSE(bytes.empty());
+    EXPECT_TRUE(bytes == readBytes(pooled));
+  }
+}
+
+TEST(Exr, EncodingThreadsGoOnlyToFilesThatEncode) {
+  const int before = exrThreads();
+  {
+    const ExrEncodingThreads zip(3, ExrCompression::Zip);
+    EXPECT_EQ(exrThreads(), 3);
+    {
+      // An uncompressed file: the pool would only pass its scanlines to other threads.
+      const ExrEncodingThreads none(3, ExrCompression::None);
+      EXPECT_EQ(exrThreads(), 0);
+    }
+    EXPECT_EQ(exrThreads(), 3);
+    {
+      // One thread: the writer's own.
+      const ExrEncodingThreads one(1, ExrCompression::Piz);
+      EXPECT_EQ(exrThreads(), 0);
+    }
+    EXPECT_EQ(exrThreads(), 3);
+  }
+  EXPECT_EQ(exrThreads(), before);
+}
+
 TEST(Exr, CompressionIsRecordedInTheHeader) {
   const std::string dir = test::scratchDir();
   const Framebuffer fb = patterned(8, 8);
