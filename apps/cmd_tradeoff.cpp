@@ -109,6 +109,7 @@ int runTradeoff(const TradeoffArgs& a) {
   TradeoffConfig c = tradeoffConfig(a);
   imageCodec();  // it compares images: a missing plugin fails before the first render
   ThreadLimit threads(a.render.threads);
+  c.encodeThreads = threads.threads();
   c.camera = framedCamera(a);
   const std::vector<TradeoffRow> rows = runWithTempDir(c, a.outDir);
   writeReports(a, c, threads.threads(), rows);

@@ -150,6 +150,7 @@ class Study {
         (fs::path(c_.tempDir) / cat("tradeoff-", exrCompressionName(exr.compression),
                                     exr.halfColor ? "-half" : "-float", ".exr"))
             .string();
+    const ExrEncodingThreads encoding(c_.encodeThreads, exr.compression);
     std::vector<double> times;
     for (int k = 0; k < std::max(1, c_.writes); ++k) {
       const auto start = Clock::now();

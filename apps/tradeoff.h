@@ -52,6 +52,8 @@ struct TradeoffConfig {
   ExrOptions baseExr;
   int referenceSpp = 256;
   int frames = 3, warmup = 1, writes = 3;
+  /// The threads each file is encoded with, as `render` and `batch` do (ExrEncodingThreads).
+  int encodeThreads = 0;
   bool quick = false;        ///< fewer values per knob, no combinations
   bool combinations = true;  ///< also a few spp x BVH-quality combinations
   std::string tempDir;       ///< where the EXR knobs write their files
