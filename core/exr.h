@@ -49,7 +49,7 @@ int exrThreads();
 
 /// While alive, OpenEXR's pool has `threads` threads for writing files with `compression`:
 /// with zip, the default, encoding is the slowest part of a batch (a 1080p depth,normal image
-/// takes it 0.4 s on one thread), and the pool shares it out (1.46x faster batches on 2
+/// takes it 0.4 s on one thread), and the pool shares it out (1.5x faster batches on 2
 /// cores, bench/RESULTS.md, twelfth session). None for one thread, and none for an
 /// uncompressed file: there the pool only hands each scanline to another thread, which made a
 /// batch 4 % slower. Restores the count it found. Pixels and file bytes do not depend on it.
