@@ -307,11 +307,11 @@ std::string exrCompressionName(ExrCompression c) {
 int exrThreads() { return Imf::globalThreadCount(); }
 
 namespace {
-/// Sets OpenEXR's pool to `threads` (no work when it has that many already); returns the
-/// count it had.
+/// Sets OpenEXR's pool to `threads` (OpenEXR does nothing when it has that many already:
+/// 0.06 us a call); returns the count it had.
 int setExrThreads(int threads) {
   const int previous = Imf::globalThreadCount();
-  if (threads != previous) Imf::setGlobalThreadCount(threads);
+  Imf::setGlobalThreadCount(threads);
   return previous;
 }
 }  // namespace
