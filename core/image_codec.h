@@ -15,14 +15,17 @@ namespace aperture {
 /// The sample types the codec writes and converts to.
 enum class SampleType { UInt8, UInt16, UInt32, Float };
 
-/// An image to encode: width x height pixels of `channels` interleaved samples of `type`, and
-/// the file's string attributes by OpenImageIO name ("ImageDescription", "oiio:ColorSpace",
-/// "compression").
+/// An image to encode: width x height pixels of `channels` interleaved samples of `type`, the
+/// file's string attributes by OpenImageIO name ("ImageDescription", "oiio:ColorSpace",
+/// "compression"), and the writer's integer settings ("png:compressionLevel", "png:filter"),
+/// which say how to encode and are not stored (OpenImageIO's PNG writer stores a string one as
+/// a tEXt chunk).
 struct ImageToEncode {
   int width = 0, height = 0, channels = 0;
   SampleType type = SampleType::UInt8;
   const void* pixels = nullptr;
   std::vector<std::pair<std::string, std::string>> attributes;
+  std::vector<std::pair<std::string, int>> settings;
 };
 
 /// What an image file is: size, channels, sample type, format and description.
@@ -61,7 +64,7 @@ class ImageCodec {
 
 /// The plugin's entry point, extern "C" in libaperture_oiio.so (declared below the
 /// namespace); the version in its name changes with any change to ImageCodec.
-#define APERTURE_IMAGE_CODEC_ENTRY aperture_image_codec_v1
+#define APERTURE_IMAGE_CODEC_ENTRY aperture_image_codec_v2
 #define APERTURE_IMAGE_CODEC_NAME_OF(entry) #entry
 #define APERTURE_IMAGE_CODEC_NAME(entry) APERTURE_IMAGE_CODEC_NAME_OF(entry)
 inline constexpr const char* kImageCodecEntry =

@@ -47,6 +47,7 @@ class OiioCodec final : public ImageCodec {
     const OIIO::TypeDesc type = typeDescOf(image.type);
     OIIO::ImageSpec spec(image.width, image.height, image.channels, type);
     for (const auto& [name, value] : image.attributes) spec.attribute(name, value);
+    for (const auto& [name, value] : image.settings) spec.attribute(name, value);
     spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
     // libtiff fails to write the Exif directory into memory and, with a colour space set, the
     // file is left without its ImageLength tag; aperture's images need no Exif data.

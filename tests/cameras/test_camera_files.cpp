@@ -465,7 +465,7 @@ TEST(CameraFileNerf, ImageSizeComesFromTheImageFile) {
   {
     const std::vector<unsigned char> pixels(7 * 5 * 3, 128);
     const std::vector<unsigned char> png =
-        encodeImage("r_0.png", {7, 5, 3, SampleType::UInt8, pixels.data(), {}});
+        encodeImage("r_0.png", {7, 5, 3, SampleType::UInt8, pixels.data(), {}, {}});
     writeFile(dir + "/train/r_0.png", std::string(png.begin(), png.end()));
   }
   const std::string identity = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";

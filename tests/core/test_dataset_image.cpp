@@ -3,12 +3,15 @@
 // parse of the PNG header for PNG16 (written through OpenImageIO), byte-level parses of the
 // PFM and NPY layouts written here from the format descriptions, OpenImageIO for TIFF.
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <limits>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "core/dataset_image.h"
 #include "core/error.h"
@@ -189,6 +192,61 @@ TEST(DatasetPng16, MillimetresWithZeroForMissesAndOutOfRange) {
   EXPECT_EQ(readUint16WithOiio(path, &w, &h), expected);
   EXPECT_EQ(w, 4);
   EXPECT_EQ(h, 3);
+}
+
+/// The chunks of a PNG file after its signature, in order: type and data (by hand from the
+/// PNG layout: length, type, data, CRC).
+std::vector<std::pair<std::string, std::string>> pngChunks(const std::string& bytes) {
+  std::vector<std::pair<std::string, std::string>> chunks;
+  for (size_t at = 8; at + 12 <= bytes.size();) {
+    const size_t length = bigEndianAt(bytes, at);
+    chunks.emplace_back(bytes.substr(at + 4, 4), bytes.substr(at + 8, length));
+    at += 12 + length;
+  }
+  return chunks;
+}
+
+/// The filter type that starts each row of a 16-bit grey PNG's image data: its IDAT chunks
+/// joined and inflated by zlib, rows of 1 + 2·width bytes.
+std::vector<int> rowFilterTypes(const std::string& bytes, int width, int height) {
+  std::string compressed;
+  for (const auto& [type, data] : pngChunks(bytes))
+    if (type == "IDAT") compressed += data;
+  const size_t stride = 1 + 2 * size_t(width);
+  std::vector<unsigned char> rows(stride * size_t(height));
+  uLongf size = uLongf(rows.size());
+  EXPECT_EQ(uncompress(rows.data(), &size, reinterpret_cast<const Bytef*>(compressed.data()),
+                       uLong(compressed.size())),
+            Z_OK);
+  EXPECT_EQ(size, rows.size());
+  std::vector<int> filters;
+  for (int row = 0; row < height; ++row) filters.push_back(rows[size_t(row) * stride]);
+  return filters;
+}
+
+TEST(DatasetPng16, EveryRowUpFilteredAndNoSettingStored) {
+  // Depths that climb along each row, each row offset from the one above by a different step:
+  // libpng's own choice filters every row by Sub here (shown by hand by leaving out the
+  // writer's setting: 64 of 64 rows Sub), so the check below fails when the setting is lost;
+  // passed as a string attribute instead, it lands in a tEXt chunk and fails the last check.
+  const int w = 96, h = 64;
+  std::vector<float> depth(size_t(w) * size_t(h));
+  for (int i = 0; i < h; ++i)
+    for (int j = 0; j < w; ++j)
+      depth[size_t(i) * size_t(w) + size_t(j)] =
+          1.0f + 0.013f * float(j) + 0.1f * float((i * 7919) % 17);
+  const std::string path = scratchDir() + "/up.png";
+  writeDatasetImage(path, DatasetFormat::Png16, ImageView{w, h, 1, depth.data(), nullptr}, "depth");
+  const std::string bytes = readFile(path);
+  const std::vector<int> filters = rowFilterTypes(bytes, w, h);
+  ASSERT_EQ(filters.size(), size_t(h));
+  for (int row = 0; row < h; ++row) EXPECT_EQ(filters[size_t(row)], 2) << "row " << row;  // Up
+  // The one text chunk is the description; encoder settings are not written into the file.
+  for (const auto& [type, data] : pngChunks(bytes)) {
+    if (type == "tEXt" || type == "zTXt" || type == "iTXt") {
+      EXPECT_EQ(data.substr(0, data.find('\0')), "Description") << data;
+    }
+  }
 }
 
 TEST(DatasetPng16, DepthScaleAndBadScales) {

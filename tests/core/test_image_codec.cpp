@@ -21,7 +21,7 @@ TEST(ImageCodec, EncodedPngReadsBackWithItsSizeAndPixels) {
   const int w = 5, h = 3;
   std::vector<unsigned char> rgb(size_t(w * h * 3));
   for (size_t k = 0; k < rgb.size(); ++k) rgb[k] = static_cast<unsigned char>(17 * k);
-  const ImageToEncode image{w, h, 3, SampleType::UInt8, rgb.data(), {}};
+  const ImageToEncode image{w, h, 3, SampleType::UInt8, rgb.data(), {}, {}};
   std::vector<unsigned char> bytes;
   std::string error;
   ASSERT_TRUE(imageCodec().encode("x.png", image, bytes, error)) << error;
@@ -72,7 +72,8 @@ TEST(ImageCodec, ACodecLinkedInIsTakenOverThePlugin) {
   std::vector<unsigned char> bytes;
   std::string error;
   const unsigned char pixel[3] = {1, 2, 3};
-  ASSERT_TRUE(imageCodec().encode("x.png", {1, 1, 3, SampleType::UInt8, pixel, {}}, bytes, error))
+  ASSERT_TRUE(
+      imageCodec().encode("x.png", {1, 1, 3, SampleType::UInt8, pixel, {}, {}}, bytes, error))
       << error;
 #ifdef APERTURE_SANITIZED
   EXPECT_FALSE(sharedObjectLoaded("libaperture_oiio.so"));
@@ -86,8 +87,8 @@ TEST(ImageCodec, FailuresReturnAnErrorInsteadOfThrowing) {
   std::vector<unsigned char> bytes;
   std::string error;
   const unsigned char pixel[3] = {0, 0, 0};
-  EXPECT_FALSE(imageCodec().encode("x.unknown-extension", {1, 1, 3, SampleType::UInt8, pixel, {}},
-                                   bytes, error));
+  EXPECT_FALSE(imageCodec().encode("x.unknown-extension",
+                                   {1, 1, 3, SampleType::UInt8, pixel, {}, {}}, bytes, error));
   EXPECT_NE(error.find("no image writer"), std::string::npos) << error;
   ImageFileInfo info;
   error.clear();
