@@ -68,37 +68,37 @@ bool formatHolds(DatasetFormat format, int channels, bool isFloat) {
 
 // --- Little-endian byte output (PFM with scale −1, NPY '<f4' / '<u4') -------------------------
 
-uint32_t valueBits(const ImageView& image, size_t index) {
-  if (image.u32) return image.u32[index];
-  uint32_t bits;
-  std::memcpy(&bits, &image.f32[index], sizeof bits);
-  return bits;
-}
-
-/// Appends pixel rows [row, row + 1) of `image` in their interleaved order.
-void appendRow(std::string& out, const ImageView& image, int row) {
+/// `header`, then the rows of `image` in the order `rowAt(k)` gives for k = 0 .. height − 1,
+/// each row's samples interleaved as 4-byte little-endian words.
+template <class RowAt>
+std::vector<unsigned char> headerAndRows(const std::string& header, const ImageView& image,
+                                         RowAt rowAt) {
   const size_t perRow = size_t(image.width) * size_t(image.channels);
-  const size_t first = size_t(row) * perRow;
-  for (size_t k = 0; k < perRow; ++k) appendLittleEndian(out, valueBits(image, first + k));
+  const void* samples =
+      image.u32 ? static_cast<const void*>(image.u32) : static_cast<const void*>(image.f32);
+  std::vector<unsigned char> out(header.size() + 4 * perRow * size_t(image.height));
+  std::memcpy(out.data(), header.data(), header.size());
+  unsigned char* at = out.data() + header.size();
+  for (int k = 0; k < image.height; ++k, at += 4 * perRow)
+    storeLittleEndianWords(
+        static_cast<const unsigned char*>(samples) + 4 * perRow * size_t(rowAt(k)), perRow, at);
+  return out;
 }
 
 /// PFM (Netpbm's description): "PF" (3 channels) or "Pf" (1), "W H", the scale whose negative
 /// sign means little-endian, each followed by one newline; then the raster, rows from the
 /// bottom of the image to the top.
-std::string encodePfm(const ImageView& image) {
-  std::string out =
+std::vector<unsigned char> encodePfm(const ImageView& image) {
+  const std::string header =
       cat(image.channels == 3 ? "PF" : "Pf", "\n", image.width, " ", image.height, "\n-1.0\n");
-  for (int row = image.height - 1; row >= 0; --row) appendRow(out, image, row);
-  return out;
+  return headerAndRows(header, image, [&](int k) { return image.height - 1 - k; });
 }
 
 /// NPY (the header of core/npy.h), then the array in C order.
-std::string encodeNpy(const ImageView& image) {
+std::vector<unsigned char> encodeNpy(const ImageView& image) {
   std::vector<uint64_t> shape = {uint64_t(image.height), uint64_t(image.width)};
   if (image.channels != 1) shape.push_back(uint64_t(image.channels));
-  std::string out = npyHeader(image.u32 ? "<u4" : "<f4", shape);
-  for (int row = 0; row < image.height; ++row) appendRow(out, image, row);
-  return out;
+  return headerAndRows(npyHeader(image.u32 ? "<u4" : "<f4", shape), image, [](int k) { return k; });
 }
 
 // --- Through the image codec (PNG16, TIFF), encoded in memory ------------------------------
@@ -302,18 +302,15 @@ namespace {
 std::vector<unsigned char> encodedImage(const std::string& path, DatasetFormat format,
                                         const ImageView& image, double scale,
                                         DatasetWriteStats& stats) {
-  const auto bytesOf = [](const std::string& text) {
-    return std::vector<unsigned char>(text.begin(), text.end());
-  };
   switch (format) {
     case DatasetFormat::Png16:
       return encodePng16(path, image, scale, &stats.outOfRange);
     case DatasetFormat::Tiff:
       return encodeTiff(path, image);
     case DatasetFormat::Pfm:
-      return bytesOf(encodePfm(image));
+      return encodePfm(image);
     case DatasetFormat::Npy:
-      return bytesOf(encodeNpy(image));
+      return encodeNpy(image);
   }
   throw Error(cat("invalid dataset format value ", int(format)));
 }
