@@ -80,18 +80,18 @@ TEST(WatertightDefault, HeaderRecordsTheModeAndExplicitChoicesWinOverPresets) {
 }
 
 TEST(WatertightDefault, BenchAndItsBaselineReportTheModeThatRan) {
-  const std::string json = scratchDir() + "/b.json";
+  const std::string jsonPath = scratchDir() + "/b.json";
   for (const char* flag : {"", " --no-robust"}) {
     std::string out;
     ASSERT_EQ(runCommand(apertureBinary() +
                              " bench --quiet --mesh procedural:sphere --size 16,16 --frames 1 "
                              "--warmup 0 --builds 1 --baseline --json " +
-                             json + flag,
+                             jsonPath + flag,
                          &out),
               0)
         << out;
     const bool robust = std::string(flag).empty();
-    const auto j = nlohmann::json::parse(std::ifstream(json));
+    const auto j = nlohmann::json::parse(std::ifstream(jsonPath));
     EXPECT_EQ(j["config"]["robust"], robust) << flag;
     EXPECT_EQ(j["baseline_robust"], robust) << flag;
     EXPECT_NE(out.find(robust ? "BVH high robust" : "BVH high not robust"), std::string::npos)
