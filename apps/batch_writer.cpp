@@ -1,5 +1,6 @@
 #include "apps/batch_writer.h"
 
+#include <algorithm>
 #include <exception>
 
 #include "core/image.h"
@@ -19,13 +20,22 @@ void writeImageFiles(ImageResult& r, const RenderedView& view, const ExrMetadata
   }
 }
 
-ImageWriter::ImageWriter(WriteFn write, bool threaded, size_t capacity)
+int writerThreadsFor(int renderThreads, uint64_t frameBytes) {
+  constexpr uint64_t kWrittenFramebufferBytes = uint64_t(1) << 30;
+  const uint64_t byMemory = kWrittenFramebufferBytes / std::max<uint64_t>(frameBytes, 1);
+  return int(
+      std::max<uint64_t>(1, std::min<uint64_t>(uint64_t(std::max(renderThreads, 1)), byMemory)));
+}
+
+int framebuffersAlive(int writers) { return writers > 0 ? 2 + writers : 1; }
+
+ImageWriter::ImageWriter(WriteFn write, int threads, size_t capacity)
     : write_(std::move(write)), capacity_(capacity) {
-  if (threaded) thread_ = std::thread([this] { loop(); });
+  for (int k = 0; k < threads; ++k) threads_.emplace_back([this] { loop(); });
 }
 
 void ImageWriter::push(Task task) {
-  if (!thread_.joinable()) {
+  if (threads_.empty()) {
     write_(task);
     return;
   }
@@ -36,13 +46,14 @@ void ImageWriter::push(Task task) {
 }
 
 void ImageWriter::finish() {
-  if (!thread_.joinable()) return;
+  if (threads_.empty()) return;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     closed_ = true;
   }
-  ready_.notify_one();
-  thread_.join();
+  ready_.notify_all();
+  for (std::thread& t : threads_) t.join();
+  threads_.clear();
 }
 
 void ImageWriter::loop() {

@@ -92,15 +92,30 @@ bool anyWritesThroughImageCodec(const JobFile& jobs) {
   });
 }
 
-SceneFootprint footprintOf(const Job& job) {
+/// Pixels of the job's largest image.
+uint64_t largestImagePixels(const Job& job) {
+  uint64_t pixels = 0;
+  for (const JobImage& image : job.images)
+    pixels = std::max(pixels, uint64_t(image.params.width) * uint64_t(image.params.height));
+  return pixels;
+}
+
+/// The writer threads of the job's images (writerThreadsFor over its largest framebuffer, for
+/// the batch's `threads`); 0 with --no-overlap, where each image is written inline.
+int writersOf(const Job& job, int threads, bool overlap) {
+  if (!overlap) return 0;
+  return writerThreadsFor(threads, largestImagePixels(job) * framebufferBytesPerPixel(job.aovs));
+}
+
+SceneFootprint footprintOf(const Job& job, int writers) {
   SceneFootprint f;
   for (const MeshPlacement& m : job.meshes)
     if (std::find(f.specs.begin(), f.specs.end(), m.spec) == f.specs.end())
       f.specs.push_back(m.spec);
-  for (const JobImage& image : job.images)
-    f.pixels = std::max(f.pixels, uint64_t(image.params.width) * uint64_t(image.params.height));
-  // Two framebuffers live at once: the image being rendered and the one being written.
-  f.bytesPerPixel = framebufferBytesPerPixel(job.aovs) * 2 + (job.previewPattern.empty() ? 0 : 4);
+  f.pixels = largestImagePixels(job);
+  // The framebuffers alive at once, and a preview (4 bytes a pixel) in each writer.
+  f.bytesPerPixel = framebufferBytesPerPixel(job.aovs) * uint64_t(framebuffersAlive(writers)) +
+                    (job.previewPattern.empty() ? 0 : 4 * uint64_t(std::max(writers, 1)));
   return f;
 }
 
@@ -116,11 +131,14 @@ MemoryEstimate pairEstimate(const SceneFootprint& a, const SceneFootprint& b) {
 /// "scenes", two consecutive scenes are alive at once (one rendering, the next loading): the
 /// estimate is that of the largest consecutive pair. The image codec, once a scene loads it,
 /// stays: it counts in every estimate when any scene writes through it.
-void checkJobMemory(const JobFile& jobs, const std::string& maxMemory) {
+void checkJobMemory(const JobFile& jobs, const std::string& maxMemory, bool overlap) {
   const uint64_t limit = parseMemoryLimit("--max-memory", maxMemory);
   if (!limit) return;
+  // The batch runs on the first scene's threads (runBatch).
+  const int threads = resolvedThreads(jobs.scenes.front().threads);
   std::vector<SceneFootprint> footprints;
-  for (const Job& job : jobs.scenes) footprints.push_back(footprintOf(job));
+  for (const Job& job : jobs.scenes)
+    footprints.push_back(footprintOf(job, writersOf(job, threads, overlap)));
   const uint64_t codecBytes = anyWritesThroughImageCodec(jobs) ? kImageCodecBytes : 0;
   // The tables' cache serves every scene: the job's cameras together.
   std::vector<CameraParams> cameras;
@@ -225,7 +243,7 @@ BatchPlan planBatch(const BatchArgs& a) {
   plan.shard = parseShard(a.shard);
   if (a.files.empty()) checkDeepHasLayers(a.cameraFile.deep, a.cameraFile.layers);
   plan.jobs = a.files.empty() ? cameraFileJobFile(a.cameraFile) : readJobFile(a.files.front());
-  checkJobMemory(plan.jobs, a.maxMemory);
+  checkJobMemory(plan.jobs, a.maxMemory, !a.noOverlap);
   // A missing image codec plugin fails here, before anything is loaded or rendered.
   if (anyWritesThroughImageCodec(plan.jobs)) imageCodec();
   if (!a.quiet && !plan.shard.origin.empty())
@@ -277,10 +295,11 @@ int printDryRun(const BatchPlan& plan) {
   return 0;
 }
 
-/// Renders the scene's images not skipped, handing each to the writer (drained before
-/// returning, so the scene can be released); returns the render seconds.
+/// Renders the scene's images not skipped, handing each to the writer threads (drained before
+/// returning, so the scene can be released), as many as writersOf gives for the batch's
+/// `threads`; returns the render seconds.
 double renderImages(BatchPlan& plan, const SceneImages& images, const LoadedScene& scene,
-                    const BatchArgs& a, Progress& progress) {
+                    const BatchArgs& a, int threads, Progress& progress) {
   const Job& job = plan.jobs.scenes[images.scene];
   const PreviewOptions preview = batchPreviewOptions(job, scene.worldLo, scene.worldHi);
   double renderSeconds = 0;
@@ -294,7 +313,7 @@ double renderImages(BatchPlan& plan, const SceneImages& images, const LoadedScen
     task.view = RenderedView();
     progress.finished(*task.result);
   };
-  ImageWriter writer(write, !a.noOverlap, 1);
+  ImageWriter writer(write, writersOf(job, threads, !a.noOverlap), 1);
   for (size_t i = images.first; i < images.last; ++i) {
     ImageResult& r = plan.results[i];
     if (r.status == ImageStatus::Skipped) continue;
@@ -445,7 +464,7 @@ void renderScenes(BatchPlan& plan, const BatchArgs& a, const Device& device, Bat
       return;
     }
     recordLoadedScene(report, *s.loaded);
-    run.renderSeconds += renderImages(plan, images, *s.loaded, a, progress);
+    run.renderSeconds += renderImages(plan, images, *s.loaded, a, run.threads, progress);
   };
   pipelineScenes(pending.size(), load, render);
   run.elapsedSeconds = start ? secondsSince(*start) : 0;
@@ -554,8 +573,9 @@ Command addBatchCommand(CLI::App& app) {
       ->type_name("OUT.json");
   sub->add_flag("--quiet", args->quiet, "No progress, log lines or summary table");
   sub->add_option("--max-memory", args->maxMemory,
-                  "Refuse the job before loading when its estimated memory (meshes, BVH, two "
-                  "framebuffers) exceeds BYTES (suffix K, M, G, T) or, with 'auto', MemAvailable");
+                  "Refuse the job before loading when its estimated memory (meshes, BVH, the "
+                  "framebuffers: one rendering, one waiting, one in each writer thread) exceeds "
+                  "BYTES (suffix K, M, G, T) or, with 'auto', MemAvailable");
   sub->add_flag("--dry-run", args->dryRun,
                 "Validate the job and list the images (with --resume: what is stale); render "
                 "nothing");

@@ -75,6 +75,12 @@ struct ThreadLimitImpl {
   std::unique_ptr<tbb::global_control> control;
 };
 
+int resolvedThreads(int n) {
+  return n > 0
+             ? n
+             : int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+}
+
 ThreadLimit::ThreadLimit(int n) : impl_(std::make_unique<ThreadLimitImpl>()) {
   if (n > 0)
     impl_->control = std::make_unique<tbb::global_control>(

@@ -29,6 +29,9 @@ void addDeepOption(CLI::App& app, bool& deep, const std::string& group = "");
 /// Throws Error naming --deep and --layers when --deep is given without --layers.
 void checkDeepHasLayers(bool deep, const std::optional<int>& layers);
 
+/// The threads a ThreadLimit(n) gives: n, or with n = 0 all the cores TBB may use.
+int resolvedThreads(int n);
+
 /// Limits TBB (and so Embree's builder) to n threads while alive; n = 0 keeps all cores.
 class ThreadLimit {
  public:

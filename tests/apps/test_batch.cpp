@@ -19,6 +19,7 @@
 #include <set>
 #include <sstream>
 
+#include "apps/batch_writer.h"
 #include "apps/job.h"
 #include "apps/resume.h"
 #include "apps/shard.h"
@@ -28,6 +29,7 @@
 #include "core/error.h"
 #include "core/exr.h"
 #include "core/image.h"
+#include "core/limits.h"
 #include "tests/apps/unwritable_dir.h"
 #include "tests/support.h"
 
@@ -1318,4 +1320,42 @@ TEST(Batch, APreviewThatFailsFailsItsFrameWithoutAnExr) {
                 "preview: '" + dir + "/previews/blocked/0.png': cannot create directory"),
             std::string::npos)
       << summary["images"][1]["error"];
+}
+
+TEST(Batch, MaxMemoryCountsAFramebufferInEveryWriterThread) {
+  // Framebuffers dominate this job (a 2000x2000 image of every AOV, a small mesh), so its
+  // estimate is its render phase. With the writer threads overlapping the render, one
+  // framebuffer renders, one waits and one is written by each writer thread; with --no-overlap
+  // one exists. A limit between the two estimates refuses the first and accepts the second.
+  const std::string dir = scratchDir();
+  json j = baseJob();
+  j["size"] = {2000, 2000};
+  j["aovs"] = "all";
+  j["performance"] = {{"threads", 2}};
+  const std::string jobPath = writeJob(dir, j);
+  const uint64_t pixels = 2000 * 2000;
+  const uint64_t perPixel = framebufferBytesPerPixel(parseAovSet("all"));
+  const int writers = app::writerThreadsFor(2, pixels * perPixel);
+  ASSERT_EQ(writers, 2);  // 2000x2000 of every AOV is far below the 1 GiB the writers may hold
+  const auto estimate = [&](int alive) {
+    return estimateMemory({"procedural:sphere"}, pixels, 1, AovSet{}, perPixel * uint64_t(alive))
+        .total();
+  };
+  const uint64_t overlapped = estimate(app::framebuffersAlive(writers));
+  const uint64_t inline1 = estimate(app::framebuffersAlive(0));
+  ASSERT_EQ(app::framebuffersAlive(writers), 4);
+  ASSERT_GT(overlapped, inline1 + 3 * pixels * perPixel - 4096);
+  const std::string limit = std::to_string((overlapped + inline1) / 2);
+  std::string out;
+  EXPECT_EQ(
+      runCommand(apertureBinary() + " batch --dry-run --max-memory " + limit + " " + quote(jobPath),
+                 &out),
+      1)
+      << out;
+  EXPECT_NE(out.find("--max-memory"), std::string::npos) << out;
+  EXPECT_EQ(runCommand(apertureBinary() + " batch --dry-run --no-overlap --max-memory " + limit +
+                           " " + quote(jobPath),
+                       &out),
+            0)
+      << out;
 }
