@@ -73,8 +73,8 @@ for part in "${parts[@]}"; do
       ;;
     tsan)
       build tsan thread "-O0 -g -DNDEBUG"
-      # The frame loop (tiles over TBB workers) and batch (render thread + writer thread).
-      # tests/tsan.supp covers reports inside the uninstrumented TBB and Embree only.
+      # The frame loop (tiles over TBB workers) and batch (render thread + writer threads).
+      # tests/tsan.supp covers reports inside the uninstrumented TBB, Embree and OpenImageIO only.
       TSAN_OPTIONS="halt_on_error=1:exitcode=88:second_deadlock_stack=1:suppressions=$PWD/tests/tsan.supp" \
         run_shards tsan --gtest_filter='Render*:PerspectiveShift.*:Batch*:Cli.PacketWidthsAndThreads*'
       ;;
