@@ -27,7 +27,7 @@ int writerThreadsFor(int renderThreads, uint64_t frameBytes) {
       std::max<uint64_t>(1, std::min<uint64_t>(uint64_t(std::max(renderThreads, 1)), byMemory)));
 }
 
-int framebuffersAlive(int writers) { return writers > 0 ? 2 + writers : 1; }
+int framebuffersAlive(int writers) { return writers > 0 ? 1 + int(kImagesWaiting) + writers : 1; }
 
 ImageWriter::ImageWriter(WriteFn write, int threads, size_t capacity)
     : write_(std::move(write)), capacity_(capacity) {

@@ -31,9 +31,12 @@ void writeImageFiles(ImageResult& r, const RenderedView& view, const ExrMetadata
 /// being written, and at least one.
 int writerThreadsFor(int renderThreads, uint64_t frameBytes);
 
+/// Rendered images a batch's ImageWriter holds waiting for a writer thread (its capacity).
+inline constexpr size_t kImagesWaiting = 1;
+
 /// Framebuffers alive at once in a batch whose ImageWriter has `writers` threads (0: it
-/// writes inline): the image being rendered, one waiting (the writer's capacity) and one in
-/// each writer thread. --max-memory counts this many.
+/// writes inline): the image being rendered, kImagesWaiting waiting and one in each writer
+/// thread. --max-memory counts this many.
 int framebuffersAlive(int writers);
 
 /// Encodes and writes rendered images on `threads` threads, each taking the next image in

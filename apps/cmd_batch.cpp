@@ -313,7 +313,7 @@ double renderImages(BatchPlan& plan, const SceneImages& images, const LoadedScen
     task.view = RenderedView();
     progress.finished(*task.result);
   };
-  ImageWriter writer(write, writersOf(job, threads, !a.noOverlap), 1);
+  ImageWriter writer(write, writersOf(job, threads, !a.noOverlap), kImagesWaiting);
   for (size_t i = images.first; i < images.last; ++i) {
     ImageResult& r = plan.results[i];
     if (r.status == ImageStatus::Skipped) continue;

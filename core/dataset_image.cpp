@@ -68,20 +68,20 @@ bool formatHolds(DatasetFormat format, int channels, bool isFloat) {
 
 // --- Little-endian byte output (PFM with scale −1, NPY '<f4' / '<u4') -------------------------
 
-/// `header`, then the rows of `image` in the order `rowAt(k)` gives for k = 0 .. height − 1,
+/// `header`, then the rows of `image`, top to bottom or with `bottomRowFirst` bottom to top,
 /// each row's samples interleaved as 4-byte little-endian words.
-template <class RowAt>
 std::vector<unsigned char> headerAndRows(const std::string& header, const ImageView& image,
-                                         RowAt rowAt) {
+                                         bool bottomRowFirst) {
   const size_t perRow = size_t(image.width) * size_t(image.channels);
-  const void* samples =
-      image.u32 ? static_cast<const void*>(image.u32) : static_cast<const void*>(image.f32);
+  const auto* samples = image.u32 ? reinterpret_cast<const unsigned char*>(image.u32)
+                                  : reinterpret_cast<const unsigned char*>(image.f32);
   std::vector<unsigned char> out(header.size() + 4 * perRow * size_t(image.height));
   std::memcpy(out.data(), header.data(), header.size());
   unsigned char* at = out.data() + header.size();
-  for (int k = 0; k < image.height; ++k, at += 4 * perRow)
-    storeLittleEndianWords(
-        static_cast<const unsigned char*>(samples) + 4 * perRow * size_t(rowAt(k)), perRow, at);
+  for (int k = 0; k < image.height; ++k, at += 4 * perRow) {
+    const int row = bottomRowFirst ? image.height - 1 - k : k;
+    storeLittleEndianWords(samples + 4 * perRow * size_t(row), perRow, at);
+  }
   return out;
 }
 
@@ -91,14 +91,14 @@ std::vector<unsigned char> headerAndRows(const std::string& header, const ImageV
 std::vector<unsigned char> encodePfm(const ImageView& image) {
   const std::string header =
       cat(image.channels == 3 ? "PF" : "Pf", "\n", image.width, " ", image.height, "\n-1.0\n");
-  return headerAndRows(header, image, [&](int k) { return image.height - 1 - k; });
+  return headerAndRows(header, image, true);
 }
 
 /// NPY (the header of core/npy.h), then the array in C order.
 std::vector<unsigned char> encodeNpy(const ImageView& image) {
   std::vector<uint64_t> shape = {uint64_t(image.height), uint64_t(image.width)};
   if (image.channels != 1) shape.push_back(uint64_t(image.channels));
-  return headerAndRows(npyHeader(image.u32 ? "<u4" : "<f4", shape), image, [](int k) { return k; });
+  return headerAndRows(npyHeader(image.u32 ? "<u4" : "<f4", shape), image, false);
 }
 
 // --- Through the image codec (PNG16, TIFF), encoded in memory ------------------------------
