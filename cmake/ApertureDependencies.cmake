@@ -1,12 +1,9 @@
 # Finds every dependency; a missing one stops configuration with the Debian package to install.
-macro(aperture_missing pkg debian)
-  message(FATAL_ERROR "aperture: dependency '${pkg}' not found. On Debian 12 install it with:\n"
-    "  apt-get install ${debian}\n(or run scripts/install-deps.sh, which installs everything)")
-endmacro()
 macro(aperture_require pkg debian)
   find_package(${pkg} ${ARGN} QUIET)
   if(NOT ${pkg}_FOUND)
-    aperture_missing(${pkg} "${debian}")
+    message(FATAL_ERROR "aperture: dependency '${pkg}' not found. On Debian 12 install it with:\n"
+      "  apt-get install ${debian}\n(or run scripts/install-deps.sh, which installs everything)")
   endif()
 endmacro()
 
@@ -17,17 +14,6 @@ aperture_require(OpenImageIO libopenimageio-dev)
 aperture_require(glm libglm-dev)
 aperture_require(nlohmann_json nlohmann-json3-dev)
 aperture_require(CLI11 libcli11-dev)
-# libzip: the zip container of .npz archives, zip64 included (core/npz.cpp); 1.6 added
-# zip_file_set_dostime, which keeps the archives' bytes free of the time they were written.
-# Found through pkg-config: Debian 12's libzip CMake config fails on the zipcmp, zipmerge and
-# ziptool programs it lists, which libzip-dev does not install.
-find_package(PkgConfig QUIET)
-if(PkgConfig_FOUND)
-  pkg_check_modules(libzip QUIET IMPORTED_TARGET libzip>=1.6)
-endif()
-if(NOT libzip_FOUND)
-  aperture_missing(libzip "libzip-dev pkg-config")
-endif()
 find_package(Threads REQUIRED)
 if(APERTURE_BUILD_TESTS)
   aperture_require(GTest "googletest libgtest-dev")

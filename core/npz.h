@@ -1,7 +1,7 @@
 #pragma once
 // NumPy .npz archives (np.savez's layout: a zip of .npy members, stored without compression;
-// zip64 records where a member or the archive passes 4 GiB), written atomically. libzip writes
-// and reads the zip; the .npy header is the one of core/npy.h.
+// zip64 records where a member or the archive passes 4 GiB), written atomically. The .npy
+// header is the one of core/npy.h.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -25,10 +25,18 @@ struct NpzArray {
 NpzArray npzStringArray(const std::string& name, const std::vector<std::string>& strings,
                         std::vector<uint8_t>& storage);
 
+/// How writeNpz lays out the archive.
+struct NpzOptions {
+  /// Zip64 records for every member and the end of the archive even where the sizes and
+  /// offsets fit 32 bits (tests: the zip64 layout without writing 4 GiB).
+  bool forceZip64 = false;
+};
+
 /// Writes `arrays` to `path` as an .npz (atomically: a failure leaves no file). Throws Error
 /// naming the file for a duplicate or empty name, bytes that do not match shape and dtype,
 /// or an I/O failure.
-void writeNpz(const std::string& path, const std::vector<NpzArray>& arrays);
+void writeNpz(const std::string& path, const std::vector<NpzArray>& arrays,
+              const NpzOptions& options = {});
 
 /// One member read back by readNpz: its dtype string, shape and raw little-endian bytes.
 struct NpzMember {
@@ -37,10 +45,9 @@ struct NpzMember {
   std::vector<uint8_t> data;
 };
 
-/// Reads an .npz, zip64 included, with stored members (np.savez, writeNpz) or deflated ones
-/// (np.savez_compressed): name (without ".npy") -> member, in archive order. Throws Error
-/// naming the file and the member for anything malformed. (Tools and tests; NumPy reads
-/// writeNpz's archives too.)
+/// Reads an .npz with stored (uncompressed) members, as writeNpz writes them, zip64 included:
+/// name (without ".npy") -> member, in archive order. Throws Error naming the file and the
+/// member for anything malformed or compressed. (Tools and tests; NumPy reads these too.)
 std::vector<std::pair<std::string, NpzMember>> readNpz(const std::string& path);
 
 }  // namespace aperture

@@ -8,7 +8,6 @@ pkgs=(
   googletest libgtest-dev libbenchmark-dev
   nlohmann-json3-dev libcli11-dev
   libyaml-cpp-dev  # OpenCV FileStorage YAML camera files
-  libzip-dev  # the zip container of .npz archives (writer and reader, zip64), core/npz.cpp
   clang-format  # the Format test enforces .clang-format
   ccache  # scripts/test.sh: its `pip install .` check reuses the objects of the CMake build
   openimageio-tools  # Debian's OpenImageIO CMake config references its binaries

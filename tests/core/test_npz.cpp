@@ -1,9 +1,9 @@
-// .npy headers (core/npy.h) and .npz archives (core/npz.h, through libzip). The archive's bytes
-// are parsed here independently of libzip from the zip format (PKWARE's APPNOTE): signatures,
+// .npy headers (core/npy.h) and .npz archives (core/npz.h). The archive's bytes are parsed
+// here independently of core/npz.cpp from the zip format (PKWARE's APPNOTE): signatures,
 // sizes, offsets, the zip64 fields, and a CRC-32 computed bit by bit (the reflected
 // polynomial 0xEDB88320, no table, no zlib). When a Python with NumPy is found (the project's
 // .venv, or APERTURE_TEST_PYTHON), np.load reads the archives too, and readNpz reads what
-// np.savez and np.savez_compressed write, zip64 records included.
+// np.savez writes, zip64 records included, and refuses np.savez_compressed's by name.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -116,7 +116,7 @@ ParsedArchive parseArchive(const std::string& zip) {
     const uint64_t entries64 = le(zip, record + 32, 8), cdSize64 = le(zip, record + 40, 8),
                    cdOffset64 = le(zip, record + 48, 8);
     EXPECT_EQ(le(zip, record + 24, 8), entries64);
-    EXPECT_TRUE(entries == (entries64 < 0xffffu ? entries64 : 0xffffu)) << entries;
+    EXPECT_TRUE(entries == entries64 || entries == 0xffffu) << entries;
     EXPECT_TRUE(cdSize == cdSize64 || cdSize == 0xffffffffu) << cdSize;
     EXPECT_TRUE(cdOffset == cdOffset64 || cdOffset == 0xffffffffu) << cdOffset;
     entries = entries64;
@@ -146,8 +146,7 @@ ParsedArchive parseArchive(const std::string& zip) {
     EXPECT_EQ(bool(flags & 0x800), hasNonAscii(m.name)) << "UTF-8 flag of " << m.name;
     m.centralZip64 = readZip64Extra(zip.substr(central + 46 + nameLen, extraLen),
                                     {&size, &compressed, &m.localOffset});
-    // Version needed to extract: 1.0 for a stored member, 4.5 with zip64 (APPNOTE 4.4.3).
-    EXPECT_EQ(le(zip, central + 6, 2), m.centralZip64 ? 45u : 10u) << "version needed";
+    EXPECT_EQ(le(zip, central + 6, 2), m.centralZip64 ? 45u : 20u) << "version needed";
     EXPECT_EQ(compressed, size);
     m.size = size;
     central += 46 + nameLen + extraLen + commentLen;
@@ -164,7 +163,7 @@ ParsedArchive parseArchive(const std::string& zip) {
     EXPECT_EQ(zip.substr(local + 30, localName), m.name);
     m.localZip64 = readZip64Extra(zip.substr(local + 30 + localName, localExtra),
                                   {&localSize, &localCompressed});
-    EXPECT_EQ(le(zip, local + 4, 2), m.localZip64 ? 45u : 10u);
+    EXPECT_EQ(le(zip, local + 4, 2), m.localZip64 ? 45u : 20u);
     EXPECT_EQ(localSize, m.size);
     EXPECT_EQ(localCompressed, m.size);
     const size_t data = local + 30 + localName + localExtra;
@@ -331,9 +330,27 @@ TEST(NpzArchive, BytesParsedIndependently) {
   expectRoundTrip(path, f);
 }
 
+TEST(NpzArchive, Zip64Forced) {
+  const Fixture f;
+  const std::string path = test::scratchDir() + "/v64.npz";
+  writeNpz(path, f.arrays, NpzOptions{true});
+  const std::string bytes = test::readFile(path);
+  const ParsedArchive zip = parseArchive(bytes);
+  EXPECT_TRUE(zip.zip64End);
+  for (const ParsedMember& m : zip.members) {
+    EXPECT_TRUE(m.localZip64) << m.name;
+    EXPECT_TRUE(m.centralZip64) << m.name;
+  }
+  // The 32-bit fields hold the 0xFFFFFFFF marker: the first local header's sizes.
+  EXPECT_EQ(le(bytes, 18, 4), 0xffffffffu);
+  EXPECT_EQ(le(bytes, 22, 4), 0xffffffffu);
+  expectMembersMatch(zip, f);
+  expectRoundTrip(path, f);
+}
+
 /// 65536 one-element uint32 arrays "a00000", ... holding their index: one member more than the
-/// end record's 16-bit count holds, so the archive needs the zip64 end record and its locator.
-/// (Zip64 sizes and offsets need a member or an archive past 4 GiB: bench/npz_zip64.sh.)
+/// end record's 16-bit count holds, so the archive needs the zip64 end record and its locator
+/// without being forced to.
 struct ManyMembers {
   static constexpr uint32_t kCount = 65536;
   std::vector<uint32_t> values;
@@ -437,8 +454,7 @@ TEST(NpzArchive, ReadRefusesCorruptMembers) {
   EXPECT_NE(message.find("face_view_count.npy"), std::string::npos) << message;
   EXPECT_NE(message.find("CRC"), std::string::npos) << message;
 
-  // The first central header says deflate (method 8) over stored bytes, and the second one
-  // an unknown method: neither member reads.
+  // The first central header says deflate (method 8), the second one an unknown method.
   std::string deflated = good;
   const size_t central = size_t(le(good, good.size() - 22 + 16, 4));
   deflated[central + 10] = 8;
@@ -446,6 +462,7 @@ TEST(NpzArchive, ReadRefusesCorruptMembers) {
   message = errorOf([&] { readNpz(dir + "/deflate.npz"); });
   EXPECT_NE(message.find(dir + "/deflate.npz"), std::string::npos) << message;
   EXPECT_NE(message.find("face_view_count.npy"), std::string::npos) << message;
+  EXPECT_NE(message.find("compression method 8"), std::string::npos) << message;
   std::string unknown = good;
   const size_t second = central + 46 + zip.members[0].name.size();
   ASSERT_EQ(le(good, second, 4), 0x02014b50u);
@@ -454,7 +471,7 @@ TEST(NpzArchive, ReadRefusesCorruptMembers) {
   message = errorOf([&] { readNpz(dir + "/unknown.npz"); });
   EXPECT_NE(message.find(dir + "/unknown.npz"), std::string::npos) << message;
   EXPECT_NE(message.find("matrix.npy"), std::string::npos) << message;
-  EXPECT_NE(message.find("not supported"), std::string::npos) << message;
+  EXPECT_NE(message.find("compression method 77"), std::string::npos) << message;
 
   test::writeFile(dir + "/short.npz", good.substr(0, good.size() - 30));
   EXPECT_NE(errorOf([&] { readNpz(dir + "/short.npz"); }).find(dir + "/short.npz"),
@@ -489,34 +506,36 @@ TEST(NpzNumpy, NpLoadReadsEveryArray) {
   const ManyMembers many;
   const std::string dir = test::scratchDir();
   writeNpz(dir + "/plain.npz", f.arrays);
+  writeNpz(dir + "/zip64.npz", f.arrays, NpzOptions{true});
   writeNpz(dir + "/many.npz", many.arrays);
   // The expected values are written into the script from the test's own arrays.
   std::string output;
-  const int code =
-      runPython(python, dir,
-                "import sys, zipfile, numpy as np\n"
-                "d = np.load(sys.argv[1])\n"
-                "assert list(d.keys()) == ['face_view_count', 'matrix', 'empty', 'camera_names'], "
-                "list(d.keys())\n"
-                "a = d['face_view_count']\n"
-                "assert a.dtype == np.uint32 and a.tolist() == [7, 0, 4000000000], a\n"
-                "m = d['matrix']\n"
-                "assert m.dtype == np.float64 and m.shape == (2, 2)\n"
-                "assert m.tolist() == [[1.5, -2.25], [1e300, -0.0]], m\n"
-                "assert np.signbit(m[1, 1])\n"
-                "e = d['empty']\n"
-                "assert e.dtype == np.int32 and e.shape == (0,)\n"
-                "n = d['camera_names']\n"
-                "assert n.dtype == np.dtype('<U11'), n.dtype\n"
-                "assert n.tolist() == ['cam0', '\\u03a9mega/1.png'], n.tolist()\n"
-                "assert zipfile.ZipFile(sys.argv[1]).testzip() is None\n"
-                "d = np.load(sys.argv[2])\n"
-                "assert len(d.files) == 65536 and d.files[-1] == 'a65535', d.files[-1]\n"
-                "for k in (0, 1, 65534, 65535):\n"
-                "    assert d[f'a{k:05d}'].tolist() == [k], k\n"
-                "assert zipfile.ZipFile(sys.argv[2]).testzip() is None\n"
-                "print('ok')\n",
-                {dir + "/plain.npz", dir + "/many.npz"}, &output);
+  const int code = runPython(
+      python, dir,
+      "import sys, zipfile, numpy as np\n"
+      "for path in sys.argv[1:3]:\n"
+      "    d = np.load(path)\n"
+      "    assert list(d.keys()) == ['face_view_count', 'matrix', 'empty', 'camera_names'], "
+      "list(d.keys())\n"
+      "    a = d['face_view_count']\n"
+      "    assert a.dtype == np.uint32 and a.tolist() == [7, 0, 4000000000], a\n"
+      "    m = d['matrix']\n"
+      "    assert m.dtype == np.float64 and m.shape == (2, 2)\n"
+      "    assert m.tolist() == [[1.5, -2.25], [1e300, -0.0]], m\n"
+      "    assert np.signbit(m[1, 1])\n"
+      "    e = d['empty']\n"
+      "    assert e.dtype == np.int32 and e.shape == (0,)\n"
+      "    n = d['camera_names']\n"
+      "    assert n.dtype == np.dtype('<U11'), n.dtype\n"
+      "    assert n.tolist() == ['cam0', '\\u03a9mega/1.png'], n.tolist()\n"
+      "    assert zipfile.ZipFile(path).testzip() is None\n"
+      "d = np.load(sys.argv[3])\n"
+      "assert len(d.files) == 65536 and d.files[-1] == 'a65535', d.files[-1]\n"
+      "for k in (0, 1, 65534, 65535):\n"
+      "    assert d[f'a{k:05d}'].tolist() == [k], k\n"
+      "assert zipfile.ZipFile(sys.argv[3]).testzip() is None\n"
+      "print('ok')\n",
+      {dir + "/plain.npz", dir + "/zip64.npz", dir + "/many.npz"}, &output);
   EXPECT_EQ(code, 0) << output;
   EXPECT_NE(output.find("ok"), std::string::npos) << output;
 }
@@ -532,7 +551,7 @@ TEST(NpzNumpy, ReadsWhatNumpyWrites) {
   const Fixture f;
   const std::string dir = test::scratchDir();
   // The fixture's arrays as np.savez (stored members; NumPy gives every local header zip64
-  // sizes), np.savez_compressed (deflated), and np.savez with zipfile's zip64 threshold
+  // sizes), np.savez_compressed (deflated: refused), and np.savez with zipfile's zip64 threshold
   // lowered to 1 byte: the zip64 extra fields and end records NumPy writes for a member
   // past 4 GiB, on a small file.
   std::string output;
@@ -554,10 +573,15 @@ TEST(NpzNumpy, ReadsWhatNumpyWrites) {
   ASSERT_EQ(code, 0) << output;
   EXPECT_FALSE(hasZip64EndRecord(dir + "/savez.npz"));
   EXPECT_TRUE(hasZip64EndRecord(dir + "/zip64.npz"));
-  for (const char* name : {"savez.npz", "compressed.npz", "zip64.npz"}) {
+  for (const char* name : {"savez.npz", "zip64.npz"}) {
     SCOPED_TRACE(name);
     expectRoundTrip(dir + "/" + name, f);
   }
+  // Deflated members are refused, naming the file, the member and the method.
+  const std::string message = errorOf([&] { readNpz(dir + "/compressed.npz"); });
+  EXPECT_NE(message.find(dir + "/compressed.npz"), std::string::npos) << message;
+  EXPECT_NE(message.find("face_view_count.npy"), std::string::npos) << message;
+  EXPECT_NE(message.find("compression method 8"), std::string::npos) << message;
 }
 
 }  // namespace

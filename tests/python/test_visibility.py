@@ -149,7 +149,7 @@ def test_the_command_line_writes_what_python_returns(cli: Path, full_bunny: Path
     done = run_cli(cli, "visibility", "--mesh", str(full_bunny), "--cameras", str(model),
                    "--out", str(out), "--out", str(tmp_path / "vis.ply"), "--quiet")
     assert done.returncode == 0, done.stderr
-    # The zip (libzip's, core/npz.cpp): every member stored, as np.savez writes them, and its
+    # The zip (core/npz.cpp): every member stored, as np.savez writes them, and its
     # CRC-32 right by Python's zipfile.
     with zipfile.ZipFile(out) as z:
         assert z.testzip() is None
