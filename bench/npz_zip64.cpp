@@ -1,6 +1,6 @@
 // Times writeNpz and readNpz (core/npz.h) on an archive past 4 GiB, where the zip64 records are
-// needed: bench/npz_zip64.sh builds this once against libzip (core/npz.cpp) and once against
-// the hand-written zip code it replaced, and runs both alternately.
+// needed: bench/npz_zip64.sh builds this against core/npz.cpp through libzip (c155488) and
+// against the hand-written zip code (9bf1f53, kept), and runs both alternately.
 //
 //   npz_zip64 write PATH LAYOUT BYTES   writes BYTES of float32 data (i × 0.5) as
 //                                       LAYOUT one: one member "data", shape (BYTES / 4,), or
