@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "cameras/calibrated.h"
+#include "cameras/resolve.h"
 #include "core/error.h"
 #include "core/spelling.h"
 

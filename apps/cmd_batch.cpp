@@ -26,6 +26,7 @@
 #include "apps/view.h"
 #include "cameras/calibrated.h"
 #include "cameras/camera_file.h"
+#include "cameras/registry.h"
 #include "core/error.h"
 #include "core/image_codec.h"
 #include "core/limits.h"

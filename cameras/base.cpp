@@ -2,9 +2,7 @@
 
 #include <cmath>
 
-#include "cameras/calibrated.h"
 #include "cameras/conventions.h"
-#include "cameras/models.h"
 #include "core/error.h"
 #include "core/sampling.h"
 #include "core/units.h"
@@ -139,7 +137,6 @@ void resolveImagePlane(const CameraParams& p, double& d, double& vw, double& vh)
 }
 
 CameraFrame frameFromParams(const CameraParams& p) {
-  if (p.worldToCamera || p.cameraToWorld) return frameOfWorldToCamera(calibratedWorldToCamera(p));
   if (p.at && p.dir)
     throw Error("camera: give either a look-at point or a view direction, not both");
   if (p.at) return CameraFrame::fromLookAt(p.eye, *p.at, p.up);
@@ -148,9 +145,12 @@ CameraFrame frameFromParams(const CameraParams& p) {
 }
 
 CameraBase::CameraBase(const CameraParams& p, const glm::dvec3& renderOrigin, const char* typeName)
-    : params_(p), renderOrigin_(renderOrigin), type_(typeName) {
+    : CameraBase(p, frameFromParams(p), renderOrigin, typeName) {}
+
+CameraBase::CameraBase(const CameraParams& p, const CameraFrame& frame,
+                       const glm::dvec3& renderOrigin, const char* typeName)
+    : params_(p), frame_(frame), renderOrigin_(renderOrigin), type_(typeName) {
   requireFinite(renderOrigin, "render origin");
-  frame_ = frameFromParams(p);
   resolveImagePlane(p, d_, vw_, vh_);
   width_ = p.width;
   height_ = p.height;

@@ -2,6 +2,7 @@
 // Shared state of the frame-based cameras: frame, image plane, render origin, pixel mapping,
 // and the packet loop every model uses (PacketCamera).
 #include <cstring>
+#include <initializer_list>
 #include <limits>
 #include <optional>
 #include <string>
@@ -9,12 +10,22 @@
 
 #include "cameras/frame.h"
 #include "cameras/image_window.h"
+#include "cameras/param_schema.h"
 #include "cameras/params.h"
 #include "cameras/view_volume.h"
 #include "core/camera.h"
 #include "core/vector_kernel.h"
 
 namespace aperture {
+
+/// type, size, spp, eye, at, dir, up: read by every model (declared in base.cpp).
+const std::vector<const ParamSpec*>& commonParamSpecs();
+/// The image-plane window of the planar models: d and viewport (declared in base.cpp).
+const ParamSpec& distanceParamSpec();
+const ParamSpec& viewportParamSpec();
+/// The concatenation of spec lists (a model's parameters from shared groups).
+std::vector<const ParamSpec*> joinParamSpecs(
+    std::initializer_list<std::vector<const ParamSpec*>> groups);
 
 /// Image-plane distance and viewport from whichever convention the parameters use:
 /// explicit d + viewport, else focal length + sensor, else fov on fovAxis at d (default d = 1,
@@ -23,14 +34,19 @@ namespace aperture {
 /// Throws Error for d <= 0, viewport <= 0, non-finite values or fov outside (0°, 180°).
 void resolveImagePlane(const CameraParams& p, double& d, double& vw, double& vh);
 
-/// Builds the frame from eye + at / dir + up (errors as CameraFrame).
+/// Builds the frame from eye + at / dir + up (errors as CameraFrame). A model posed otherwise
+/// (the calibrated camera's matrices) passes its own frame to CameraBase.
 CameraFrame frameFromParams(const CameraParams& p);
 
 /// Base for cameras defined by a frame and an image plane. Precomputes the render-space eye,
 /// the axes and the effective shift (user shift plus the architectural tilt shift).
 class CameraBase : public Camera {
  public:
+  /// The frame from eye / at / dir / up (frameFromParams).
   CameraBase(const CameraParams& p, const glm::dvec3& renderOrigin, const char* typeName);
+  /// The frame given (a model with a pose of its own).
+  CameraBase(const CameraParams& p, const CameraFrame& frame, const glm::dvec3& renderOrigin,
+             const char* typeName);
 
   glm::vec3 renderEye() const override { return renderEye_; }
   glm::vec3 viewAxis() const override { return viewAxis_; }

@@ -117,6 +117,16 @@ glm::dmat4 calibratedWorldToCamera(const CameraParams& p) {
   return openCvCameraFromFrame(f.u, f.v, f.w, f.e);
 }
 
+namespace {
+
+/// The frame of the pose matrix when one is given, else of eye / at / dir / up.
+CameraFrame poseFrame(const CameraParams& p) {
+  if (p.worldToCamera || p.cameraToWorld) return frameOfWorldToCamera(calibratedWorldToCamera(p));
+  return frameFromParams(p);
+}
+
+}  // namespace
+
 CameraParams calibratedCameraParams(const CalibratedSensor& sensor,
                                     const glm::dmat4& worldToCameraCv) {
   CameraParams p;
@@ -169,13 +179,6 @@ uint64_t directionTableBytes(const std::vector<CameraParams>& cameras) {
     if (readsDirectionTable(sensor.lens)) sensors.push_back(std::move(sensor));
   }
   return uint64_t(DirectionTable::peakBytes(sensors));
-}
-
-std::optional<CalibratedView> calibratedViewOf(const CameraParams& p) {
-  if (p.type == "calibrated")
-    return CalibratedView{calibratedSensorOf(p), calibratedWorldToCamera(p)};
-  if (p.type != "perspective") return std::nullopt;
-  return calibratedViewOf(makeCameraModel(p)->describe());
 }
 
 namespace {
@@ -273,7 +276,7 @@ APERTURE_VECTOR_KERNEL void pinholeCentres(const CalibratedFrame& f, const Pinho
 class CalibratedCamera final : public CameraBase {
  public:
   CalibratedCamera(const CameraParams& p, const glm::dvec3& renderOrigin)
-      : CameraBase(p, renderOrigin, "calibrated"), sensor_(calibratedSensorOf(p)) {
+      : CameraBase(p, poseFrame(p), renderOrigin, "calibrated"), sensor_(calibratedSensorOf(p)) {
     rejectShift();
     // The pinhole part of the lens as the lecture's image plane at d = 1: u = (x − px) / fx,
     // v = (py − y) / fy for raster (x, y) and the principal point (px, py) in raster terms.

@@ -70,9 +70,13 @@ struct ParamSpec {
   std::string flag() const;  ///< "--fov", "--focal-length", "--camera"
   /// The rule, or the value `defaults` holds (a command's own defaults, e.g. its size).
   std::string defaultText(const CameraParams& defaults = {}) const;
-  /// Help with unit, default, range, choices, conflicts and companions: for --help.
-  std::string describeText(const CameraParams& defaults = {}) const;
 };
+
+/// Throws Error, naming `label` ("--fov", "cameras[2].fov"), the value, the range and the unit,
+/// when `value` lies outside the spec's range, is not finite, is not one of its choices or
+/// (Size) has more than 2^28 pixels. The `type` choice (no fixed list) is left to the
+/// registry.
+void checkParamValue(const ParamSpec& spec, const ParamValue& value, const std::string& label);
 
 /// Text form of a value ("1.5", "0,1,0", "640x480", "true").
 std::string formatParamValue(const ParamValue& v);
@@ -82,7 +86,7 @@ ParamValue parseParamText(const ParamSpec& spec, const std::string& text,
                           const std::string& source);
 
 /// Parameters given by a user, each with where it came from ("--fov", "cameras[2].fov"), in
-/// the order given. Resolve with resolveCameraParams().
+/// the order given. Resolve with resolveCameraParams() (cameras/resolve.h).
 class ParamSet {
  public:
   struct Entry {
@@ -97,35 +101,11 @@ class ParamSet {
   void erase(const std::string& name);
   const std::vector<Entry>& entries() const { return entries_; }
   /// How messages name a parameter: its source when given, else its flag.
-  std::string label(const std::string& name) const;
+  std::string label(const ParamSpec& spec) const;
 
  private:
   std::vector<Entry> entries_;
 };
-
-/// The parameters of `p` that differ from a default-constructed CameraParams, among those its
-/// model reads (type included), each with `source`: resolving them gives `p` back.
-ParamSet paramSetOf(const CameraParams& p, const std::string& source);
-
-/// Every parameter of every registered camera model, each once, in a stable order (common
-/// parameters first). What the command line registers as flags and job files accept as keys.
-const std::vector<const ParamSpec*>& allCameraParamSpecs();
-/// The spec of `name`, or null.
-const ParamSpec* findCameraParamSpec(const std::string& name);
-
-/// Checks and resolves a user's parameters, before any work: the camera type must be known
-/// (with "did you mean"), every parameter must apply to that type, no two conflicting ones
-/// may be given, every required companion must be given, and every value must lie in its
-/// range. Errors name the sources (both of a conflicting pair). `base` supplies the values
-/// of parameters not given (e.g. a job's size).
-CameraParams resolveCameraParams(const ParamSet& given, CameraParams base = {});
-
-/// The range checks of resolveCameraParams on already-resolved parameters (for callers that
-/// fill CameraParams directly); errors name the parameter as `labels` does, or by its flag.
-void checkCameraParamRanges(const CameraParams& p, const ParamSet* labels = nullptr);
-
-/// Markdown table of every camera's parameters (docs/cameras.md embeds it verbatim).
-std::string cameraParamsMarkdown();
 
 /// Field accessors for the common member types (optional fields read as "not set").
 template <auto Member>
