@@ -18,11 +18,15 @@
 
 namespace aperture {
 
-/// type, size, spp, eye, at, dir, up: read by every model (declared in base.cpp).
+/// The parameters CameraBase reads, declared in base_params.cpp: type, size, spp, eye, at,
+/// dir, up (every model reads them).
 const std::vector<const ParamSpec*>& commonParamSpecs();
-/// The image-plane window of the planar models: d and viewport (declared in base.cpp).
+/// The image-plane window of the planar models: d and viewport.
 const ParamSpec& distanceParamSpec();
 const ParamSpec& viewportParamSpec();
+/// The window of the perspective models: fov, fov_axis, focal_length, sensor, sensor_fit,
+/// shift, blender_shift, architectural.
+const std::vector<const ParamSpec*>& perspectiveWindowParamSpecs();
 /// The concatenation of spec lists (a model's parameters from shared groups).
 std::vector<const ParamSpec*> joinParamSpecs(
     std::initializer_list<std::vector<const ParamSpec*>> groups);

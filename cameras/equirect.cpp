@@ -146,16 +146,16 @@ class EquirectCamera final : public PacketCamera<EquirectCamera> {
   std::vector<double> sinLon_, cosLon_, sinLat_, cosLat_;
 };
 
-const ParamSpec kLon{"lon",     ParamKind::Vec2,
-                     "degrees", "Longitude range MIN,MAX (columns)",
-                     nullptr,   {-360.0, 360.0},
-                     {},        {},
-                     {},        fieldAccess<&CameraParams::longitudeRangeDeg>()};
-const ParamSpec kLat{"lat",     ParamKind::Vec2,
-                     "degrees", "Latitude range MIN,MAX (rows)",
-                     nullptr,   {-90.0, 90.0},
-                     {},        {},
-                     {},        fieldAccess<&CameraParams::latitudeRangeDeg>()};
+const ParamSpec kLon =
+    ParamSpec("lon", ParamKind::Vec2, fieldAccess<&CameraParams::longitudeRangeDeg>())
+        .withUnit("degrees")
+        .withHelp("Longitude range MIN,MAX (columns)")
+        .withRange(ParamRange::closed(-360.0, 360.0));
+const ParamSpec kLat =
+    ParamSpec("lat", ParamKind::Vec2, fieldAccess<&CameraParams::latitudeRangeDeg>())
+        .withUnit("degrees")
+        .withHelp("Latitude range MIN,MAX (rows)")
+        .withRange(ParamRange::closed(-90.0, 90.0));
 
 std::unique_ptr<CameraBase> makeEquirectCamera(const CameraParams& p,
                                                const glm::dvec3& renderOrigin) {

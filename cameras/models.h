@@ -17,8 +17,9 @@ const CameraModel& equirectModel();
 const CameraModel& fisheyeModel();
 const CameraModel& calibratedModel();
 
-/// fov, fov_axis, focal_length, sensor, sensor_fit, shift, blender_shift, architectural, clip
-/// (declared in perspective.cpp).
+/// The perspective window (perspectiveWindowParamSpecs) and clip: what the perspective and
+/// thin-lens models read beside d and viewport (declared in base_params.cpp and
+/// perspective.cpp).
 const std::vector<const ParamSpec*>& perspectiveParamSpecs();
 
 /// The common unit direction of an oblique camera (errors for a missing, zero, backwards or

@@ -8,6 +8,7 @@
 #include <glm/glm.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -34,6 +35,12 @@ using ParamValue = std::variant<double, int, glm::dvec2, glm::dvec3, glm::ivec2,
 struct ParamRange {
   std::optional<double> min, max;
   bool minOpen = false, maxOpen = false;  ///< exclusive bounds
+  /// (lo, hi), [lo, hi], (lo, hi], > lo, >= lo.
+  static constexpr ParamRange open(double lo, double hi) { return {lo, hi, true, true}; }
+  static constexpr ParamRange closed(double lo, double hi) { return {lo, hi, false, false}; }
+  static constexpr ParamRange openClosed(double lo, double hi) { return {lo, hi, true, false}; }
+  static constexpr ParamRange above(double lo) { return {lo, std::nullopt, true, false}; }
+  static constexpr ParamRange atLeast(double lo) { return {lo, std::nullopt, false, false}; }
   bool contains(double x) const;
   std::string text() const;  ///< "(0, 180)", "[1, 65536]", "> 0", ""
 };
@@ -45,20 +52,34 @@ struct ParamAccess {
   void (*set)(CameraParams&, const ParamValue&);
 };
 
+/// One camera parameter, declared once by the module that reads it. C++17 has no designated
+/// initialisers, so a declaration names each field it sets through a setter of the same
+/// meaning (`withUnit` sets `unit`, ...); what it does not name keeps the default below:
+///
+///     const ParamSpec kFov =
+///         ParamSpec("fov", ParamKind::Number, fieldAccess<&CameraParams::fovDeg>())
+///             .withUnit("degrees")
+///             .withHelp("Field of view")
+///             .withDefaultRule("45 vertical, when neither viewport nor focal_length is given")
+///             .withRange(ParamRange::open(0.0, 180.0))
+///             .withConflicts({"focal_length", "viewport"});
+///
+/// The setters take and give the declaration being built (an rvalue), so a spec is written
+/// in one expression and is const afterwards.
 struct ParamSpec {
   const char* name;  ///< snake_case: the job-file key and Python keyword
   ParamKind kind;
-  const char* unit;  ///< "degrees", "scene units", "pixels", "mm", "" for none
-  const char* help;
+  ParamAccess access;     ///< how it sits in CameraParams
+  const char* unit = "";  ///< "degrees", "scene units", "pixels", "mm", "" for none
+  const char* help = "";
   /// What applies when the parameter is not given and CameraParams has no plain default for
   /// it ("45 vertical, unless viewport or focal_length is given"); null: the default is the
   /// value of a default-constructed CameraParams, printed from `access.get`.
-  const char* defaultRule;
+  const char* defaultRule = nullptr;
   ParamRange range;
   std::vector<const char*> choices;    ///< for Choice; empty: the registered camera models
   std::vector<const char*> conflicts;  ///< parameters that may not be given with this one
   std::vector<const char*> needs;      ///< parameters that must be given with this one
-  ParamAccess access;
   /// The command-line flag when it is not "--" + name with '_' as '-' (only `type`: --camera).
   const char* flagOverride = nullptr;
   /// For Numbers: how many (0: any number, at least one).
@@ -66,6 +87,49 @@ struct ParamSpec {
   /// A model this parameter selects when given without `type` (the pose matrices and
   /// intrinsics select "calibrated"); null: the default type applies.
   const char* selectsModel = nullptr;
+
+  ParamSpec(const char* paramName, ParamKind paramKind, ParamAccess paramAccess)
+      : name(paramName), kind(paramKind), access(paramAccess) {}
+  ParamSpec&& withUnit(const char* u) && {
+    unit = u;
+    return std::move(*this);
+  }
+  ParamSpec&& withHelp(const char* h) && {
+    help = h;
+    return std::move(*this);
+  }
+  ParamSpec&& withDefaultRule(const char* rule) && {
+    defaultRule = rule;
+    return std::move(*this);
+  }
+  ParamSpec&& withRange(ParamRange r) && {
+    range = r;
+    return std::move(*this);
+  }
+  ParamSpec&& withChoices(std::vector<const char*> c) && {
+    choices = std::move(c);
+    return std::move(*this);
+  }
+  ParamSpec&& withConflicts(std::vector<const char*> c) && {
+    conflicts = std::move(c);
+    return std::move(*this);
+  }
+  ParamSpec&& withNeeds(std::vector<const char*> n) && {
+    needs = std::move(n);
+    return std::move(*this);
+  }
+  ParamSpec&& withFlag(const char* f) && {
+    flagOverride = f;
+    return std::move(*this);
+  }
+  ParamSpec&& withCount(size_t n) && {
+    count = n;
+    return std::move(*this);
+  }
+  ParamSpec&& withSelectsModel(const char* m) && {
+    selectsModel = m;
+    return std::move(*this);
+  }
 
   std::string flag() const;  ///< "--fov", "--focal-length", "--camera"
   /// The rule, or the value `defaults` holds (a command's own defaults, e.g. its size).
