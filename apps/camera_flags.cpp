@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "apps/camera_files.h"
+#include "cameras/base.h"
 #include "cameras/registry.h"
 #include "core/error.h"
 
@@ -84,7 +85,8 @@ CameraParams resolveCommandCamera(const ParamSet& given, const CameraParams& def
   // Frame the scene: look at its centre from above-front, far enough for the bounding
   // sphere to fit the vertical field of view.
   const double radius = std::max(0.5 * glm::length(hi - lo), 1e-6);
-  const double halfFov = 0.5 * p.fovDeg.value_or(kDefaultFovDeg) * 3.14159265358979323846 / 180.0;
+  const double halfFov =
+      0.5 * p.fovDeg.value_or(fovParamSpec().defaultAs<double>()) * 3.14159265358979323846 / 180.0;
   const glm::dvec3 view =
       p.dir ? glm::normalize(*p.dir) : glm::normalize(glm::dvec3(-0.35, -0.45, -1.0));
   const glm::dvec3 target = p.at.value_or(centre);

@@ -13,13 +13,8 @@ namespace {
 double radians(double deg) { return deg * kPi / 180.0; }
 }  // namespace
 
-double focusDistanceOf(const CameraParams& p) {
-  if (p.focusDistance) return *p.focusDistance;
-  return p.at ? glm::length(*p.at - p.eye) : 1.0;
-}
-
 void resolveImagePlane(const CameraParams& p, double& d, double& vw, double& vh) {
-  d = p.d.value_or(1.0);
+  d = p.d.value_or(distanceParamSpec().defaultAs<double>());
   if (p.viewport) {
     vw = p.viewport->x;
     vh = p.viewport->y;
@@ -29,8 +24,8 @@ void resolveImagePlane(const CameraParams& p, double& d, double& vw, double& vh)
     vw = v.x;
     vh = v.y;
   } else {
-    const glm::dvec2 v =
-        viewportOfFov(p.fovDeg.value_or(kDefaultFovDeg), p.fovAxis, p.width, p.height, d);
+    const glm::dvec2 v = viewportOfFov(p.fovDeg.value_or(fovParamSpec().defaultAs<double>()),
+                                       p.fovAxis, p.width, p.height, d);
     vw = v.x;
     vh = v.y;
   }

@@ -27,15 +27,19 @@ const ParamSpec& viewportParamSpec();
 /// The window of the perspective models: fov, fov_axis, focal_length, sensor, sensor_fit,
 /// shift, blender_shift, architectural.
 const std::vector<const ParamSpec*>& perspectiveWindowParamSpecs();
+/// `fov`, whose default (defaultAs<double>()) applies when no viewport and no focal length is
+/// given.
+const ParamSpec& fovParamSpec();
 /// The concatenation of spec lists (a model's parameters from shared groups).
 std::vector<const ParamSpec*> joinParamSpecs(
     std::initializer_list<std::vector<const ParamSpec*>> groups);
 
 /// Image-plane distance and viewport from whichever convention the parameters use:
-/// explicit d + viewport, else focal length + sensor, else fov on fovAxis at d (default d = 1,
-/// default fov 45° vertical). Focal length + sensor: the sensor spans the image dimension
+/// explicit d + viewport, else focal length + sensor, else fov on fovAxis at d (d and fov not
+/// given: their specs' defaults). Focal length + sensor: the sensor spans the image dimension
 /// sensorFit chooses, as Blender's sensor_fit (viewportOfSensor, cameras/conventions.h).
-/// Throws Error for d <= 0, viewport <= 0, non-finite values or fov outside (0°, 180°).
+/// Throws Error for viewport <= 0 and non-finite values; the ranges of d and fov are the
+/// specs' (checked by makeCamera).
 void resolveImagePlane(const CameraParams& p, double& d, double& vw, double& vh);
 
 /// Builds the frame from eye + at / dir + up (errors as CameraFrame). A model posed otherwise

@@ -1,8 +1,10 @@
 // The parameters CameraBase reads (base.cpp): the ones every model shares and those that
-// place a planar image window.
+// place a planar image window. Each is declared once, here; its default and range are read
+// from the declaration wherever they are applied.
 #include <optional>
 
 #include "cameras/base.h"
+#include "cameras/conventions.h"
 
 namespace aperture {
 
@@ -53,7 +55,8 @@ const ParamSpec kType = ParamSpec("type", K::Choice, fieldAccess<&CameraParams::
 const ParamSpec kSize = ParamSpec("size", K::Size, sizeAccess())
                             .withUnit("pixels")
                             .withHelp("Image size W,H (or WxH), at most 2^28 pixels")
-                            .withRange(ParamRange::closed(1.0, 65536.0));
+                            .withRange(ParamRange::closed(1.0, 65536.0))
+                            .withMaxPixels(double(1 << 28));
 const ParamSpec kSpp = ParamSpec("spp", K::Integer, fieldAccess<&CameraParams::spp>())
                            .withHelp("Samples per pixel (stratified; 1 = pixel centres)")
                            .withRange(ParamRange::closed(1.0, 65536.0));
@@ -79,7 +82,7 @@ const ParamSpec kUp = ParamSpec("up", K::Vec3, fieldAccess<&CameraParams::up>())
 const ParamSpec kD = ParamSpec("d", K::Number, fieldAccess<&CameraParams::d>())
                          .withUnit("scene units")
                          .withHelp("Image-plane distance d (with viewport)")
-                         .withDefaultRule("1 when viewport is given")
+                         .withDefault(1.0, "{} when viewport is given")
                          .withRange(ParamRange::above(0.0))
                          .withNeeds({"viewport"});
 const ParamSpec kViewport =
@@ -90,13 +93,14 @@ const ParamSpec kViewport =
         .withRange(ParamRange::above(0.0))
         .withConflicts({"fov", "focal_length"});
 
-const ParamSpec kFov =
-    ParamSpec("fov", K::Number, fieldAccess<&CameraParams::fovDeg>())
-        .withUnit("degrees")
-        .withHelp("Field of view")
-        .withDefaultRule("45 vertical, when neither viewport nor focal_length is given")
-        .withRange(ParamRange::open(0.0, 180.0))
-        .withConflicts({"focal_length", "viewport"});
+const ParamSpec kFov = ParamSpec("fov", K::Number, fieldAccess<&CameraParams::fovDeg>())
+                           .withUnit("degrees")
+                           .withHelp("Field of view")
+                           .withDefault(45.0,
+                                        "{} vertical, when neither viewport nor focal_length "
+                                        "is given")
+                           .withRange(kPlanarFovRangeDeg)
+                           .withConflicts({"focal_length", "viewport"});
 const ParamSpec kFovAxis = ParamSpec("fov_axis", K::Choice, fovAxisAccess())
                                .withHelp("The extent fov spans")
                                .withChoices({"x", "y", "diagonal"});
@@ -145,6 +149,7 @@ const std::vector<const ParamSpec*>& commonParamSpecs() {
 }
 const ParamSpec& distanceParamSpec() { return kD; }
 const ParamSpec& viewportParamSpec() { return kViewport; }
+const ParamSpec& fovParamSpec() { return kFov; }
 
 const std::vector<const ParamSpec*>& perspectiveWindowParamSpecs() {
   static const std::vector<const ParamSpec*> v = {&kFov,          &kFovAxis,      &kFocalLength,

@@ -59,12 +59,14 @@ class EquirectCamera final : public PacketCamera<EquirectCamera> {
       : PacketCamera(p, renderOrigin, "equirect") {
     rejectShift();
     const glm::dvec2 lon = p.longitudeRangeDeg, lat = p.latitudeRangeDeg;
-    if (!(std::isfinite(lon.x) && std::isfinite(lon.y) && lon.x < lon.y && lon.y - lon.x <= 360))
+    // Each end lies in its spec's range (checked by makeCamera); the order and the span of a
+    // range are not ranges of its ends.
+    if (!(lon.x < lon.y && lon.y - lon.x <= 360))
       throw Error(cat("camera: longitude range [", lon.x, ", ", lon.y,
                       "] degrees must be increasing and span at most 360"));
-    if (!(lat.x >= -90 && lat.x < lat.y && lat.y <= 90))
-      throw Error(cat("camera: latitude range [", lat.x, ", ", lat.y,
-                      "] degrees must be increasing within [-90, 90]"));
+    if (!(lat.x < lat.y))
+      throw Error(
+          cat("camera: latitude range [", lat.x, ", ", lat.y, "] degrees must be increasing"));
     lon0_ = lon.x * kRadPerDeg;
     lonPerPixel_ = (lon.y - lon.x) * kRadPerDeg / width_;
     lat1_ = lat.y * kRadPerDeg;

@@ -125,7 +125,13 @@ std::string ParamSpec::flag() const {
 }
 
 std::string ParamSpec::defaultText(const CameraParams& defaults) const {
-  if (defaultRule) return defaultRule;
+  if (defaultRule) {
+    std::string text = defaultRule;
+    const size_t slot = text.find("{}");
+    if (defaultValue && slot != std::string::npos)
+      text.replace(slot, 2, formatParamValue(*defaultValue));
+    return text;
+  }
   const std::optional<ParamValue> v = access.get(defaults);
   return v ? formatParamValue(*v) : "none";
 }
@@ -149,12 +155,11 @@ void checkParamValue(const ParamSpec& spec, const ParamValue& value, const std::
           cat(label, ": '", word, "' is not one of ", list, didYouMean(word, names(spec.choices))));
     }
   }
-  if (spec.kind == ParamKind::Size) {
+  if (spec.kind == ParamKind::Size && spec.maxPixels > 0) {
     const glm::ivec2 s = std::get<glm::ivec2>(value);
-    constexpr double kMaxPixels = double(1 << 28);
-    if (double(s.x) * double(s.y) > kMaxPixels)
+    if (double(s.x) * double(s.y) > spec.maxPixels)
       throw Error(
-          cat(label, ": ", formatParamValue(value), " has more than ", kMaxPixels, " pixels"));
+          cat(label, ": ", formatParamValue(value), " has more than ", spec.maxPixels, " pixels"));
   }
 }
 

@@ -60,7 +60,7 @@ struct ParamAccess {
 ///         ParamSpec("fov", ParamKind::Number, fieldAccess<&CameraParams::fovDeg>())
 ///             .withUnit("degrees")
 ///             .withHelp("Field of view")
-///             .withDefaultRule("45 vertical, when neither viewport nor focal_length is given")
+///             .withDefault(45.0, "{} vertical, when neither viewport nor focal_length is given")
 ///             .withRange(ParamRange::open(0.0, 180.0))
 ///             .withConflicts({"focal_length", "viewport"});
 ///
@@ -73,9 +73,13 @@ struct ParamSpec {
   const char* unit = "";  ///< "degrees", "scene units", "pixels", "mm", "" for none
   const char* help = "";
   /// What applies when the parameter is not given and CameraParams has no plain default for
-  /// it ("45 vertical, unless viewport or focal_length is given"); null: the default is the
-  /// value of a default-constructed CameraParams, printed from `access.get`.
+  /// it ("{} vertical, unless viewport or focal_length is given", "{}" standing for
+  /// `defaultValue`); null: the default is the value of a default-constructed CameraParams,
+  /// printed from `access.get`.
   const char* defaultRule = nullptr;
+  /// The value the rule applies (fov's 45, d's 1), for the code that applies it to read
+  /// (defaultAs); none when the rule names no value.
+  std::optional<ParamValue> defaultValue;
   ParamRange range;
   std::vector<const char*> choices;    ///< for Choice; empty: the registered camera models
   std::vector<const char*> conflicts;  ///< parameters that may not be given with this one
@@ -84,6 +88,8 @@ struct ParamSpec {
   const char* flagOverride = nullptr;
   /// For Numbers: how many (0: any number, at least one).
   size_t count = 0;
+  /// For Size: at most this many pixels (width x height); 0: no limit beyond the range.
+  double maxPixels = 0;
   /// A model this parameter selects when given without `type` (the pose matrices and
   /// intrinsics select "calibrated"); null: the default type applies.
   const char* selectsModel = nullptr;
@@ -98,7 +104,14 @@ struct ParamSpec {
     help = h;
     return std::move(*this);
   }
+  /// A default stated as a rule only (eye: "frames the scene").
   ParamSpec&& withDefaultRule(const char* rule) && {
+    defaultRule = rule;
+    return std::move(*this);
+  }
+  /// A default value with the rule it applies under; "{}" in the rule stands for the value.
+  ParamSpec&& withDefault(ParamValue value, const char* rule) && {
+    defaultValue = std::move(value);
     defaultRule = rule;
     return std::move(*this);
   }
@@ -126,19 +139,30 @@ struct ParamSpec {
     count = n;
     return std::move(*this);
   }
+  ParamSpec&& withMaxPixels(double n) && {
+    maxPixels = n;
+    return std::move(*this);
+  }
   ParamSpec&& withSelectsModel(const char* m) && {
     selectsModel = m;
     return std::move(*this);
   }
 
   std::string flag() const;  ///< "--fov", "--focal-length", "--camera"
-  /// The rule, or the value `defaults` holds (a command's own defaults, e.g. its size).
+  /// The rule (with the value in place of "{}"), or the value `defaults` holds (a command's
+  /// own defaults, e.g. its size).
   std::string defaultText(const CameraParams& defaults = {}) const;
+  /// defaultValue as a T (double for a Number); throws std::bad_optional_access or
+  /// std::bad_variant_access when the spec declares no value of that type.
+  template <class T>
+  T defaultAs() const {
+    return std::get<T>(defaultValue.value());
+  }
 };
 
 /// Throws Error, naming `label` ("--fov", "cameras[2].fov"), the value, the range and the unit,
 /// when `value` lies outside the spec's range, is not finite, is not one of its choices or
-/// (Size) has more than 2^28 pixels. The `type` choice (no fixed list) is left to the
+/// (Size) has more than maxPixels pixels. The `type` choice (no fixed list) is left to the
 /// registry.
 void checkParamValue(const ParamSpec& spec, const ParamValue& value, const std::string& label);
 

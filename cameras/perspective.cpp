@@ -23,9 +23,11 @@ PerspectiveCamera::PerspectiveCamera(const CameraParams& p, const glm::dvec3& re
   pinholeCentres_ = spp_ == 1 && lensRadius_ == 0;
   centres_ = PixelCentreTable(window());
   pinhole_ = {frame_.u, frame_.v, d_ * frame_.w, renderEyeD_, width_, height_};
-  if (clip_ && !(clip_->x >= 0 && clip_->x < clip_->y && std::isfinite(clip_->y)))
+  // The range of each end (finite, >= 0) is the clip spec's, checked by makeCamera; their
+  // order is not a range.
+  if (clip_ && !(clip_->x < clip_->y))
     throw Error(cat("camera: clip ", clip_->x, ",", clip_->y,
-                    ": needs 0 <= near < far, both finite (planar depths, scene units)"));
+                    ": near must be less than far (planar depths, scene units)"));
 }
 
 namespace {

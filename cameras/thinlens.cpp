@@ -46,7 +46,7 @@ const ParamSpec kFocus =
     ParamSpec("focus", ParamKind::Number, fieldAccess<&CameraParams::focusDistance>())
         .withUnit("scene units")
         .withHelp("Distance of the in-focus plane along the view axis")
-        .withDefaultRule("|at - eye| with a look-at point, else 1")
+        .withDefault(1.0, "|at - eye| with a look-at point, else {}")
         .withRange(ParamRange::above(0.0));
 
 std::unique_ptr<CameraBase> makeThinLensCamera(const CameraParams& p,
@@ -56,6 +56,11 @@ std::unique_ptr<CameraBase> makeThinLensCamera(const CameraParams& p,
 }
 
 }  // namespace
+
+double focusDistanceOf(const CameraParams& p) {
+  if (p.focusDistance) return *p.focusDistance;
+  return p.at ? glm::length(*p.at - p.eye) : kFocus.defaultAs<double>();
+}
 
 bool generateThinLensCentres(const ThinLensCentres& c, const PacketRequest& req, RayLanes& out,
                              int* valid) {

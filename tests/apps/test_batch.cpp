@@ -26,6 +26,7 @@
 #include "cameras/calibrated.h"
 #include "cameras/direction_table.h"
 #include "cameras/registry.h"
+#include "cameras/thinlens.h"
 #include "core/error.h"
 #include "core/exr.h"
 #include "core/image.h"
