@@ -1,18 +1,18 @@
-// Tests of cameras/resolve.cpp and of the one place a parameter's default and range live (its
-// ParamSpec): the code that applies a default reads the spec's value, and the help line and
+// Tests of cameras/registry/resolve.cpp and of the one place a parameter's default and range live
+// (its ParamSpec): the code that applies a default reads the spec's value, and the help line and
 // the range checks come from the same declaration.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <string>
 
-#include "apps/camera_flags.h"
-#include "cameras/base.h"
-#include "cameras/conventions.h"
-#include "cameras/registry.h"
-#include "cameras/thinlens.h"
-#include "core/error.h"
-#include "core/units.h"
+#include "apps/services/command_camera.h"
+#include "cameras/models/base.h"
+#include "cameras/models/thinlens.h"
+#include "cameras/registry/registry.h"
+#include "cameras/schema/conventions.h"
+#include "core/util/error.h"
+#include "core/util/units.h"
 
 using namespace aperture;
 
