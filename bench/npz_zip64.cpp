@@ -1,4 +1,4 @@
-// Times writeNpz and readNpz (core/npz.h) on an archive past 4 GiB, where the zip64 records are
+// Times writeNpz and readNpz (core/io/npz.h) on an archive past 4 GiB, where the zip64 records are
 // needed: bench/npz_zip64.sh builds this against core/npz.cpp through libzip (c155488) and
 // against the hand-written zip code (9bf1f53, kept), and runs both alternately.
 //
@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "core/npz.h"
+#include "core/io/npz.h"
 
 namespace {
 
