@@ -167,7 +167,7 @@ void checkPreviewable(const std::string& name, const std::string& path, AovMask 
   if (previewableAovs(aovs)) return;
   throw Error(prefix(name, path) +
               cat("none of the AOVs ", aovListString(aovs),
-                  " can be previewed (previewable: ", aovListString(kPreviewableAovs), ")"));
+                  " can be previewed (previewable: ", aovListString(previewableAovMask()), ")"));
 }
 
 void checkPreviewRange(const glm::dvec2& range) {

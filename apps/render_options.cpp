@@ -2,6 +2,7 @@
 
 #include <tbb/global_control.h>
 
+#include "core/aov_table.h"
 #include "core/error.h"
 #include "core/layers.h"
 
@@ -32,8 +33,8 @@ void checkDeepHasLayers(bool deep, const std::optional<int>& layers) {
 
 void addRenderOptions(CLI::App& app, RenderOptions& o) {
   app.add_option("--aov", o.aovs,
-                 "AOVs to compute: color, depth, distance, normal, position, primid, geomid, all, "
-                 "shading-normal, face.NAME, vertex.NAME (integer PLY properties)")
+                 cat("AOVs to compute: ", aovNameList(),
+                     ", face.NAME, vertex.NAME (integer PLY properties)"))
       ->capture_default_str();
   app.add_option("--normal-frame", o.normalFrame,
                  "Frame of normal and shading-normal: world, opencv (x right, y down, z "

@@ -18,9 +18,11 @@
 #include <OpenEXR/ImfVecAttribute.h>
 
 #include <cstddef>
+#include <deque>
 #include <exception>
 #include <limits>
 
+#include "core/aov_table.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/exr_header.h"
@@ -78,11 +80,6 @@ glm::dvec3 toGlm(const Imath::V3d& v) { return glm::dvec3(v.x, v.y, v.z); }
 /// The only fisheye mapping aperture writes: the angle from the axis is proportional to the
 /// distance from the centre (FisheyeProjection).
 const char* const kFisheyeMapping = "equidistant";
-
-const char* const kColorNames[4] = {"R", "G", "B", "A"};
-const char* const kNormalNames[3] = {"N.X", "N.Y", "N.Z"};
-const char* const kPositionNames[3] = {"P.X", "P.Y", "P.Z"};
-const char* const kShadingNormalNames[3] = {"Ns.X", "Ns.Y", "Ns.Z"};
 
 /// The property AOVs among an EXR's channels: UINT channels named "face.NAME" / "vertex.NAME",
 /// in the file's (name-sorted) channel order.
@@ -337,54 +334,31 @@ void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata&
   header.compression() = toImf(options.compression);
 
   Imf::FrameBuffer frame;
-  std::vector<half> halfColor;
+  std::deque<std::vector<half>> halves;  // the half copies of the rows written as half
   const int w = fb.width;
-  if (fb.has(kAovColor)) {
-    checkSize("color", fb.rgba.size(), 4);
-    if (options.halfColor) {
-      halfColor.assign(fb.rgba.begin(), fb.rgba.end());
-      for (int c = 0; c < 4; ++c)
-        addChannel(header, frame, kColorNames[c], Imf::HALF, halfColor.data() + c, sizeof(half), 4,
-                   w);
+  for (const AovRow& row : aovTable()) {
+    if (!fb.has(Aov(row.bit))) continue;
+    const int channels = row.channels();
+    checkSize(row.name.c_str(), valueCount(fb, row), size_t(channels));
+    const char* data = nullptr;
+    Imf::PixelType type = Imf::FLOAT;
+    size_t valueSize = sizeof(float);
+    if (!row.isFloat()) {
+      data = reinterpret_cast<const char*>(uintPixels(fb, row).data());
+      type = Imf::UINT;
+      valueSize = sizeof(uint32_t);
+    } else if (row.halfInExr && options.halfColor) {
+      const std::vector<float>& values = floatPixels(fb, row);
+      data =
+          reinterpret_cast<const char*>(halves.emplace_back(values.begin(), values.end()).data());
+      type = Imf::HALF;
+      valueSize = sizeof(half);
     } else {
-      for (int c = 0; c < 4; ++c)
-        addChannel(header, frame, kColorNames[c], Imf::FLOAT, fb.rgba.data() + c, sizeof(float), 4,
-                   w);
+      data = reinterpret_cast<const char*>(floatPixels(fb, row).data());
     }
-  }
-  if (fb.has(kAovDepth)) {
-    checkSize("depth", fb.depth.size(), 1);
-    addChannel(header, frame, "Z", Imf::FLOAT, fb.depth.data(), sizeof(float), 1, w);
-  }
-  if (fb.has(kAovDistance)) {
-    checkSize("distance", fb.distance.size(), 1);
-    addChannel(header, frame, "T", Imf::FLOAT, fb.distance.data(), sizeof(float), 1, w);
-  }
-  if (fb.has(kAovNormal)) {
-    checkSize("normal", fb.normal.size(), 3);
-    for (int c = 0; c < 3; ++c)
-      addChannel(header, frame, kNormalNames[c], Imf::FLOAT, fb.normal.data() + c, sizeof(float), 3,
-                 w);
-  }
-  if (fb.has(kAovPosition)) {
-    checkSize("position", fb.position.size(), 3);
-    for (int c = 0; c < 3; ++c)
-      addChannel(header, frame, kPositionNames[c], Imf::FLOAT, fb.position.data() + c,
-                 sizeof(float), 3, w);
-  }
-  if (fb.has(kAovPrimId)) {
-    checkSize("primid", fb.primId.size(), 1);
-    addChannel(header, frame, "primID", Imf::UINT, fb.primId.data(), sizeof(uint32_t), 1, w);
-  }
-  if (fb.has(kAovGeomId)) {
-    checkSize("geomid", fb.geomId.size(), 1);
-    addChannel(header, frame, "geomID", Imf::UINT, fb.geomId.data(), sizeof(uint32_t), 1, w);
-  }
-  if (fb.has(kAovShadingNormal)) {
-    checkSize("shading-normal", fb.shadingNormal.size(), 3);
-    for (int c = 0; c < 3; ++c)
-      addChannel(header, frame, kShadingNormalNames[c], Imf::FLOAT, fb.shadingNormal.data() + c,
-                 sizeof(float), 3, w);
+    for (int c = 0; c < channels; ++c)
+      addChannel(header, frame, row.exrChannels[size_t(c)].c_str(), type,
+                 data + size_t(c) * valueSize, valueSize, channels, w);
   }
   std::vector<std::string> propertyNames;  // the properties' channel names
   for (const PropertyChannel& p : fb.properties) propertyNames.push_back(p.property.aovName());
@@ -427,28 +401,17 @@ Framebuffer readExr(const std::string& path, ExrMetadata* meta) {
 
     const Imf::ChannelList& channels = header.channels();
     auto present = [&](const char* name) { return channels.findChannel(name) != nullptr; };
-    auto anyPresent = [&](const char* const* names, int count) {
-      for (int i = 0; i < count; ++i)
-        if (present(names[i])) return true;
-      return false;
-    };
     AovMask mask = 0;
-    if (anyPresent(kColorNames, 4)) mask |= kAovColor;
-    if (present("Z")) mask |= kAovDepth;
-    if (present("T")) mask |= kAovDistance;
-    if (anyPresent(kNormalNames, 3)) mask |= kAovNormal;
-    if (anyPresent(kPositionNames, 3)) mask |= kAovPosition;
-    if (present("primID")) mask |= kAovPrimId;
-    if (present("geomID")) mask |= kAovGeomId;
-    if (anyPresent(kShadingNormalNames, 3)) mask |= kAovShadingNormal;
+    for (const AovRow& row : aovTable())
+      for (const std::string& name : row.exrChannels)
+        if (present(name.c_str())) mask |= row.bit;
     AovSet set(mask);
     set.properties = propertyChannelsOf(channels);
     while (set.layers < kMaxLayers && present(layerChannelName(set.layers, kLayerZ).c_str()))
       ++set.layers;
     if (set.empty())
       throw Error(
-          "no aperture channels (R G B A, Z, T, N.*, P.*, primID, geomID, Ns.*, face.*, "
-          "vertex.*, hit0.Z ...)");
+          cat("no aperture channels (", exrChannelSummary(), ", face.*, vertex.*, hit0.Z ...)"));
 
     Framebuffer fb(width, height, set);
     Imf::FrameBuffer frame;
@@ -458,26 +421,19 @@ Framebuffer readExr(const std::string& path, ExrMetadata* meta) {
       frame.insert(
           name, Imf::Slice::Make(type, data, window, xStride, xStride * size_t(width), 1, 1, fill));
     };
-    if (mask & kAovColor)
-      for (int c = 0; c < 4; ++c)
-        insert(kColorNames[c], Imf::FLOAT, fb.rgba.data() + c, sizeof(float), 4,
-               c == 3 ? 1.0 : 0.0);
-    if (mask & kAovDepth) insert("Z", Imf::FLOAT, fb.depth.data(), sizeof(float), 1, 0.0);
-    if (mask & kAovDistance) insert("T", Imf::FLOAT, fb.distance.data(), sizeof(float), 1, 0.0);
-    if (mask & kAovNormal)
-      for (int c = 0; c < 3; ++c)
-        insert(kNormalNames[c], Imf::FLOAT, fb.normal.data() + c, sizeof(float), 3, 0.0);
-    if (mask & kAovPosition)
-      for (int c = 0; c < 3; ++c)
-        insert(kPositionNames[c], Imf::FLOAT, fb.position.data() + c, sizeof(float), 3, 0.0);
-    if (mask & kAovPrimId)
-      insert("primID", Imf::UINT, fb.primId.data(), sizeof(uint32_t), 1, double(kInvalidId));
-    if (mask & kAovGeomId)
-      insert("geomID", Imf::UINT, fb.geomId.data(), sizeof(uint32_t), 1, double(kInvalidId));
-    if (mask & kAovShadingNormal)
-      for (int c = 0; c < 3; ++c)
-        insert(kShadingNormalNames[c], Imf::FLOAT, fb.shadingNormal.data() + c, sizeof(float), 3,
-               0.0);
+    for (const AovRow& row : aovTable()) {
+      if ((mask & row.bit) == 0) continue;
+      const int components = row.channels();
+      for (int c = 0; c < components; ++c) {
+        const char* name = row.exrChannels[size_t(c)].c_str();
+        if (row.isFloat())
+          insert(name, Imf::FLOAT, floatPixels(fb, row).data() + c, sizeof(float), components,
+                 row.fillOfAbsent(c));
+        else
+          insert(name, Imf::UINT, uintPixels(fb, row).data() + c, sizeof(uint32_t), components,
+                 row.fillOfAbsent(c));
+      }
+    }
     std::vector<std::string> propertyNames;  // the properties' channel names
     for (const PropertyChannel& p : fb.properties) propertyNames.push_back(p.property.aovName());
     for (size_t j = 0; j < fb.properties.size(); ++j)
@@ -536,15 +492,8 @@ bool isCompleteExr(const std::string& path) {
 std::vector<std::string> exrChannelNames(const AovSet& set, const ExrOptions& options) {
   const AovMask aovs = set.mask;
   std::vector<std::string> names;
-  if (aovs & kAovColor) names.insert(names.end(), kColorNames, kColorNames + 4);
-  if (aovs & kAovDepth) names.push_back("Z");
-  if (aovs & kAovDistance) names.push_back("T");
-  if (aovs & kAovNormal) names.insert(names.end(), kNormalNames, kNormalNames + 3);
-  if (aovs & kAovPosition) names.insert(names.end(), kPositionNames, kPositionNames + 3);
-  if (aovs & kAovPrimId) names.push_back("primID");
-  if (aovs & kAovGeomId) names.push_back("geomID");
-  if (aovs & kAovShadingNormal)
-    names.insert(names.end(), kShadingNormalNames, kShadingNormalNames + 3);
+  for (const AovRow& row : aovTable())
+    if (aovs & row.bit) names.insert(names.end(), row.exrChannels.begin(), row.exrChannels.end());
   for (const PropertyAov& p : set.properties) names.push_back(p.aovName());
   const int flatLayers = options.layersInDeepFile ? 0 : set.layers;
   for (int k = 0; k < flatLayers; ++k)

@@ -22,17 +22,20 @@ struct PreviewOptions {
 /// composited over): a dark slate blue, as sRGB bytes. No ID colour and no grey equals it.
 inline constexpr std::array<uint8_t, 3> kPreviewBackground = {38, 50, 72};
 
-/// The AOVs a preview can show, in order of preference: color, depth, normal, primID, geomID.
-inline constexpr AovMask kPreviewableAovs =
-    kAovColor | kAovDepth | kAovNormal | kAovPrimId | kAovGeomId;
+/// The AOVs a preview can show: the rows of the AOV table with a PreviewRule
+/// (core/aov_table.h), in order of preference: color, depth, normal, primID, geomID.
+AovMask previewableAovMask();
 
-/// The requested AOVs a preview could show (`aovs & kPreviewableAovs`); 0 means a preview of
-/// such a framebuffer cannot be written, which callers check before rendering.
-inline AovMask previewableAovs(AovMask aovs) { return aovs & kPreviewableAovs; }
+/// The requested AOVs a preview could show (`aovs & previewableAovMask()`); 0 means a preview
+/// of such a framebuffer cannot be written, which callers check before rendering.
+inline AovMask previewableAovs(AovMask aovs) { return aovs & previewableAovMask(); }
 
-/// The one AOV a preview of a framebuffer with `aovs` shows: the first previewable AOV in the
-/// order of kPreviewableAovs, or 0 when there is none.
+/// The one AOV a preview of a framebuffer with `aovs` shows: the first previewable AOV in table
+/// order, or 0 when there is none.
 Aov previewAov(AovMask aovs);
+
+/// "color, else depth, normal, primid or geomid": the previewable AOVs in order, for help texts.
+std::string previewableAovText();
 
 /// Writes an opaque 8-bit RGB preview of `fb` to `path` (PNG or any 8-bit format OpenImageIO
 /// writes, chosen by the extension), atomically. Throws Error naming `path`. It shows
