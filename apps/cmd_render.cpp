@@ -134,12 +134,11 @@ Command addRenderCommand(CLI::App& app) {
                   "16-bit PNG --out: value = round(depth * S), 0 for misses and out of range (a "
                   "warning counts them); 1000 = millimetres per metre, 5000 for TUM")
       ->capture_default_str();
-  sub->add_option(
-      "--preview", args->preview,
-      cat("Also write an opaque 8-bit preview (.png .jpg .jpeg .tif .tiff .bmp .tga .ppm) of ",
-          previewableAovText(),
-          ", for looking at (--out x.png is the 16-bit depth data); written before "
-          "the EXR"));
+  sub->add_option("--preview", args->preview,
+                  cat("Also write an opaque 8-bit preview (", join(previewExtensions(), " "),
+                      ") of ", previewableAovText(),
+                      ", for looking at (--out x.png is the 16-bit depth data); written before "
+                      "the EXR"));
   sub->add_option("--preview-range", args->previewRange,
                   "NEAR,FAR: a depth preview maps depth NEAR to white and FAR to black, clamped "
                   "(default: the image's own nearest and farthest depth)");

@@ -11,6 +11,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_codec.h"
+#include "core/mesh.h"
 #include "core/sampling.h"
 
 namespace aperture {
@@ -192,7 +193,30 @@ std::string previewableAovText() {
   return text;
 }
 
+const std::vector<PreviewFormat>& previewFormats() {
+  static const std::vector<PreviewFormat> formats = {
+      {"PNG", {".png"}}, {"JPEG", {".jpg", ".jpeg"}}, {"TIFF", {".tif", ".tiff"}},
+      {"BMP", {".bmp"}}, {"Targa", {".tga"}},         {"PPM", {".ppm"}},
+  };
+  return formats;
+}
+
+const std::vector<std::string>& previewExtensions() {
+  static const std::vector<std::string> extensions = [] {
+    std::vector<std::string> all;
+    for (const PreviewFormat& f : previewFormats())
+      all.insert(all.end(), f.extensions.begin(), f.extensions.end());
+    return all;
+  }();
+  return extensions;
+}
+
 void writePreview(const std::string& path, const Framebuffer& fb, const PreviewOptions& options) {
+  const std::string extension = lowerExtension(path);
+  const std::vector<std::string>& known = previewExtensions();
+  if (std::find(known.begin(), known.end(), extension) == known.end())
+    throw Error(cat("cannot write preview '", path, "': unknown preview extension '", extension,
+                    "' (supported: ", join(known, " "), ")"));
   if (fb.width <= 0 || fb.height <= 0)
     throw Error(cat("cannot write preview '", path, "': empty framebuffer"));
   const PreviewImage image = previewPixels(fb, options, path);

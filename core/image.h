@@ -5,6 +5,7 @@
 #include <glm/glm.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/framebuffer.h"
 
@@ -37,8 +38,19 @@ Aov previewAov(AovMask aovs);
 /// "color, else depth, normal, primid or geomid": the previewable AOVs in order, for help texts.
 std::string previewableAovText();
 
-/// Writes an opaque 8-bit RGB preview of `fb` to `path` (PNG or any 8-bit format OpenImageIO
-/// writes, chosen by the extension), atomically. Throws Error naming `path`. It shows
+/// A format a preview is written in (by OpenImageIO), picked by the path's extension.
+struct PreviewFormat {
+  const char* name;                     ///< "PNG", "JPEG", ...
+  std::vector<std::string> extensions;  ///< lower case, with the dot
+};
+/// The preview formats: PNG, JPEG, TIFF, BMP, Targa, PPM. The one list the output checks
+/// (apps/outputs.h), writePreview, the help texts and the README's list come from.
+const std::vector<PreviewFormat>& previewFormats();
+/// Every extension of previewFormats(), in order: .png .jpg .jpeg .tif .tiff .bmp .tga .ppm.
+const std::vector<std::string>& previewExtensions();
+
+/// Writes an opaque 8-bit RGB preview of `fb` to `path` (the format of previewFormats() its
+/// extension names), atomically. Throws Error naming `path`. It shows
 /// previewAov(fb.aovs):
 ///  - color: R G B composited over kPreviewBackground by coverage A (the color AOV is
 ///    premultiplied: c + (1 − A)·background, in linear light), clamped, sRGB-encoded;
