@@ -1,4 +1,4 @@
-// The AOV table (core/aov_table.h) seen from Python, for the tests: _aov_table() lists the rows
+// The AOV table (core/aov/aov_table.h) seen from Python, for the tests: _aov_table() lists the rows
 // as the arrays of render and read_exr give them; _AovRegistration adds a row for as long as it
 // is open, as a test-only AOV that the arrays must pick up with no code of their own.
 #include <nanobind/stl/string.h>
@@ -8,8 +8,8 @@
 #include <optional>
 
 #include "bindings.h"
-#include "core/aov_table.h"
-#include "core/error.h"
+#include "core/aov/aov_table.h"
+#include "core/util/error.h"
 
 namespace aperture::python {
 
@@ -43,7 +43,7 @@ void bindAovTable(nb::module_& m) {
         for (const AovRow& row : aovTable()) rows.append(rowDict(row));
         return rows;
       },
-      "The AOV table's rows (core/aov_table.h), in table order.");
+      "The AOV table's rows (core/aov/aov_table.h), in table order.");
   nb::class_<PyAovRegistration>(m, "_AovRegistration")
       .def(
           "__init__",

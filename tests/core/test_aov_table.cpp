@@ -1,4 +1,4 @@
-// The AOV table (core/aov_table.h): the docs hold its table, and a row registered by a test —
+// The AOV table (core/aov/aov_table.h): the docs hold its table, and a row registered by a test —
 // the row and the test's own computation, no other code — is allocated, parsed, listed,
 // written and read back by the EXR writer and reader, and written as a dataset file.
 #include <gtest/gtest.h>
@@ -8,13 +8,13 @@
 #include <string>
 #include <vector>
 
-#include "core/aov_table.h"
-#include "core/dataset_image.h"
-#include "core/error.h"
-#include "core/exr.h"
-#include "core/exr_header.h"
-#include "core/framebuffer.h"
-#include "core/limits.h"
+#include "apps/services/limits.h"
+#include "core/aov/aov_table.h"
+#include "core/aov/framebuffer.h"
+#include "core/exr/exr.h"
+#include "core/exr/exr_header.h"
+#include "core/io/dataset_image.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 using namespace aperture;
@@ -26,7 +26,7 @@ TEST(AovTable, DocsHoldTheGeneratedTable) {
   for (const char* file : {"/../docs/aovs.md", "/../README.md"}) {
     const std::string docs = test::readFile(std::string(APERTURE_TESTS_DIR) + file);
     EXPECT_NE(docs.find(table), std::string::npos)
-        << file << " does not hold the AOV table of core/aov_table.cpp; paste this one:\n"
+        << file << " does not hold the AOV table of core/aov/aov_table.cpp; paste this one:\n"
         << table;
   }
 }
