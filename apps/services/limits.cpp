@@ -267,7 +267,8 @@ uint64_t framebufferBytesPerPixel(const AovSet& set) {
   for (const AovRow& row : aovTable())
     if (set.mask & row.bit) b += 4 * uint64_t(row.channels());  // float32 or uint32 values
   b += 4 * set.properties.size();
-  b += 16 * uint64_t(set.layers);
+  for (const AovRow& row : aovTable())
+    if (row.layered()) b += 4 * uint64_t(set.layers);  // one float32 or uint32 per layer
   return b;
 }
 

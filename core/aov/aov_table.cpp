@@ -53,6 +53,11 @@ std::vector<AovRow> fixedRows() {
       if (r.name == name) return r;
     throw Error(cat("no fixed AOV '", name, "'"));
   };
+  // The layered hits (--layers K): layer 0 is the first surface, equal to these AOVs.
+  row("depth").layerF32 = &F::layerDepth;
+  row("distance").layerF32 = &F::layerDistance;
+  row("primid").layerU32 = &F::layerPrimId;
+  row("geomid").layerU32 = &F::layerGeomId;
   row("color").absentFill = {0, 0, 0, 1};  // an EXR without A is opaque
   row("color").halfInExr = true;
   row("shading-normal").inAll = false;  // asked for by name: it loads the vertex normals
@@ -124,6 +129,22 @@ const std::vector<uint32_t>& uintPixels(const Framebuffer& fb, const AovRow& row
   return p ? *p : none;
 }
 
+const std::vector<float>& layerFloatPixels(const Framebuffer& fb, const AovRow& row) {
+  if (!row.layerF32) throw Error(cat("AOV '", row.name, "' has no float layers"));
+  return fb.*row.layerF32;
+}
+
+const std::vector<uint32_t>& layerUintPixels(const Framebuffer& fb, const AovRow& row) {
+  if (!row.layerU32) throw Error(cat("AOV '", row.name, "' has no uint32 layers"));
+  return fb.*row.layerU32;
+}
+
+std::string layerAovName(const AovRow& row) { return "layers." + row.name; }
+
+std::string layerChannelName(int layer, const AovRow& row) {
+  return cat("hit", layer, ".", row.exrChannels.front());
+}
+
 size_t valueCount(const Framebuffer& fb, const AovRow& row) {
   return row.isFloat() ? floatPixels(fb, row).size() : uintPixels(fb, row).size();
 }
@@ -138,7 +159,7 @@ AovRegistration::AovRegistration(AovRow row) {
         throw Error(cat("AOV '", row.name, "': EXR channel '", c, "' is AOV '", r.name, "''s"));
   }
   if (row.exrChannels.empty()) throw Error(cat("AOV '", row.name, "' has no channel"));
-  if (row.f32 || row.u32)
+  if (row.f32 || row.u32 || row.layered())
     throw Error(cat("AOV '", row.name, "': a registered row keeps its pixels in the framebuffer"));
   for (int b = 0; b < 32 && bit_ == 0; ++b)
     if ((used & (1u << b)) == 0) bit_ = 1u << b;

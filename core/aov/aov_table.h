@@ -42,8 +42,14 @@ struct AovRow {
   /// name); both null for a registered row, whose pixels are in Framebuffer::registered.
   std::vector<float> Framebuffer::*f32 = nullptr;
   std::vector<uint32_t> Framebuffer::*u32 = nullptr;
+  /// Its layered hits (--layers K, core/engine/layers.h), for the 1-channel rows the layer
+  /// tracer fills: Framebuffer::layerDepth, ... (layer-major), the AOV "layers.NAME" and the
+  /// EXR channels "hit<k>.CHANNEL". Null for the rows without layers.
+  std::vector<float> Framebuffer::*layerF32 = nullptr;
+  std::vector<uint32_t> Framebuffer::*layerU32 = nullptr;
 
   int channels() const { return int(exrChannels.size()); }
+  bool layered() const { return layerF32 || layerU32; }
   bool isFloat() const { return type == AovType::Float32; }
   /// readExr's value for channel c when the file lacks it.
   double fillOfAbsent(int c) const { return absentFill.empty() ? miss : absentFill[size_t(c)]; }
@@ -64,6 +70,15 @@ const std::vector<float>& floatPixels(const Framebuffer& fb, const AovRow& row);
 const std::vector<uint32_t>& uintPixels(const Framebuffer& fb, const AovRow& row);
 /// The number of values `fb` holds for `row` (0 when it does not hold it).
 size_t valueCount(const Framebuffer& fb, const AovRow& row);
+
+/// The layered hits of `row` in `fb` (K·W·H values, layer-major; empty without layers), by the
+/// row's type. The row must be layered().
+const std::vector<float>& layerFloatPixels(const Framebuffer& fb, const AovRow& row);
+const std::vector<uint32_t>& layerUintPixels(const Framebuffer& fb, const AovRow& row);
+/// "layers.depth": the AOV name of a layered row's hits (aovView, the Python arrays).
+std::string layerAovName(const AovRow& row);
+/// "hit2.Z": the EXR channel of layer k of a layered row.
+std::string layerChannelName(int layer, const AovRow& row);
 
 /// Adds a row to the table for as long as the object lives (tests, and AOVs computed outside
 /// the frame loop): its bit is the lowest one no row uses, its pixels live in

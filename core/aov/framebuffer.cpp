@@ -93,7 +93,6 @@ std::string aovListString(const AovSet& set) {
 Framebuffer::Framebuffer(int w, int h, const AovSet& set)
     : width(w), height(h), aovs(set.mask), layers(set.layers) {
   const size_t n = pixelCount();
-  const float inf = std::numeric_limits<float>::infinity();
   for (const AovRow& row : aovTable()) {
     if ((set.mask & row.bit) == 0) continue;
     if (!row.f32 && !row.u32) registered.push_back({row.bit, {}, {}});
@@ -105,13 +104,12 @@ Framebuffer::Framebuffer(int w, int h, const AovSet& set)
   }
   for (const PropertyAov& p : set.properties)
     properties.push_back({p, std::vector<uint32_t>(n, kInvalidId)});
-  if (layers > 0) {
-    const size_t ln = size_t(layers) * n;
-    layerDepth.assign(ln, inf);
-    layerDistance.assign(ln, inf);
-    layerPrimId.assign(ln, kInvalidId);
-    layerGeomId.assign(ln, kInvalidId);
-  }
+  if (layers > 0)
+    for (const AovRow& row : aovTable()) {
+      const size_t ln = size_t(layers) * n;
+      if (row.layerF32) (this->*row.layerF32).assign(ln, float(row.miss));
+      if (row.layerU32) (this->*row.layerU32).assign(ln, uint32_t(row.miss));
+    }
 }
 
 AovSet Framebuffer::aovSet() const {
@@ -134,33 +132,21 @@ ImageView uintView(const Framebuffer& fb, const std::vector<uint32_t>& v) {
   return {fb.width, fb.height, 1, nullptr, v.data()};
 }
 
-/// The layered-hit views by name ("layers.depth", ...), in the order aovNames lists them.
-constexpr const char* kLayerViewNames[] = {"layers.depth", "layers.distance", "layers.primid",
-                                           "layers.geomid"};
-
-ImageView layerView(const Framebuffer& fb, int which) {
+/// The view of a layered row's hits ("layers.depth", ...).
+ImageView layerView(const Framebuffer& fb, const AovRow& row) {
   ImageView v{fb.width, fb.height, 1, nullptr, nullptr, fb.layers};
-  switch (which) {
-    case 0:
-      v.f32 = fb.layerDepth.data();
-      break;
-    case 1:
-      v.f32 = fb.layerDistance.data();
-      break;
-    case 2:
-      v.u32 = fb.layerPrimId.data();
-      break;
-    default:
-      v.u32 = fb.layerGeomId.data();
-  }
+  if (row.layerF32)
+    v.f32 = layerFloatPixels(fb, row).data();
+  else
+    v.u32 = layerUintPixels(fb, row).data();
   return v;
 }
 }  // namespace
 
 ImageView aovView(const Framebuffer& fb, const std::string& aovName) {
   if (fb.layers > 0)
-    for (int k = 0; k < 4; ++k)
-      if (aovName == kLayerViewNames[k]) return layerView(fb, k);
+    for (const AovRow& row : aovTable())
+      if (row.layered() && aovName == layerAovName(row)) return layerView(fb, row);
   PropertyAov property;
   if (parsePropertyAov(aovName, property)) {
     for (const PropertyChannel& c : fb.properties)
@@ -178,7 +164,8 @@ std::vector<std::string> aovNames(const Framebuffer& fb) {
     if (fb.has(Aov(row.bit))) names.push_back(row.name);
   for (const PropertyChannel& c : fb.properties) names.push_back(c.property.aovName());
   if (fb.layers > 0)
-    names.insert(names.end(), std::begin(kLayerViewNames), std::end(kLayerViewNames));
+    for (const AovRow& row : aovTable())
+      if (row.layered()) names.push_back(layerAovName(row));
   return names;
 }
 

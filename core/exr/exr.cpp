@@ -17,6 +17,7 @@
 #include <OpenEXR/ImfThreading.h>
 #include <OpenEXR/ImfVecAttribute.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <deque>
 #include <exception>
@@ -93,15 +94,6 @@ std::vector<PropertyAov> propertyChannelsOf(const Imf::ChannelList& channels) {
     if (set.properties.size() == 1) found.push_back(set.properties.front());
   }
   return found;
-}
-
-/// Layered hits (core/engine/layers.h): layer k (0-based, nearest first) is the OpenEXR layer
-/// "hit<k>" holding the channels below, e.g. hit0.Z hit0.T hit0.primID hit0.geomID hit1.Z ...
-/// Z and T float (+inf past the last surface), primID and geomID UINT (0xFFFFFFFF there).
-enum LayerChannel { kLayerZ, kLayerT, kLayerPrimId, kLayerGeomId };
-const char* const kLayerChannelNames[4] = {"Z", "T", "primID", "geomID"};
-std::string layerChannelName(int layer, LayerChannel channel) {
-  return cat("hit", layer, ".", kLayerChannelNames[channel]);
 }
 
 /// Adds a channel and a slice over interleaved data (`components` values a pixel).
@@ -367,18 +359,26 @@ void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata&
     addChannel(header, frame, propertyNames[j].c_str(), Imf::UINT, fb.properties[j].values.data(),
                sizeof(uint32_t), 1, w);
   }
-  checkSize("layers", fb.layerDepth.size(), size_t(fb.layers));
+  // Layered hits (core/engine/layers.h): layer k (0-based, nearest first) is the OpenEXR layer
+  // "hit<k>" with a channel per layered row of the AOV table: hit0.Z hit0.T hit0.primID
+  // hit0.geomID hit1.Z ..., each of its row's type, its miss value past the last surface.
   const int flatLayers = options.layersInDeepFile ? 0 : fb.layers;
+  for (const AovRow& row : aovTable()) {
+    if (!row.layered()) continue;
+    const bool f = row.layerF32 != nullptr;
+    checkSize("layers", f ? layerFloatPixels(fb, row).size() : layerUintPixels(fb, row).size(),
+              size_t(fb.layers));
+  }
   for (int k = 0; k < flatLayers; ++k) {
     const size_t at = size_t(k) * n;
-    addChannel(header, frame, layerChannelName(k, kLayerZ).c_str(), Imf::FLOAT,
-               fb.layerDepth.data() + at, sizeof(float), 1, w);
-    addChannel(header, frame, layerChannelName(k, kLayerT).c_str(), Imf::FLOAT,
-               fb.layerDistance.data() + at, sizeof(float), 1, w);
-    addChannel(header, frame, layerChannelName(k, kLayerPrimId).c_str(), Imf::UINT,
-               fb.layerPrimId.data() + at, sizeof(uint32_t), 1, w);
-    addChannel(header, frame, layerChannelName(k, kLayerGeomId).c_str(), Imf::UINT,
-               fb.layerGeomId.data() + at, sizeof(uint32_t), 1, w);
+    for (const AovRow& row : aovTable()) {
+      if (row.layerF32)
+        addChannel(header, frame, layerChannelName(k, row).c_str(), Imf::FLOAT,
+                   layerFloatPixels(fb, row).data() + at, sizeof(float), 1, w);
+      else if (row.layerU32)
+        addChannel(header, frame, layerChannelName(k, row).c_str(), Imf::UINT,
+                   layerUintPixels(fb, row).data() + at, sizeof(uint32_t), 1, w);
+    }
   }
   if (header.channels().begin() == header.channels().end())
     throw Error(cat("cannot write '", path, "': the framebuffer holds no AOV"));
@@ -407,7 +407,10 @@ Framebuffer readExr(const std::string& path, ExrMetadata* meta) {
         if (present(name.c_str())) mask |= row.bit;
     AovSet set(mask);
     set.properties = propertyChannelsOf(channels);
-    while (set.layers < kMaxLayers && present(layerChannelName(set.layers, kLayerZ).c_str()))
+    // Layer k is there when the first layered row's channel of it is (hit<k>.Z).
+    const AovRow& firstLayered = *std::find_if(aovTable().begin(), aovTable().end(),
+                                               [](const AovRow& r) { return r.layered(); });
+    while (set.layers < kMaxLayers && present(layerChannelName(set.layers, firstLayered).c_str()))
       ++set.layers;
     if (set.empty())
       throw Error(
@@ -439,17 +442,16 @@ Framebuffer readExr(const std::string& path, ExrMetadata* meta) {
     for (size_t j = 0; j < fb.properties.size(); ++j)
       insert(propertyNames[j].c_str(), Imf::UINT, fb.properties[j].values.data(), sizeof(uint32_t),
              1, double(kInvalidId));
-    const double inf = std::numeric_limits<double>::infinity();
     for (int k = 0; k < set.layers; ++k) {
       const size_t at = size_t(k) * fb.pixelCount();
-      insert(layerChannelName(k, kLayerZ).c_str(), Imf::FLOAT, fb.layerDepth.data() + at,
-             sizeof(float), 1, inf);
-      insert(layerChannelName(k, kLayerT).c_str(), Imf::FLOAT, fb.layerDistance.data() + at,
-             sizeof(float), 1, inf);
-      insert(layerChannelName(k, kLayerPrimId).c_str(), Imf::UINT, fb.layerPrimId.data() + at,
-             sizeof(uint32_t), 1, double(kInvalidId));
-      insert(layerChannelName(k, kLayerGeomId).c_str(), Imf::UINT, fb.layerGeomId.data() + at,
-             sizeof(uint32_t), 1, double(kInvalidId));
+      for (const AovRow& row : aovTable()) {
+        if (row.layerF32)
+          insert(layerChannelName(k, row).c_str(), Imf::FLOAT, (fb.*row.layerF32).data() + at,
+                 sizeof(float), 1, row.miss);
+        else if (row.layerU32)
+          insert(layerChannelName(k, row).c_str(), Imf::UINT, (fb.*row.layerU32).data() + at,
+                 sizeof(uint32_t), 1, row.miss);
+      }
     }
     file.setFrameBuffer(frame);
     file.readPixels(window.min.y, window.max.y);
@@ -497,8 +499,8 @@ std::vector<std::string> exrChannelNames(const AovSet& set, const ExrOptions& op
   for (const PropertyAov& p : set.properties) names.push_back(p.aovName());
   const int flatLayers = options.layersInDeepFile ? 0 : set.layers;
   for (int k = 0; k < flatLayers; ++k)
-    for (LayerChannel c : {kLayerZ, kLayerT, kLayerPrimId, kLayerGeomId})
-      names.push_back(layerChannelName(k, c));
+    for (const AovRow& row : aovTable())
+      if (row.layered()) names.push_back(layerChannelName(k, row));
   return names;
 }
 

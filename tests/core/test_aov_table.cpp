@@ -44,6 +44,28 @@ TEST(AovTable, FixedRowsAreTheEnumBitsInOrder) {
   EXPECT_EQ(seen, AovMask(0xff));
 }
 
+// The layered hits are the columns of the four rows the layer tracer fills, as docs/layers.md
+// names them: hit<k>.Z hit<k>.T hit<k>.primID hit<k>.geomID.
+TEST(AovTable, LayeredRowsGiveTheHitChannels) {
+  std::vector<std::string> layered;
+  for (const AovRow& row : aovTable())
+    if (row.layered()) layered.push_back(layerAovName(row));
+  EXPECT_EQ(layered, (std::vector<std::string>{"layers.depth", "layers.distance", "layers.primid",
+                                               "layers.geomid"}));
+  AovSet set(kAovNormal);
+  set.layers = 2;
+  EXPECT_EQ(
+      exrChannelNames(set, {}),
+      (std::vector<std::string>{"N.X", "N.Y", "N.Z", "hit0.Z", "hit0.T", "hit0.primID",
+                                "hit0.geomID", "hit1.Z", "hit1.T", "hit1.primID", "hit1.geomID"}));
+  const Framebuffer fb(2, 1, set);
+  EXPECT_EQ(aovView(fb, "layers.primid").u32, fb.layerPrimId.data());
+  EXPECT_EQ(aovView(fb, "layers.distance").layers, 2);
+  EXPECT_EQ(fb.layerGeomId, std::vector<uint32_t>(4, kInvalidId));
+  EXPECT_TRUE(std::isinf(fb.layerDistance[3]));
+  EXPECT_EQ(framebufferBytesPerPixel(set), 12u + 2u * 16u);
+}
+
 /// A test-only AOV: two float channels "uv.U", "uv.V", -1 on a miss.
 AovRow uvRow() {
   AovRow row;
