@@ -1,4 +1,4 @@
-#include "apps/services/camera_files.h"
+#include "apps/services/camera_file_params.h"
 
 #include <filesystem>
 
