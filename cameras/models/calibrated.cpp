@@ -15,7 +15,7 @@
 #include <mutex>
 
 #include "cameras/lenses/direction_table.h"
-#include "cameras/models/models.h"
+#include "cameras/models/camera_models.h"
 #include "core/util/error.h"
 #include "core/util/units.h"
 #include "core/util/vector_kernel.h"

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <vector>
 
-#include "cameras/models/models.h"
+#include "cameras/models/camera_models.h"
 #include "core/util/error.h"
 #include "core/util/units.h"
 #include "core/util/vector_kernel.h"

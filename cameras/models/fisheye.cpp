@@ -12,7 +12,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "cameras/models/models.h"
+#include "cameras/models/camera_models.h"
 #include "core/util/error.h"
 #include "core/util/parallel.h"
 #include "core/util/units.h"

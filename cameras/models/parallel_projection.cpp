@@ -75,7 +75,7 @@ std::optional<glm::dvec2> ParallelCamera::project(const glm::dvec3& worldPoint) 
   const glm::dvec3 p = worldPoint - frame_.e;
   const double depth = -glm::dot(p, frame_.w);
   if (depth < 0) return std::nullopt;
-  return planeToRaster(glm::dot(p, frame_.u) - shearU_ * depth,
+  return rasterFromPlane(glm::dot(p, frame_.u) - shearU_ * depth,
                        glm::dot(p, frame_.v) - shearV_ * depth);
 }
 

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <limits>
 
-#include "cameras/models/models.h"
+#include "cameras/models/camera_models.h"
 #include "core/util/error.h"
 #include "core/util/units.h"
 #include "core/util/vector_kernel.h"
@@ -109,7 +109,7 @@ std::optional<glm::dvec2> PerspectiveCamera::project(const glm::dvec3& worldPoin
   const glm::dvec3 p = worldPoint - frame_.e;
   const double depth = -glm::dot(p, frame_.w);
   if (!(depth > 0)) return std::nullopt;
-  return planeToRaster(d_ * glm::dot(p, frame_.u) / depth, d_ * glm::dot(p, frame_.v) / depth);
+  return rasterFromPlane(d_ * glm::dot(p, frame_.u) / depth, d_ * glm::dot(p, frame_.v) / depth);
 }
 
 ViewVolume PerspectiveCamera::viewVolume(double nearDist, double farDist) const {

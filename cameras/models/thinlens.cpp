@@ -2,7 +2,7 @@
 // at e, focused at depth f along −W. The ray code is PerspectiveCamera::rayAt.
 #include <cmath>
 
-#include "cameras/models/models.h"
+#include "cameras/models/camera_models.h"
 #include "cameras/models/perspective.h"
 #include "core/util/error.h"
 #include "core/util/vector_kernel.h"
