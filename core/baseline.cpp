@@ -27,9 +27,9 @@ bool plainPinhole(const CameraDescription& d) {
 
 /// The 16 rays of the 4x4 block at (x0, y0): direction normalize(corner + j·du + i·dv) in
 /// float, origin the eye; lanes outside the image are masked off.
-APERTURE_VECTOR_KERNEL void pinholeBlock(const glm::vec3& eye, const glm::vec3& corner,
-                                         const glm::vec3& du, const glm::vec3& dv, int x0, int y0,
-                                         int width, int height, RTCRay16& r, int* valid) {
+void pinholeBlock(const glm::vec3& eye, const glm::vec3& corner, const glm::vec3& du,
+                  const glm::vec3& dv, int x0, int y0, int width, int height, RTCRay16& r,
+                  int* valid) {
   APERTURE_LANE_LOOP
   for (int k = 0; k < 16; ++k) {
     const LanePixel px = lanePixel(x0, y0, 4, k);
@@ -130,7 +130,7 @@ std::string BaselineTracer::rayGeneration() const {
 }
 
 void BaselineTracer::pinholeRays(int x0, int y0, RTCRay16& rays, int* valid) const {
-  pinholeBlock(p_.eye, p_.corner, p_.du, p_.dv, x0, y0, width_, height_, rays, valid);
+  runKernel<&pinholeBlock>(p_.eye, p_.corner, p_.du, p_.dv, x0, y0, width_, height_, rays, valid);
 }
 
 void BaselineTracer::traceTilePinhole(const Scene& scene, const Tile& t, RTCIntersectContext& ctx,

@@ -844,8 +844,7 @@ void prefetchBlockRow(const ImagePlan& plan, int y, int x0, int x1, int y1) {
 /// A per-ISA kernel (core/vector_kernel.h): the whole block loop, stores included, is
 /// compiled for each x86-64 level.
 template <int N, bool kNull>
-APERTURE_VECTOR_KERNEL void renderTile(const ImagePlan& plan, int x0, int y0, int x1, int y1,
-                                       TileCounters& count) {
+void renderTile(const ImagePlan& plan, int x0, int y0, int x1, int y1, TileCounters& count) {
   // Denormals flushed on every worker (Embree's recommendation); same mode on all threads.
   _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
   _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
@@ -872,13 +871,13 @@ template <bool kNull>
 TileRenderer tileRendererOfWidth(int packetWidth) {
   switch (packetWidth) {
     case 1:
-      return &renderTile<1, kNull>;
+      return &Kernel<&renderTile<1, kNull>>::run;
     case 4:
-      return &renderTile<4, kNull>;
+      return &Kernel<&renderTile<4, kNull>>::run;
     case 8:
-      return &renderTile<8, kNull>;
+      return &Kernel<&renderTile<8, kNull>>::run;
     default:
-      return &renderTile<16, kNull>;
+      return &Kernel<&renderTile<16, kNull>>::run;
   }
 }
 
