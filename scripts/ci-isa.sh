@@ -2,7 +2,7 @@
 # CI: the GoogleTest suite again at the vector widths of CPUs other than the one CI runs on,
 # forced through the two environment variables that pick the kernels:
 #   - Embree at AVX2 (APERTURE_EMBREE_CONFIG=isa=avx2: what Embree picks on any CPU without
-#     AVX-512) with aperture's x86-64-v3 kernels (APERTURE_KERNEL_ISA, core/vector_kernel.h);
+#     AVX-512) with aperture's x86-64-v3 kernels (APERTURE_KERNEL_ISA, core/util/vector_kernel.h);
 #   - Embree at SSE4.2 with aperture's baseline kernels.
 # The golden hashes (tests/cameras/test_golden.cpp) must hold under both, as under the
 # default run of scripts/test.sh. Reuses build/ of scripts/test.sh (run it first): only the

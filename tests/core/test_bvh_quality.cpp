@@ -12,9 +12,9 @@
 #include <cstdio>
 #include <vector>
 
-#include "core/mesh.h"
-#include "core/scene.h"
-#include "core/trace.h"
+#include "core/engine/scene.h"
+#include "core/mesh/mesh.h"
+#include "core/queries/trace.h"
 #include "tests/numerics_support.h"
 
 namespace aperture {

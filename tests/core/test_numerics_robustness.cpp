@@ -16,16 +16,16 @@
 #include <memory>
 #include <vector>
 
-#include "cameras/base.h"
-#include "cameras/registry.h"
-#include "core/error.h"
-#include "core/exr.h"
-#include "core/layers.h"
-#include "core/mesh.h"
-#include "core/packet.h"
-#include "core/render.h"
-#include "core/scene.h"
-#include "core/trace.h"
+#include "cameras/models/base.h"
+#include "cameras/registry/registry.h"
+#include "core/engine/layers.h"
+#include "core/engine/packet.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/exr/exr.h"
+#include "core/mesh/mesh.h"
+#include "core/queries/trace.h"
+#include "core/util/error.h"
 #include "tests/numerics_support.h"
 #include "tests/support.h"
 
@@ -215,8 +215,8 @@ TEST(NumericsNonFinite, NonFiniteRaysAreNeverTracedAndNeverReachTheFramebuffer) 
 }
 
 /// What Embree may be handed, written from its documentation (RTCRay, rtcIntersectNM) rather
-/// than from core/packet.h: an active lane holds a ray with finite origin and direction within
-/// Embree's range and a segment 0 <= tnear <= tfar; an inactive lane has tfar < tnear, since
+/// than from core/engine/packet.h: an active lane holds a ray with finite origin and direction
+/// within Embree's range and a segment 0 <= tnear <= tfar; an inactive lane has tfar < tnear, since
 /// a device without native kernels of the packet's width traces it as a stream, mask ignored.
 struct PacketAudit {
   static inline std::atomic<uint64_t> packets{0}, activeLanes{0}, inactiveLanes{0}, bad{0};

@@ -1,4 +1,4 @@
-// The per-ISA kernels of core/vector_kernel.h: which level APERTURE_KERNEL_ISA picks and
+// The per-ISA kernels of core/util/vector_kernel.h: which level APERTURE_KERNEL_ISA picks and
 // refuses, that the command line runs the level it names, and that every level renders the
 // same pixels bit for bit.
 #include <gtest/gtest.h>
@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "core/error.h"
-#include "core/exr.h"
-#include "core/framebuffer.h"
-#include "core/vector_kernel.h"
+#include "core/aov/framebuffer.h"
+#include "core/exr/exr.h"
+#include "core/util/error.h"
+#include "core/util/vector_kernel.h"
 #include "tests/support.h"
 
 namespace aperture {
@@ -104,7 +104,7 @@ TEST(KernelIsa, TheCommandLineRunsTheLevelTheVariableNamesAndRefusesABadOne) {
 }
 
 TEST(KernelIsa, EveryLevelRendersTheSamePixels) {
-  // The kernels' rule (core/vector_kernel.h): the same bits on every level. Embree's kernels
+  // The kernels' rule (core/util/vector_kernel.h): the same bits on every level. Embree's kernels
   // pinned, so only aperture's differ: ray generation of three camera models, the frame loop's
   // stores (every AOV) and the mesh placement. Compared AOV by AOV, bit for bit.
   const std::vector<KernelIsa> levels = runnableLevels();

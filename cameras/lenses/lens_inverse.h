@@ -1,0 +1,121 @@
+#pragma once
+// The arithmetic of the calibrated lens models, and the exact inverse's kernel. A Lens
+// (cameras/lenses/lens_model.h) owns a model and its parameters; what its forward map and its
+// inverse compute is written here once, as templates over the number type: a double for one point,
+// or eight of them side by side (GCC's vector extension, one AVX-512 register, two AVX2 ones)
+// for the inverse of eight pixels. Either way each lane computes exactly the same operations
+// in the same order: IEEE +, −, ×, ÷ and √ round the same in every vector width, and the build
+// contracts no FMA.
+#include <cstdint>
+#include <vector>
+
+namespace aperture {
+
+/// Every model's distortion in one shared form, filled from the parameters once:
+///   (u', v') = g(s)·(u, v) + tangential(u, v) + (sx1, sy1)·s,   s = u² + v²,
+///   g(s) = N(s) / D(s),  N = 1 + n1 s + … + n4 s⁴,  D = 1 + d1 s + d2 s² + d3 s³,
+///   tangential = (2 p1 u v + p2 (s + 2u²), 2 p2 u v + p1 (s + 2v²)).
+struct DistortionTerms {
+  double num[5] = {1, 0, 0, 0, 0};  ///< N's coefficients by power of s
+  double den[4] = {1, 0, 0, 0};     ///< D's (FULL_OPENCV's k4, k5, k6)
+  double p1 = 0, p2 = 0;            ///< tangential (OpenCV's p1, p2)
+  double sx1 = 0, sy1 = 0;          ///< thin prism
+  bool identity = true;             ///< no distortion at all: (u', v') = (u, v)
+  bool rational = false;            ///< D is not 1
+  bool radialOnly = true;           ///< no tangential or thin-prism term
+};
+
+/// Σ c[i] sⁱ (i < N, N >= 2) and its derivative by s, by Horner's rule (from p = c[N − 1],
+/// dp = 0; the first step written out, so every step's operands have the type of s).
+template <int N, class T>
+inline T polynomialAt(const double* c, T s, T& derivative) {
+  T dp = 0.0 * s + c[N - 1];
+  T p = c[N - 1] * s + c[N - 2];
+  for (int i = N - 3; i >= 0; --i) {
+    dp = dp * s + p;
+    p = p * s + c[i];
+  }
+  derivative = dp;
+  return p;
+}
+
+/// g(s) and dg/ds.
+template <class T>
+inline void distortionGain(const DistortionTerms& t, T s, T& g, T& dg) {
+  T dn;
+  const T n = polynomialAt<5>(t.num, s, dn);
+  if (!t.rational) {
+    g = n, dg = dn;
+    return;
+  }
+  T dd;
+  const T d = polynomialAt<4>(t.den, s, dd);
+  g = n / d;
+  dg = (dn * d - n * dd) / (d * d);
+}
+
+/// The radial profile ρ(r) = r·g(r²) and its derivative.
+template <class T>
+inline void radialProfileOf(const DistortionTerms& t, T r, T& rho, T& drho) {
+  const T s = r * r;
+  T g, dg;
+  distortionGain(t, s, g, dg);
+  rho = r * g;
+  drho = g + 2 * s * dg;
+}
+
+/// The forward map (u, v) -> (u', v') of a distorted model (not t.identity) and, when
+/// `withJacobian`, d(u', v')/d(u, v) column by column: j[0] = du'/du, j[1] = dv'/du,
+/// j[2] = du'/dv, j[3] = dv'/dv.
+template <class T>
+inline void distortPoint(const DistortionTerms& t, T u, T v, T& du, T& dv, bool withJacobian,
+                         T* j) {
+  const T uu = u * u, vv = v * v, uv = u * v, s = uu + vv;
+  T g, dg;
+  distortionGain(t, s, g, dg);
+  if (withJacobian) {
+    // d(g(s)·u)/du = g + 2u²·g'(s), and so on.
+    j[0] = g + 2 * uu * dg + 2 * t.p1 * v + 6 * t.p2 * u + 2 * t.sx1 * u;
+    j[1] = 2 * uv * dg + 2 * t.p2 * v + 2 * t.p1 * u + 2 * t.sy1 * u;
+    j[2] = 2 * uv * dg + 2 * t.p1 * u + 2 * t.p2 * v + 2 * t.sx1 * v;
+    j[3] = g + 2 * vv * dg + 2 * t.p2 * u + 6 * t.p1 * v + 2 * t.sy1 * v;
+  }
+  du = g * u + 2 * t.p1 * uv + t.p2 * (s + 2 * uu) + t.sx1 * s;
+  dv = g * v + 2 * t.p2 * uv + t.p1 * (s + 2 * vv) + t.sy1 * s;
+}
+
+/// Everything the inverse reads of a lens, made once with it (Lens::inverse_): its terms,
+/// intrinsics, valid region and the radial inverse's first-guess table.
+struct LensInverse {
+  DistortionTerms terms;
+  double fx = 1, fy = 1, cx = 0, cy = 0;
+  bool fisheye = false;
+  bool bounded = false;       ///< LensValidRegion::bounded()
+  double maxUndistorted = 0;  ///< the valid region's radii
+  double maxDistorted = 0;
+  /// maxDistorted plus how far the tangential and thin-prism terms reach: no distorted point
+  /// beyond it has a preimage (Lens::nonRadialReach).
+  double nonRadialLimit = 0;
+  /// The radial inverse's table: r and dr/dt at t = k·step, k = 0..cells() (empty: none, as
+  /// for a lens without distortion or while the table is being made).
+  std::vector<double> inverseRadius, inverseSlope;
+  double step = 0;
+  int cells() const { return inverseRadius.empty() ? 0 : int(inverseRadius.size()) - 1; }
+};
+
+/// Pixels unprojectEight solves side by side.
+inline constexpr int kLensLanes = 8;
+
+/// Lens::unproject of one pixel (COLMAP pixel coordinates): false where it has no ray.
+bool unprojectOne(const LensInverse& lens, double px, double py, double dir[3]);
+/// Lens::unproject of eight pixels side by side; on entry solve[k] says which to solve, on
+/// return whether each has a ray (written to dirX..dirZ[k]).
+void unprojectEight(const LensInverse& lens, const double* px, const double* py, double* dirX,
+                    double* dirY, double* dirZ, bool* solve);
+/// Lens::undistort of one point in normalised coordinates: false where it has no preimage.
+bool undistortOne(const LensInverse& lens, double du, double dv, double& u, double& v);
+/// The radial profile's inverse of one radius (Lens::invertRadialProfile); `exact` false: the
+/// table's first guess where it has one.
+bool invertRadialOne(const LensInverse& lens, double t, bool exact, double& r);
+
+}  // namespace aperture
