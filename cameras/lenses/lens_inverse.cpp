@@ -353,11 +353,9 @@ MaskOf<T> unproject(const LensInverse& c, const T& px, const T& py, T& dx, T& dy
   return solve;
 }
 
-}  // namespace
-
-APERTURE_VECTOR_KERNEL void unprojectEight(const LensInverse& lens, const double* px,
-                                           const double* py, double* dirX, double* dirY,
-                                           double* dirZ, bool* solve) {
+/// unprojectEight's kernel.
+void unprojectEightLanes(const LensInverse& lens, const double* px, const double* py, double* dirX,
+                         double* dirY, double* dirZ, bool* solve) {
   Lanes x, y, dx = {}, dy = {}, dz = {};
   LaneMasks wanted;
   for (int k = 0; k < kLensLanes; ++k) x[k] = px[k], y[k] = py[k], wanted[k] = maskOf(solve[k]);
@@ -366,6 +364,13 @@ APERTURE_VECTOR_KERNEL void unprojectEight(const LensInverse& lens, const double
     dirX[k] = dx[k], dirY[k] = dy[k], dirZ[k] = dz[k];
     solve[k] = solved[k] != 0;
   }
+}
+
+}  // namespace
+
+void unprojectEight(const LensInverse& lens, const double* px, const double* py, double* dirX,
+                    double* dirY, double* dirZ, bool* solve) {
+  runKernel<&unprojectEightLanes>(lens, px, py, dirX, dirY, dirZ, solve);
 }
 
 bool unprojectOne(const LensInverse& lens, double px, double py, double dir[3]) {

@@ -20,8 +20,7 @@ struct ParallelCentres {
 /// A kBW x kBH block of rays through pixel centres, rayAt() term by term: origin
 /// (e + u·U) + v·V, u and v from the camera's pixel-centre table.
 template <int kBW, int kBH>
-APERTURE_VECTOR_KERNEL void parallelCentres(const ParallelCentres& c, int x0, int y0, RayLanes& out,
-                                            int* valid) {
+void parallelCentres(const ParallelCentres& c, int x0, int y0, RayLanes& out, int* valid) {
   constexpr int kLanes = kBW * kBH;
   const double* __restrict us = c.centres.u.data() + x0;
   const double* __restrict vs = c.centres.v.data() + y0;
@@ -64,7 +63,7 @@ void ParallelCamera::generate(const PacketRequest& req, RayLanes& out, int* vali
                             frame_.u, frame_.v, glm::vec3(dir_)};
     const bool done = withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
       constexpr int kBW = decltype(bw)::value, kBH = decltype(bh)::value;
-      parallelCentres<kBW, kBH>(c, req.x0, req.y0, out, valid);
+      runKernel<&parallelCentres<kBW, kBH>>(c, req.x0, req.y0, out, valid);
     });
     if (done) return;
   }
