@@ -75,7 +75,7 @@ std::optional<glm::dvec2> ParallelCamera::project(const glm::dvec3& worldPoint) 
   const double depth = -glm::dot(p, frame_.w);
   if (depth < 0) return std::nullopt;
   return rasterFromPlane(glm::dot(p, frame_.u) - shearU_ * depth,
-                       glm::dot(p, frame_.v) - shearV_ * depth);
+                         glm::dot(p, frame_.v) - shearV_ * depth);
 }
 
 ViewVolume ParallelCamera::viewVolume(double nearDist, double farDist) const {
