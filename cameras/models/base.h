@@ -8,8 +8,8 @@
 #include <string>
 #include <type_traits>
 
-#include "cameras/models/frame.h"
-#include "cameras/models/view_volume.h"
+#include "cameras/geometry/frame.h"
+#include "cameras/geometry/view_volume.h"
 #include "cameras/schema/image_window.h"
 #include "cameras/schema/param_schema.h"
 #include "cameras/schema/params.h"
