@@ -387,7 +387,7 @@ class CalibratedCamera final : public CameraBase {
     lp.params = lens.params();
     lp.pixelCentre = pixelCentreName(sensor_.pixelCentre);
     c.lens = lp;
-    c.extra.emplace_back("valid_region", lens.validRegion().text(lens.info().fisheye));
+    c.extra.emplace_back("valid_region", lens.validRegion().text(lens.overTheta()));
   }
 
   void describeCounts(CameraDescription& c) const override {
@@ -480,16 +480,14 @@ const ParamSpec kIntrinsics{"intrinsics",
                             nullptr,
                             4,
                             "calibrated"};
-const ParamSpec kLensModel{"lens_model",
-                           K::Choice,
-                           "",
-                           "COLMAP camera model of the lens (src/colmap/sensor/models.h)",
-                           nullptr,
-                           {},
-                           lensModelNames(),
-                           {},
-                           {},
-                           fieldAccess<&CameraParams::lensModel>()};
+const ParamSpec kLensModel{
+    "lens_model", K::Choice,
+    "",           "COLMAP camera model of the lens (src/colmap/sensor/models.h)",
+    nullptr,      {},
+    {},           {},
+    {},           fieldAccess<&CameraParams::lensModel>(),
+    nullptr,      0,
+    nullptr,      lensModelNames};
 const ParamSpec kDistortion{"distortion",
                             K::Numbers,
                             "",

@@ -353,11 +353,82 @@ MaskOf<T> unproject(const LensInverse& c, const T& px, const T& py, T& dx, T& dy
   return solve;
 }
 
+// ---- A model's own formula (LensFormula): one pixel at a time, in double.
+
+/// The r in the valid region with ρ(r) = t (t >= 0): the formula's closed form, or Newton's
+/// method kept inside the bracket [0, the fold] by bisection.
+bool invertFormula(const LensInverse& c, double t, double& r) {
+  if (!(t >= 0)) return false;
+  if (t == 0) {
+    r = 0;
+    return true;
+  }
+  if (c.bounded && !(t < c.maxDistorted)) return false;
+  const double* k = c.coefficients.data();
+  if (c.formula->inverse) {
+    r = c.formula->inverse(k, t);
+    return r >= 0 && r < c.maxUndistorted;
+  }
+  double lo = 0, hi = c.maxUndistorted, rho = 0, drho = 0;
+  if (!c.bounded) {
+    for (hi = std::max(1.0, t);; hi *= 2) {
+      c.formula->profile(k, hi, rho, drho);
+      if (!(rho < t)) break;
+      if (hi > 1e300) return false;
+    }
+  }
+  r = std::min(t, 0.5 * (lo + hi));
+  for (int i = 0; i < kMaxRadialIterations; ++i) {
+    c.formula->profile(k, r, rho, drho);
+    const double f = rho - t;
+    if (f == 0) return drho > 0;
+    (f < 0 ? lo : hi) = r;
+    const double newton = r - f / drho;
+    const double next = newton > lo && newton < hi ? newton : 0.5 * (lo + hi);
+    if (std::abs(next - r) <= 1e-15 * r)
+      return std::abs(f) <= kAcceptedResidual * std::max(1.0, t) && drho > 0;
+    r = next;
+  }
+  return false;
+}
+
+bool undistortFormula(const LensInverse& c, double du, double dv, double& u, double& v) {
+  if (!std::isfinite(du) || !std::isfinite(dv)) return false;
+  const double t = std::sqrt(du * du + dv * dv);
+  double r = 0;
+  if (!invertFormula(c, t, r)) return false;
+  const double along = t == 0 ? 0.0 : r / t;
+  u = du * along, v = dv * along;
+  return true;
+}
+
+bool unprojectFormula(const LensInverse& c, double px, double py, double dir[3]) {
+  double u = 0, v = 0;
+  if (!undistortFormula(c, (px - c.cx) / c.fx, (py - c.cy) / c.fy, u, v)) return false;
+  if (!c.fisheye) {
+    const double inv = 1.0 / std::sqrt((u * u + v * v) + 1.0);
+    dir[0] = u * inv, dir[1] = v * inv, dir[2] = inv;
+    return true;
+  }
+  const double theta = std::sqrt(u * u + v * v);
+  const double s = theta == 0 ? 0.0 : std::sin(theta) / theta;
+  dir[0] = u * s, dir[1] = v * s, dir[2] = std::cos(theta);
+  return true;
+}
+
 }  // namespace
 
 APERTURE_VECTOR_KERNEL void unprojectEight(const LensInverse& lens, const double* px,
                                            const double* py, double* dirX, double* dirY,
                                            double* dirZ, bool* solve) {
+  if (lens.formula) {
+    for (int k = 0; k < kLensLanes; ++k) {
+      double dir[3] = {0, 0, 1};
+      solve[k] = solve[k] && unprojectFormula(lens, px[k], py[k], dir);
+      dirX[k] = dir[0], dirY[k] = dir[1], dirZ[k] = dir[2];
+    }
+    return;
+  }
   Lanes x, y, dx = {}, dy = {}, dz = {};
   LaneMasks wanted;
   for (int k = 0; k < kLensLanes; ++k) x[k] = px[k], y[k] = py[k], wanted[k] = maskOf(solve[k]);
@@ -369,14 +440,17 @@ APERTURE_VECTOR_KERNEL void unprojectEight(const LensInverse& lens, const double
 }
 
 bool unprojectOne(const LensInverse& lens, double px, double py, double dir[3]) {
+  if (lens.formula) return unprojectFormula(lens, px, py, dir);
   return unproject(lens, px, py, dir[0], dir[1], dir[2], maskOf(true)) != 0;
 }
 
 bool undistortOne(const LensInverse& lens, double du, double dv, double& u, double& v) {
+  if (lens.formula) return undistortFormula(lens, du, dv, u, v);
   return undistort(lens, du, dv, u, v, maskOf(true)) != 0;
 }
 
 bool invertRadialOne(const LensInverse& lens, double t, bool exact, double& r) {
+  if (lens.formula) return invertFormula(lens, t, r);
   return invertRadial(lens, t, exact, r, maskOf(true)) != 0;
 }
 

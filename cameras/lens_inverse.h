@@ -84,10 +84,33 @@ inline void distortPoint(const DistortionTerms& t, T u, T v, T& du, T& dv, bool 
   dv = g * v + 2 * t.p2 * uv + t.p1 * (s + 2 * vv) + t.sy1 * s;
 }
 
+/// A model's own distortion, for a model the shared polynomial form (DistortionTerms) does not
+/// hold: its radial profile ρ(r), the distorted radius (normalised coordinates) of the
+/// undistorted one, r = |(x/z, y/z)| or, `overTheta`, the angle θ off-axis. ρ(0) = 0 and
+/// ρ'(0) > 0; ρ is NaN where the model has no image. The valid region ends at the first r
+/// where ρ is not finite or ρ' <= 0 (Lens::findValidRegion).
+struct LensFormula {
+  /// ρ(r) and dρ/dr for the coefficients k (the params after the focal lengths and principal
+  /// point, in COLMAP's order).
+  void (*profile)(const double* k, double r, double& rho, double& drho) = nullptr;
+  /// The exact inverse r(ρ) inside the valid region, when there is a closed form (else the
+  /// inverse is Newton's method on `profile`).
+  double (*inverse)(const double* k, double rho) = nullptr;
+  /// Throws Error (naming `model` and the value) for coefficients the model refuses; null:
+  /// any finite values.
+  void (*check)(const char* model, const double* k) = nullptr;
+  /// The profile is over θ (the ray at θ off-axis, up to π: a model that sees behind the
+  /// camera), whatever COLMAP calls the model.
+  bool overTheta = false;
+};
+
 /// Everything the inverse reads of a lens, made once with it (Lens::inverse_): its terms,
 /// intrinsics, valid region and the radial inverse's first-guess table.
 struct LensInverse {
   DistortionTerms terms;
+  /// The model's own formula (LensModelInfo::formula) and its coefficients; null: `terms`.
+  const LensFormula* formula = nullptr;
+  std::vector<double> coefficients;
   double fx = 1, fy = 1, cx = 0, cy = 0;
   bool fisheye = false;
   bool bounded = false;       ///< LensValidRegion::bounded()
@@ -102,6 +125,14 @@ struct LensInverse {
   double step = 0;
   int cells() const { return inverseRadius.empty() ? 0 : int(inverseRadius.size()) - 1; }
 };
+
+/// The radial profile ρ(r) of a lens and dρ/dr, by its formula.
+inline void profileOf(const LensInverse& c, double r, double& rho, double& drho) {
+  if (c.formula)
+    c.formula->profile(c.coefficients.data(), r, rho, drho);
+  else
+    radialProfileOf(c.terms, r, rho, drho);
+}
 
 /// Pixels unprojectEight solves side by side.
 inline constexpr int kLensLanes = 8;

@@ -13,32 +13,186 @@
 
 namespace aperture {
 
-const std::vector<LensModelInfo>& lensModels() {
-  static const std::vector<LensModelInfo> models = {
-      {LensModelId::SimplePinhole, "SIMPLE_PINHOLE", 0, {"f", "cx", "cy"}, false},
-      {LensModelId::Pinhole, "PINHOLE", 1, {"fx", "fy", "cx", "cy"}, false},
-      {LensModelId::SimpleRadial, "SIMPLE_RADIAL", 2, {"f", "cx", "cy", "k"}, false},
-      {LensModelId::Radial, "RADIAL", 3, {"f", "cx", "cy", "k1", "k2"}, false},
-      {LensModelId::OpenCV, "OPENCV", 4, {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"}, false},
+namespace {
+
+// The formulas of the shared polynomial form (cameras/lens_inverse.h): each model's
+// coefficients, in COLMAP's order (models.h, the models' Distortion functions), as its terms.
+DistortionTerms noTerms(const double*) { return {}; }
+DistortionTerms oneRadialTerm(const double* k) {  // k
+  DistortionTerms t;
+  t.num[1] = k[0];
+  return t;
+}
+DistortionTerms twoRadialTerms(const double* k) {  // k1, k2
+  DistortionTerms t;
+  t.num[1] = k[0], t.num[2] = k[1];
+  return t;
+}
+DistortionTerms openCVTerms(const double* k) {  // k1, k2, p1, p2
+  DistortionTerms t;
+  t.num[1] = k[0], t.num[2] = k[1], t.p1 = k[2], t.p2 = k[3];
+  return t;
+}
+DistortionTerms fullOpenCVTerms(const double* k) {  // k1, k2, p1, p2, k3, k4, k5, k6
+  DistortionTerms t = openCVTerms(k);
+  t.num[3] = k[4];
+  t.den[1] = k[5], t.den[2] = k[6], t.den[3] = k[7];
+  return t;
+}
+DistortionTerms openCVFisheyeTerms(const double* k) {  // k1, k2, k3, k4
+  DistortionTerms t;
+  t.num[1] = k[0], t.num[2] = k[1], t.num[3] = k[2], t.num[4] = k[3];
+  return t;
+}
+DistortionTerms thinPrismTerms(const double* k) {  // k1, k2, p1, p2, k3, k4, sx1, sy1
+  DistortionTerms t = openCVTerms(k);
+  t.num[3] = k[4], t.num[4] = k[5], t.sx1 = k[6], t.sy1 = k[7];
+  return t;
+}
+
+// Spellings. OpenCV's standard model has COLMAP's OPENCV and FULL_OPENCV order (k1 k2 p1 p2
+// k3 k4 k5 k6); the radial models are it with the missing coefficients zero. cv::fisheye is
+// OPENCV_FISHEYE (θd = θ(1 + k1θ² + k2θ⁴ + …)); the radial fisheyes are it with the missing
+// coefficients zero. nerfstudio's slots are k1 k2 k3 k4 p1 p2 (camera_utils.py: the radial
+// polynomial in r² up to r⁸ and OpenCV's tangential terms; OPENCV_FISHEYE: k1..k4 in θ).
+const LensSpelling kNone{};
+LensSpelling openCV(std::vector<int> slots) { return {"standard", std::move(slots)}; }
+LensSpelling cvFisheye(std::vector<int> slots) { return {"fisheye", std::move(slots)}; }
+LensSpelling nerf(const char* name, std::vector<int> slots) { return {name, std::move(slots)}; }
+const LensSpelling kBlenderPerspective{"PERSP", {}};
+constexpr int _ = -1;  // a slot no coefficient fills
+
+std::deque<LensModelInfo>& modelTable() {
+  static std::deque<LensModelInfo> models = {
+      {LensModelId::SimplePinhole,
+       "SIMPLE_PINHOLE",
+       0,
+       {"f", "cx", "cy"},
+       false,
+       noTerms,
+       nullptr,
+       openCV({_, _, _, _}),
+       nerf("SIMPLE_PINHOLE", {_, _, _, _, _, _}),
+       kBlenderPerspective},
+      {LensModelId::Pinhole,
+       "PINHOLE",
+       1,
+       {"fx", "fy", "cx", "cy"},
+       false,
+       noTerms,
+       nullptr,
+       openCV({_, _, _, _}),
+       nerf("PINHOLE", {_, _, _, _, _, _}),
+       kBlenderPerspective},
+      {LensModelId::SimpleRadial,
+       "SIMPLE_RADIAL",
+       2,
+       {"f", "cx", "cy", "k"},
+       false,
+       oneRadialTerm,
+       nullptr,
+       openCV({0, _, _, _}),
+       nerf("SIMPLE_RADIAL", {0, _, _, _, _, _}),
+       kNone},
+      {LensModelId::Radial,
+       "RADIAL",
+       3,
+       {"f", "cx", "cy", "k1", "k2"},
+       false,
+       twoRadialTerms,
+       nullptr,
+       openCV({0, 1, _, _}),
+       nerf("RADIAL", {0, 1, _, _, _, _}),
+       kNone},
+      {LensModelId::OpenCV,
+       "OPENCV",
+       4,
+       {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"},
+       false,
+       openCVTerms,
+       nullptr,
+       openCV({0, 1, 2, 3}),
+       nerf("OPENCV", {0, 1, _, _, 2, 3}),
+       kNone},
       {LensModelId::OpenCVFisheye,
        "OPENCV_FISHEYE",
        5,
        {"fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"},
-       true},
+       true,
+       openCVFisheyeTerms,
+       nullptr,
+       cvFisheye({0, 1, 2, 3}),
+       nerf("OPENCV_FISHEYE", {0, 1, 2, 3}),
+       kNone},
+      // nerfstudio's k3 is FULL_OPENCV's k3 (its k4 k5 k6, the denominator, have no slot).
       {LensModelId::FullOpenCV,
        "FULL_OPENCV",
        6,
        {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"},
-       false},
-      {LensModelId::SimpleRadialFisheye, "SIMPLE_RADIAL_FISHEYE", 8, {"f", "cx", "cy", "k"}, true},
-      {LensModelId::RadialFisheye, "RADIAL_FISHEYE", 9, {"f", "cx", "cy", "k1", "k2"}, true},
+       false,
+       fullOpenCVTerms,
+       nullptr,
+       openCV({0, 1, 2, 3, 4, 5, 6, 7}),
+       nerf("OPENCV", {0, 1, 4, _, 2, 3}),
+       kNone},
+      {LensModelId::SimpleRadialFisheye,
+       "SIMPLE_RADIAL_FISHEYE",
+       8,
+       {"f", "cx", "cy", "k"},
+       true,
+       oneRadialTerm,
+       nullptr,
+       cvFisheye({0, _, _, _}),
+       nerf("OPENCV_FISHEYE", {0, _, _, _}),
+       kNone},
+      {LensModelId::RadialFisheye,
+       "RADIAL_FISHEYE",
+       9,
+       {"f", "cx", "cy", "k1", "k2"},
+       true,
+       twoRadialTerms,
+       nullptr,
+       cvFisheye({0, 1, _, _}),
+       nerf("OPENCV_FISHEYE", {0, 1, _, _}),
+       kNone},
       {LensModelId::ThinPrismFisheye,
        "THIN_PRISM_FISHEYE",
        10,
        {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "sx1", "sy1"},
-       true},
+       true,
+       thinPrismTerms,
+       nullptr,
+       kNone,
+       kNone,
+       kNone},
   };
   return models;
+}
+
+}  // namespace
+
+const std::deque<LensModelInfo>& lensModels() { return modelTable(); }
+
+const LensModelInfo& registerLensModel(LensModelInfo row) {
+  if ((row.terms == nullptr) == (row.formula == nullptr) ||
+      (row.formula && row.formula->profile == nullptr))
+    throw Error(cat("lens model ", row.name,
+                    ": needs exactly one formula (terms of the polynomial form, or a profile)"));
+  if (row.paramNames.size() < 3)
+    throw Error(cat("lens model ", row.name, ": needs at least f, cx, cy"));
+  for (const LensModelInfo& m : lensModels())
+    if (m.id == row.id || m.colmapId == row.colmapId || std::string(m.name) == row.name)
+      throw Error(cat("lens model ", row.name, " (id ", int(row.id), ", COLMAP id ", row.colmapId,
+                      "): its id, COLMAP id or name is taken by ", m.name));
+  modelTable().push_back(std::move(row));
+  return modelTable().back();
+}
+
+void unregisterLensModel(LensModelId id) {
+  std::deque<LensModelInfo>& models = modelTable();
+  if (models.empty() || models.back().id != id)
+    throw Error(cat("lens model id ", int(id), " is not the last one registered"));
+  models.pop_back();
 }
 
 const LensModelInfo& lensModelInfo(LensModelId id) {
@@ -79,11 +233,22 @@ Lens::Lens(LensModelId model, std::vector<double> params)
   LensInverse& c = inverse_;
   c.fx = params_[0], c.fy = params_[single ? 0 : 1];
   c.cx = params_[single ? 1 : 2], c.cy = params_[single ? 2 : 3];
-  c.fisheye = m.fisheye;
+  c.fisheye = m.fisheye || (m.formula && m.formula->overTheta);
   if (c.fx <= 0 || c.fy <= 0)
     throw Error(
         cat("camera model ", m.name, ": focal length must be > 0 (got ", c.fx, ", ", c.fy, ")"));
-  c.terms = termsOf(model_, distortion());
+  const std::vector<double> k = distortion();
+  if (m.formula) {
+    if (m.formula->check) m.formula->check(m.name, k.data());
+    c.formula = m.formula;
+    c.coefficients = k;
+  } else {
+    c.terms = m.terms(k.data());
+    c.terms.rational = c.terms.den[1] != 0 || c.terms.den[2] != 0 || c.terms.den[3] != 0;
+    c.terms.radialOnly = c.terms.p1 == 0 && c.terms.p2 == 0 && c.terms.sx1 == 0 && c.terms.sy1 == 0;
+    c.terms.identity = c.terms.radialOnly && !c.terms.rational && c.terms.num[1] == 0 &&
+                       c.terms.num[2] == 0 && c.terms.num[3] == 0 && c.terms.num[4] == 0;
+  }
   valid_ = findValidRegion();
   c.bounded = valid_.bounded();
   c.maxUndistorted = valid_.maxUndistorted;
@@ -99,11 +264,11 @@ double Lens::cx() const { return inverse_.cx; }
 double Lens::cy() const { return inverse_.cy; }
 
 std::vector<double> Lens::distortion() const {
-  return {params_.begin() + (info().singleFocal() ? 3 : 4), params_.end()};
+  return {params_.begin() + long(info().intrinsicCount()), params_.end()};
 }
 
 bool Lens::distorted() const {
-  if (info().fisheye) return true;
+  if (inverse_.fisheye) return true;
   for (double k : distortion())
     if (k != 0) return true;
   return false;
@@ -144,44 +309,22 @@ std::string LensValidRegion::text(bool fisheye) const {
   return s;
 }
 
-// The coefficients come in COLMAP's order (models.h, the models' Distortion functions).
-DistortionTerms Lens::termsOf(LensModelId model, const std::vector<double>& k) {
-  DistortionTerms t;
-  switch (model) {
-    case LensModelId::SimplePinhole:
-    case LensModelId::Pinhole:
-      break;
-    case LensModelId::SimpleRadial:  // k
-    case LensModelId::SimpleRadialFisheye:
-      t.num[1] = k[0];
-      break;
-    case LensModelId::Radial:  // k1, k2
-    case LensModelId::RadialFisheye:
-      t.num[1] = k[0], t.num[2] = k[1];
-      break;
-    case LensModelId::OpenCV:  // k1, k2, p1, p2
-      t.num[1] = k[0], t.num[2] = k[1], t.p1 = k[2], t.p2 = k[3];
-      break;
-    case LensModelId::FullOpenCV:  // k1, k2, p1, p2, k3, k4, k5, k6
-      t.num[1] = k[0], t.num[2] = k[1], t.p1 = k[2], t.p2 = k[3], t.num[3] = k[4];
-      t.den[1] = k[5], t.den[2] = k[6], t.den[3] = k[7];
-      break;
-    case LensModelId::OpenCVFisheye:  // k1, k2, k3, k4
-      t.num[1] = k[0], t.num[2] = k[1], t.num[3] = k[2], t.num[4] = k[3];
-      break;
-    case LensModelId::ThinPrismFisheye:  // k1, k2, p1, p2, k3, k4, sx1, sy1
-      t.num[1] = k[0], t.num[2] = k[1], t.p1 = k[2], t.p2 = k[3], t.num[3] = k[4];
-      t.num[4] = k[5], t.sx1 = k[6], t.sy1 = k[7];
-      break;
-  }
-  t.rational = t.den[1] != 0 || t.den[2] != 0 || t.den[3] != 0;
-  t.radialOnly = t.p1 == 0 && t.p2 == 0 && t.sx1 == 0 && t.sy1 == 0;
-  t.identity = t.radialOnly && !t.rational && t.num[1] == 0 && t.num[2] == 0 && t.num[3] == 0 &&
-               t.num[4] == 0;
-  return t;
-}
-
 glm::dvec2 Lens::distort(const glm::dvec2& p, glm::dmat2* jacobian) const {
+  if (inverse_.formula) {
+    // A radial profile: (u', v') = (ρ(r)/r)·(u, v), whose Jacobian is (ρ/r)·I plus
+    // (ρ' − ρ/r)·n nᵀ along the unit radius n.
+    const double r = glm::length(p);
+    double rho = 0, drho = 0;
+    radialProfile(r, rho, drho);
+    if (r == 0) {
+      if (jacobian) *jacobian = glm::dmat2(drho);
+      return p;
+    }
+    const double gain = rho / r;
+    const glm::dvec2 n = p / r;
+    if (jacobian) *jacobian = glm::dmat2(gain) + (drho - gain) * glm::outerProduct(n, n);
+    return p * gain;
+  }
   if (inverse_.terms.identity) {
     if (jacobian) *jacobian = glm::dmat2(1.0);
     return p;
@@ -197,10 +340,10 @@ glm::dvec2 Lens::distort(const glm::dvec2& p, glm::dmat2* jacobian) const {
 // rational FULL_OPENCV, before the first pole of g (D(r²) > 0): the valid region ends at the
 // first r where either fails. ρ'(0) = 1 and D(0) = 1 for every model.
 LensValidRegion Lens::findValidRegion() const {
-  const bool fisheye = info().fisheye;
+  const bool fisheye = inverse_.fisheye;
   LensValidRegion region;
   region.maxUndistorted = region.maxDistorted = fisheye ? kPi : kInf;
-  if (inverse_.terms.identity) return region;
+  if (!inverse_.formula && inverse_.terms.identity) return region;
 
   const auto invertible = [this](double r) {
     if (inverse_.terms.rational) {
@@ -235,7 +378,7 @@ LensValidRegion Lens::findValidRegion() const {
 
 void Lens::tabulateInverse() {
   inverse_.inverseRadius.clear(), inverse_.inverseSlope.clear();  // none while it is made
-  if (inverse_.terms.identity) return;
+  if (inverse_.formula || inverse_.terms.identity) return;        // a formula's inverse needs none
   const double end = std::min(kInverseTableEnd, valid_.maxDistorted * (1 - 1e-6));
   std::vector<double> radius(kInverseTableCells + 1), slope(kInverseTableCells + 1);
   for (int k = 0; k <= kInverseTableCells; ++k) {

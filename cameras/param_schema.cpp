@@ -157,11 +157,12 @@ void checkRange(const ParamSpec& spec, const ParamValue& value, const std::strin
   }
   if (spec.kind == ParamKind::Choice) {
     const std::string& word = std::get<std::string>(value);
-    if (spec.choices.empty()) return;  // `type`: checked by the registry
-    if (std::find(spec.choices.begin(), spec.choices.end(), word) == spec.choices.end()) {
-      const std::string list = join(spec.choices, ", ");
+    const std::vector<const char*> choices = spec.choiceList();
+    if (choices.empty()) return;  // `type`: checked by the registry
+    if (std::find(choices.begin(), choices.end(), word) == choices.end()) {
+      const std::string list = join(choices, ", ");
       throw Error(
-          cat(label, ": '", word, "' is not one of ", list, didYouMean(word, names(spec.choices))));
+          cat(label, ": '", word, "' is not one of ", list, didYouMean(word, names(choices))));
     }
   }
   if (spec.kind == ParamKind::Size) {
@@ -209,7 +210,8 @@ std::string ParamSpec::describeText(const CameraParams& defaults) const {
   if (*unit) add(unit);
   if (kind == ParamKind::Choice) {
     // No fixed list: the registered camera models (the `type` parameter).
-    std::vector<std::string> words(choices.begin(), choices.end());
+    const std::vector<const char*> list = choiceList();
+    std::vector<std::string> words(list.begin(), list.end());
     if (words.empty()) words = cameraTypeNames();
     add(join(words, "|"));
   }
@@ -329,7 +331,7 @@ std::string cameraParamsMarkdown() {
     for (const char* c : p->conflicts) rel += std::string(rel.empty() ? "not " : ", not ") + c;
     for (const char* r : p->needs) rel += std::string(rel.empty() ? "needs " : ", needs ") + r;
     std::string range = p->range.text();
-    for (const char* c : p->choices) range += std::string(range.empty() ? "" : " \\| ") + c;
+    for (const char* c : p->choiceList()) range += std::string(range.empty() ? "" : " \\| ") + c;
     s << "| `" << p->name << "` | `" << p->flag() << "` | " << users << " | " << p->unit << " | "
       << (p->kind == ParamKind::Flag ? "off" : p->defaultText()) << " | " << range << " | " << rel
       << " | " << p->help << " |\n";

@@ -66,7 +66,12 @@ struct ParamSpec {
   /// A model this parameter selects when given without `type` (the pose matrices and
   /// intrinsics select "calibrated"); null: the default type applies.
   const char* selectsModel = nullptr;
+  /// For Choice: the choices as a table holds them when asked (a table that can grow: the lens
+  /// models, cameras/lens_model.h); null: `choices`.
+  std::vector<const char*> (*choicesNow)() = nullptr;
 
+  /// The choices of a Choice parameter (choicesNow() or choices; empty: the camera models).
+  std::vector<const char*> choiceList() const { return choicesNow ? choicesNow() : choices; }
   std::string flag() const;  ///< "--fov", "--focal-length", "--camera"
   /// The rule, or the value `defaults` holds (a command's own defaults, e.g. its size).
   std::string defaultText(const CameraParams& defaults = {}) const;
