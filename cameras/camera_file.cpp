@@ -51,6 +51,9 @@ int shareSensor(CameraFile& file, const CalibratedSensor& sensor) {
 
 CalibratedSensor inPixelCentre(const CalibratedSensor& sensor, PixelCentre to) {
   if (sensor.pixelCentre == to) return sensor;
+  if (sensor.lens.info().ownMap())
+    throw Error(cat("camera model ", sensor.lens.info().name, " has no principal point to give in ",
+                    pixelCentreName(to), " pixel centres"));
   // The raster position of the principal point is the same in both conventions.
   const glm::dvec2 raster =
       rasterOfSourcePixel({sensor.lens.cx(), sensor.lens.cy()}, sensor.pixelCentre);

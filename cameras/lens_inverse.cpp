@@ -392,17 +392,64 @@ bool invertFormula(const LensInverse& c, double t, double& r) {
   return false;
 }
 
+/// Newton's method on a formula's 2D map from (x, y) towards (tx, ty), as newton2d: solved
+/// when converged inside the radial fold with a positive Jacobian determinant.
+bool newtonFormula(const LensInverse& c, double tx, double ty, double& x, double& y) {
+  const double scale = std::max(1.0, std::sqrt(tx * tx + ty * ty));
+  double du = 0, dv = 0, j[4];
+  distortByFormula(c, x, y, du, dv, j);
+  double rx = du - tx, ry = dv - ty, error = std::sqrt(rx * rx + ry * ry);
+  bool stalled = false;
+  for (int i = 0;; ++i) {
+    const double det = j[0] * j[3] - j[2] * j[1];
+    if (!(std::isfinite(error) && std::isfinite(det) && det != 0)) return false;
+    if (error <= kConvergedResidual * scale || (stalled && error <= kAcceptedResidual * scale))
+      return det > 0 && std::sqrt(x * x + y * y) < c.maxUndistorted;
+    if (stalled || i == kMaxNewtonIterations) return false;
+    double sx = (j[3] * rx - j[2] * ry) / det, sy = (-j[1] * rx + j[0] * ry) / det;
+    stalled = true;  // unless a step below lowers the residual
+    for (int h = 0; h < kMaxHalvings; ++h) {
+      const double nx = x - sx, ny = y - sy, reach = std::sqrt(nx * nx + ny * ny);
+      double ndu = 0, ndv = 0, nj[4];
+      distortByFormula(c, nx, ny, ndu, ndv, nj);
+      const double nrx = ndu - tx, nry = ndv - ty, nextError = std::sqrt(nrx * nrx + nry * nry);
+      if (reach < c.maxUndistorted && nextError <= error) {
+        stalled = std::sqrt(sx * sx + sy * sy) <= kStalledStep * std::max(1.0, reach);
+        x = nx, y = ny, rx = nrx, ry = nry, error = nextError;
+        for (int e = 0; e < 4; ++e) j[e] = nj[e];
+        break;
+      }
+      sx *= 0.5, sy *= 0.5;
+    }
+  }
+}
+
 bool undistortFormula(const LensInverse& c, double du, double dv, double& u, double& v) {
   if (!std::isfinite(du) || !std::isfinite(dv)) return false;
   const double t = std::sqrt(du * du + dv * dv);
   double r = 0;
-  if (!invertFormula(c, t, r)) return false;
-  const double along = t == 0 ? 0.0 : r / t;
-  u = du * along, v = dv * along;
-  return true;
+  const bool radial = invertFormula(c, t, r);
+  if (!c.formula->nonRadial) {
+    if (!radial) return false;
+    const double along = t == 0 ? 0.0 : r / t;
+    u = du * along, v = dv * along;
+    return true;
+  }
+  // As undistort(): from the radial inverse along the point's direction, or from just inside
+  // the fold when the radial part alone has none there, unless the point lies beyond the
+  // non-radial terms' reach.
+  if (t == 0) {
+    u = v = 0;
+  } else {
+    if (!radial && !(t < c.nonRadialLimit)) return false;
+    const double along = radial ? r / t : 0.99 * c.maxUndistorted / t;
+    u = du * along, v = dv * along;
+  }
+  return newtonFormula(c, du, dv, u, v);
 }
 
 bool unprojectFormula(const LensInverse& c, double px, double py, double dir[3]) {
+  if (c.formula->rayOf) return c.formula->rayOf(c.coefficients.data(), px, py, dir);
   double u = 0, v = 0;
   if (!undistortFormula(c, (px - c.cx) / c.fx, (py - c.cy) / c.fy, u, v)) return false;
   if (!c.fisheye) {
@@ -417,6 +464,39 @@ bool unprojectFormula(const LensInverse& c, double px, double py, double dir[3])
 }
 
 }  // namespace
+
+void distortByFormula(const LensInverse& c, double u, double v, double& du, double& dv, double* j) {
+  // The radial part (x, y) = (ρ(r)/r)·(u, v), whose Jacobian is (ρ/r)·I plus
+  // (ρ' − ρ/r)·n nᵀ along the unit radius n.
+  const double* k = c.coefficients.data();
+  const double r = std::sqrt(u * u + v * v);
+  double rho = 0, drho = 0;
+  c.formula->profile(k, r, rho, drho);
+  const double gain = r == 0 ? drho : rho / r;
+  const double x = u * gain, y = v * gain;
+  double jr[4] = {drho, 0, 0, drho};
+  if (r > 0) {
+    const double nx = u / r, ny = v / r, extra = drho - gain;
+    jr[0] = gain + extra * nx * nx, jr[1] = extra * nx * ny;
+    jr[2] = extra * nx * ny, jr[3] = gain + extra * ny * ny;
+  }
+  if (!c.formula->nonRadial) {
+    du = x, dv = y;
+    if (j)
+      for (int e = 0; e < 4; ++e) j[e] = jr[e];
+    return;
+  }
+  double dx = 0, dy = 0, jn[4];
+  c.formula->nonRadial(k, x, y, dx, dy, j ? jn : nullptr);
+  du = x + dx, dv = y + dy;
+  if (!j) return;
+  // (I + Jn)·Jr, column by column.
+  for (int col = 0; col < 2; ++col) {
+    const double a = jr[2 * col], b = jr[2 * col + 1];
+    j[2 * col] = (1 + jn[0]) * a + jn[2] * b;
+    j[2 * col + 1] = jn[1] * a + (1 + jn[3]) * b;
+  }
+}
 
 APERTURE_VECTOR_KERNEL void unprojectEight(const LensInverse& lens, const double* px,
                                            const double* py, double* dirX, double* dirY,

@@ -102,6 +102,20 @@ struct LensFormula {
   /// The profile is over θ (the ray at θ off-axis, up to π: a model that sees behind the
   /// camera), whatever COLMAP calls the model.
   bool overTheta = false;
+  /// Terms that are not radial, added to the radially distorted point (x, y): their value and,
+  /// when j is given, their Jacobian by (x, y) column by column (j[0] = d(dx)/dx,
+  /// j[1] = d(dy)/dx, j[2] = d(dx)/dy, j[3] = d(dy)/dy). Null: a radial model.
+  void (*nonRadial)(const double* k, double x, double y, double& dx, double& dy,
+                    double* j) = nullptr;
+  /// How far `nonRadial` can move a point of radius <= `radius` (a bound).
+  double (*reach)(const double* k, double radius) = nullptr;
+  /// A map that is not radial about a principal point (EQUIRECTANGULAR): the unit ray of a
+  /// pixel and the pixel of a direction, from all the parameters, and the linear part of the
+  /// map as intrinsics. Null: the radial profile above, after the intrinsics.
+  bool (*rayOf)(const double* params, double px, double py, double dir[3]) = nullptr;
+  bool (*pixelOf)(const double* params, const double dir[3], double& px, double& py) = nullptr;
+  void (*intrinsicsOf)(const double* params, double& fx, double& fy, double& cx,
+                       double& cy) = nullptr;
 };
 
 /// Everything the inverse reads of a lens, made once with it (Lens::inverse_): its terms,
@@ -125,6 +139,11 @@ struct LensInverse {
   double step = 0;
   int cells() const { return inverseRadius.empty() ? 0 : int(inverseRadius.size()) - 1; }
 };
+
+/// A formula's whole distortion (u, v) -> (u', v'): the radial profile, then the non-radial
+/// terms; `j` (if given) receives the Jacobian column by column, as distortPoint's.
+void distortByFormula(const LensInverse& lens, double u, double v, double& du, double& dv,
+                      double* j);
 
 /// The radial profile ρ(r) of a lens and dρ/dr, by its formula.
 inline void profileOf(const LensInverse& c, double r, double& rho, double& drho) {

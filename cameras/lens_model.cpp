@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "cameras/lens_formulas.h"
 #include "core/error.h"
 #include "core/spelling.h"
 #include "core/units.h"
@@ -60,112 +61,60 @@ LensSpelling openCV(std::vector<int> slots) { return {"standard", std::move(slot
 LensSpelling cvFisheye(std::vector<int> slots) { return {"fisheye", std::move(slots)}; }
 LensSpelling nerf(const char* name, std::vector<int> slots) { return {name, std::move(slots)}; }
 const LensSpelling kBlenderPerspective{"PERSP", {}};
+const LensSpelling kBlenderEquidistant{"FISHEYE_EQUIDISTANT", {}};
+const LensSpelling kBlenderEquirectangular{"EQUIRECTANGULAR", {}};
 constexpr int _ = -1;  // a slot no coefficient fills
 
 std::deque<LensModelInfo>& modelTable() {
+  // One row per model, in COLMAP's id order: id, COLMAP's name, id and parameters, fisheye,
+  // the formula (terms or own), and the OpenCV, nerfstudio and Blender spellings.
+  // clang-format off
   static std::deque<LensModelInfo> models = {
-      {LensModelId::SimplePinhole,
-       "SIMPLE_PINHOLE",
-       0,
-       {"f", "cx", "cy"},
-       false,
-       noTerms,
-       nullptr,
-       openCV({_, _, _, _}),
-       nerf("SIMPLE_PINHOLE", {_, _, _, _, _, _}),
-       kBlenderPerspective},
-      {LensModelId::Pinhole,
-       "PINHOLE",
-       1,
-       {"fx", "fy", "cx", "cy"},
-       false,
-       noTerms,
-       nullptr,
-       openCV({_, _, _, _}),
-       nerf("PINHOLE", {_, _, _, _, _, _}),
-       kBlenderPerspective},
-      {LensModelId::SimpleRadial,
-       "SIMPLE_RADIAL",
-       2,
-       {"f", "cx", "cy", "k"},
-       false,
-       oneRadialTerm,
-       nullptr,
-       openCV({0, _, _, _}),
-       nerf("SIMPLE_RADIAL", {0, _, _, _, _, _}),
-       kNone},
-      {LensModelId::Radial,
-       "RADIAL",
-       3,
-       {"f", "cx", "cy", "k1", "k2"},
-       false,
-       twoRadialTerms,
-       nullptr,
-       openCV({0, 1, _, _}),
-       nerf("RADIAL", {0, 1, _, _, _, _}),
-       kNone},
-      {LensModelId::OpenCV,
-       "OPENCV",
-       4,
-       {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"},
-       false,
-       openCVTerms,
-       nullptr,
-       openCV({0, 1, 2, 3}),
-       nerf("OPENCV", {0, 1, _, _, 2, 3}),
-       kNone},
-      {LensModelId::OpenCVFisheye,
-       "OPENCV_FISHEYE",
-       5,
-       {"fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"},
-       true,
-       openCVFisheyeTerms,
-       nullptr,
-       cvFisheye({0, 1, 2, 3}),
-       nerf("OPENCV_FISHEYE", {0, 1, 2, 3}),
-       kNone},
-      // nerfstudio's k3 is FULL_OPENCV's k3 (its k4 k5 k6, the denominator, have no slot).
-      {LensModelId::FullOpenCV,
-       "FULL_OPENCV",
-       6,
-       {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"},
-       false,
-       fullOpenCVTerms,
-       nullptr,
-       openCV({0, 1, 2, 3, 4, 5, 6, 7}),
-       nerf("OPENCV", {0, 1, 4, _, 2, 3}),
-       kNone},
-      {LensModelId::SimpleRadialFisheye,
-       "SIMPLE_RADIAL_FISHEYE",
-       8,
-       {"f", "cx", "cy", "k"},
-       true,
-       oneRadialTerm,
-       nullptr,
-       cvFisheye({0, _, _, _}),
-       nerf("OPENCV_FISHEYE", {0, _, _, _}),
-       kNone},
-      {LensModelId::RadialFisheye,
-       "RADIAL_FISHEYE",
-       9,
-       {"f", "cx", "cy", "k1", "k2"},
-       true,
-       twoRadialTerms,
-       nullptr,
-       cvFisheye({0, 1, _, _}),
-       nerf("OPENCV_FISHEYE", {0, 1, _, _}),
-       kNone},
-      {LensModelId::ThinPrismFisheye,
-       "THIN_PRISM_FISHEYE",
-       10,
-       {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "sx1", "sy1"},
-       true,
-       thinPrismTerms,
-       nullptr,
-       kNone,
-       kNone,
-       kNone},
+    {LensModelId::SimplePinhole, "SIMPLE_PINHOLE", 0, {"f", "cx", "cy"}, false,
+     noTerms, nullptr, openCV({_, _, _, _}), nerf("SIMPLE_PINHOLE", {_, _, _, _, _, _}), kBlenderPerspective},
+    {LensModelId::Pinhole, "PINHOLE", 1, {"fx", "fy", "cx", "cy"}, false,
+     noTerms, nullptr, openCV({_, _, _, _}), nerf("PINHOLE", {_, _, _, _, _, _}), kBlenderPerspective},
+    {LensModelId::SimpleRadial, "SIMPLE_RADIAL", 2, {"f", "cx", "cy", "k"}, false,
+     oneRadialTerm, nullptr, openCV({0, _, _, _}), nerf("SIMPLE_RADIAL", {0, _, _, _, _, _}), kNone},
+    {LensModelId::Radial, "RADIAL", 3, {"f", "cx", "cy", "k1", "k2"}, false,
+     twoRadialTerms, nullptr, openCV({0, 1, _, _}), nerf("RADIAL", {0, 1, _, _, _, _}), kNone},
+    {LensModelId::OpenCV, "OPENCV", 4, {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"}, false,
+     openCVTerms, nullptr, openCV({0, 1, 2, 3}), nerf("OPENCV", {0, 1, _, _, 2, 3}), kNone},
+    {LensModelId::OpenCVFisheye, "OPENCV_FISHEYE", 5, {"fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"}, true,
+     openCVFisheyeTerms, nullptr, cvFisheye({0, 1, 2, 3}), nerf("OPENCV_FISHEYE", {0, 1, 2, 3}), kNone},
+    // nerfstudio's k3 is FULL_OPENCV's k3 (its k4 k5 k6, the denominator, have no slot).
+    {LensModelId::FullOpenCV, "FULL_OPENCV", 6,
+     {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"}, false,
+     fullOpenCVTerms, nullptr, openCV({0, 1, 2, 3, 4, 5, 6, 7}), nerf("OPENCV", {0, 1, 4, _, 2, 3}), kNone},
+    {LensModelId::FOV, "FOV", 7, {"fx", "fy", "cx", "cy", "omega"}, false,
+     nullptr, &kFovFormula, kNone, kNone, kNone},
+    {LensModelId::SimpleRadialFisheye, "SIMPLE_RADIAL_FISHEYE", 8, {"f", "cx", "cy", "k"}, true,
+     oneRadialTerm, nullptr, cvFisheye({0, _, _, _}), nerf("OPENCV_FISHEYE", {0, _, _, _}), kNone},
+    {LensModelId::RadialFisheye, "RADIAL_FISHEYE", 9, {"f", "cx", "cy", "k1", "k2"}, true,
+     twoRadialTerms, nullptr, cvFisheye({0, 1, _, _}), nerf("OPENCV_FISHEYE", {0, 1, _, _}), kNone},
+    {LensModelId::ThinPrismFisheye, "THIN_PRISM_FISHEYE", 10,
+     {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "sx1", "sy1"}, true,
+     thinPrismTerms, nullptr, kNone, kNone, kNone},
+    // Project Aria's Fisheye624 (nerfstudio's FISHEYE624 is not read: its file keys differ).
+    {LensModelId::RadTanThinPrismFisheye, "RAD_TAN_THIN_PRISM_FISHEYE", 11,
+     {"fx", "fy", "cx", "cy", "k0", "k1", "k2", "k3", "k4", "k5", "p0", "p1", "s0", "s1", "s2", "s3"}, true,
+     nullptr, &kRadTanThinPrismFormula, kNone, kNone, kNone},
+    {LensModelId::SimpleDivision, "SIMPLE_DIVISION", 12, {"f", "cx", "cy", "k"}, false,
+     nullptr, &kDivisionFormula, kNone, kNone, kNone},
+    {LensModelId::Division, "DIVISION", 13, {"fx", "fy", "cx", "cy", "k"}, false,
+     nullptr, &kDivisionFormula, kNone, kNone, kNone},
+    // The equidistant fisheye: cv::fisheye and nerfstudio's OPENCV_FISHEYE with k = 0, and
+    // Blender's (Cycles') equidistant fisheye panorama.
+    {LensModelId::SimpleFisheye, "SIMPLE_FISHEYE", 14, {"f", "cx", "cy"}, true,
+     noTerms, nullptr, cvFisheye({_, _, _, _}), nerf("OPENCV_FISHEYE", {_, _, _, _}), kBlenderEquidistant},
+    {LensModelId::Fisheye, "FISHEYE", 15, {"fx", "fy", "cx", "cy"}, true,
+     noTerms, nullptr, cvFisheye({_, _, _, _}), nerf("OPENCV_FISHEYE", {_, _, _, _}), kBlenderEquidistant},
+    {LensModelId::EUCM, "EUCM", 16, {"fx", "fy", "cx", "cy", "alpha", "beta"}, false,
+     nullptr, &kEucmFormula, kNone, kNone, kNone},
+    {LensModelId::Equirectangular, "EQUIRECTANGULAR", 17, {"w", "h"}, false,
+     nullptr, &kEquirectangularFormula, kNone, kNone, kBlenderEquirectangular},
   };
+  // clang-format on
   return models;
 }
 
@@ -231,15 +180,19 @@ Lens::Lens(LensModelId model, std::vector<double> params)
                       " (must be finite)"));
   const bool single = m.singleFocal();
   LensInverse& c = inverse_;
-  c.fx = params_[0], c.fy = params_[single ? 0 : 1];
-  c.cx = params_[single ? 1 : 2], c.cy = params_[single ? 2 : 3];
+  if (m.ownMap()) {
+    m.formula->intrinsicsOf(params_.data(), c.fx, c.fy, c.cx, c.cy);
+  } else {
+    c.fx = params_[0], c.fy = params_[single ? 0 : 1];
+    c.cx = params_[single ? 1 : 2], c.cy = params_[single ? 2 : 3];
+  }
   c.fisheye = m.fisheye || (m.formula && m.formula->overTheta);
+  const std::vector<double> k = distortion();
+  if (m.formula && m.formula->check) m.formula->check(m.name, k.data());
   if (c.fx <= 0 || c.fy <= 0)
     throw Error(
         cat("camera model ", m.name, ": focal length must be > 0 (got ", c.fx, ", ", c.fy, ")"));
-  const std::vector<double> k = distortion();
   if (m.formula) {
-    if (m.formula->check) m.formula->check(m.name, k.data());
     c.formula = m.formula;
     c.coefficients = k;
   } else {
@@ -255,6 +208,8 @@ Lens::Lens(LensModelId model, std::vector<double> params)
   c.maxDistorted = valid_.maxDistorted;
   c.nonRadialLimit =
       c.bounded ? valid_.maxDistorted + nonRadialReach() : std::numeric_limits<double>::infinity();
+  if (c.formula && c.formula->reach && c.bounded)
+    c.nonRadialLimit = valid_.maxDistorted + c.formula->reach(k.data(), valid_.maxDistorted);
   tabulateInverse();
 }
 
@@ -310,20 +265,16 @@ std::string LensValidRegion::text(bool fisheye) const {
 }
 
 glm::dvec2 Lens::distort(const glm::dvec2& p, glm::dmat2* jacobian) const {
+  if (info().ownMap()) {  // no distortion about a principal point: the identity
+    if (jacobian) *jacobian = glm::dmat2(1.0);
+    return p;
+  }
   if (inverse_.formula) {
-    // A radial profile: (u', v') = (ρ(r)/r)·(u, v), whose Jacobian is (ρ/r)·I plus
-    // (ρ' − ρ/r)·n nᵀ along the unit radius n.
-    const double r = glm::length(p);
-    double rho = 0, drho = 0;
-    radialProfile(r, rho, drho);
-    if (r == 0) {
-      if (jacobian) *jacobian = glm::dmat2(drho);
-      return p;
-    }
-    const double gain = rho / r;
-    const glm::dvec2 n = p / r;
-    if (jacobian) *jacobian = glm::dmat2(gain) + (drho - gain) * glm::outerProduct(n, n);
-    return p * gain;
+    glm::dvec2 d;
+    double j[4] = {};
+    distortByFormula(inverse_, p.x, p.y, d.x, d.y, jacobian ? j : nullptr);
+    if (jacobian) *jacobian = glm::dmat2(j[0], j[1], j[2], j[3]);  // column by column
+    return d;
   }
   if (inverse_.terms.identity) {
     if (jacobian) *jacobian = glm::dmat2(1.0);
@@ -343,6 +294,10 @@ LensValidRegion Lens::findValidRegion() const {
   const bool fisheye = inverse_.fisheye;
   LensValidRegion region;
   region.maxUndistorted = region.maxDistorted = fisheye ? kPi : kInf;
+  if (info().ownMap()) {  // every pixel has its ray
+    region.maxUndistorted = region.maxDistorted = kInf;
+    return region;
+  }
   if (!inverse_.formula && inverse_.terms.identity) return region;
 
   const auto invertible = [this](double r) {
@@ -410,6 +365,7 @@ double Lens::nonRadialReach() const {
 }
 
 std::optional<glm::dvec2> Lens::undistort(const glm::dvec2& distorted) const {
+  if (info().ownMap()) return distorted;
   glm::dvec2 u;
   if (!undistortOne(inverse_, distorted.x, distorted.y, u.x, u.y)) return std::nullopt;
   return u;
@@ -417,6 +373,12 @@ std::optional<glm::dvec2> Lens::undistort(const glm::dvec2& distorted) const {
 
 std::optional<glm::dvec2> Lens::project(const glm::dvec3& dir) const {
   if (!std::isfinite(dir.x) || !std::isfinite(dir.y) || !std::isfinite(dir.z)) return std::nullopt;
+  if (info().ownMap()) {
+    const double d[3] = {dir.x, dir.y, dir.z};
+    glm::dvec2 pixel;
+    if (!inverse_.formula->pixelOf(params_.data(), d, pixel.x, pixel.y)) return std::nullopt;
+    return pixel;
+  }
   glm::dvec2 undistorted(0.0);
   if (inverse_.fisheye) {
     // θ from atan2, not atan(r/z): the fisheyes see beyond 90° off-axis.
@@ -433,7 +395,7 @@ std::optional<glm::dvec2> Lens::project(const glm::dvec3& dir) const {
   // With tangential or thin-prism terms the map can fold in 2D inside the radial region:
   // project only where unproject would return the direction.
   glm::dmat2 jacobian(1.0);
-  const glm::dvec2 d = distort(undistorted, inverse_.terms.radialOnly ? nullptr : &jacobian);
+  const glm::dvec2 d = distort(undistorted, radialOnly() ? nullptr : &jacobian);
   if (!(glm::determinant(jacobian) > 0)) return std::nullopt;
   const glm::dvec2 pixel(fx() * d.x + cx(), fy() * d.y + cy());
   if (!isFinite(pixel)) return std::nullopt;

@@ -32,9 +32,17 @@ enum class LensModelId : int {
   OpenCV = 4,
   OpenCVFisheye = 5,
   FullOpenCV = 6,
+  FOV = 7,
   SimpleRadialFisheye = 8,
   RadialFisheye = 9,
   ThinPrismFisheye = 10,
+  RadTanThinPrismFisheye = 11,
+  SimpleDivision = 12,
+  Division = 13,
+  SimpleFisheye = 14,
+  Fisheye = 15,
+  EUCM = 16,
+  Equirectangular = 17,
 };
 
 /// How a camera file format spells a model: its name there and, per coefficient slot of the
@@ -70,8 +78,12 @@ struct LensModelInfo {
   /// distortion: "PERSP" for the pinholes. No slots: Blender's cameras have no distortion.
   LensSpelling blender;
   bool singleFocal() const { return paramNames[0][1] == '\0'; }  ///< "f" rather than "fx", "fy"
-  /// The number of parameters before the distortion coefficients.
-  size_t intrinsicCount() const { return singleFocal() ? 3 : 4; }
+  /// Whether the model maps pixels to rays by a map of its own, without focal lengths and
+  /// principal point among its parameters (EQUIRECTANGULAR: LensFormula::rayOf).
+  bool ownMap() const { return formula && formula->rayOf; }
+  /// The number of parameters before the distortion coefficients (none for an own map: all
+  /// its parameters are its coefficients).
+  size_t intrinsicCount() const { return ownMap() ? 0 : singleFocal() ? 3 : 4; }
 };
 
 /// Every model, COLMAP's in COLMAP's id order, then the registered ones. A deque: a row's
@@ -164,6 +176,10 @@ class Lens {
   LensValidRegion findValidRegion() const;
   /// How far the tangential and thin-prism terms can move a point of the valid region.
   double nonRadialReach() const;
+  /// Whether the distortion is radial only (it cannot fold the map in 2D inside the fold).
+  bool radialOnly() const {
+    return inverse_.formula ? inverse_.formula->nonRadial == nullptr : inverse_.terms.radialOnly;
+  }
 
   LensModelId model_;
   std::vector<double> params_;
