@@ -6,12 +6,12 @@
 #include <string>
 #include <vector>
 
-#include "cameras/registry.h"
-#include "core/framebuffer.h"
-#include "core/image.h"
-#include "core/mesh.h"
-#include "core/render.h"
-#include "core/scene.h"
+#include "cameras/registry/registry.h"
+#include "core/aov/framebuffer.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/io/image.h"
+#include "core/mesh/mesh.h"
 
 namespace aperture {
 namespace {

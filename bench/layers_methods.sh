@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# Issue 12 item 5: the two layered-hit methods (core/layers.h), interleaved, on the dragon and
+# Issue 12 item 5: the two layered-hit methods (core/engine/layers.h), interleaved, on the dragon and
 # the bunny for K = 1, 2, 4, 8: "filter" (one traversal with a context filter keeping the K
 # nearest hits) against "retrace" (K traversals, tnear moved past the previous hit). Mrays/s
 # counts primary rays (pixels), so the two methods' figures compare directly; K = 1 shows the
 # cost of the filter-capable scene alone. The winner becomes the default in
-# defaultLayerMethod (core/layers.cpp). Run on an idle machine:
+# defaultLayerMethod (core/engine/layers.cpp). Run on an idle machine:
 #   bash bench/layers_methods.sh           (ROUNDS=3, FRAMES=5 by default; FRAMES=1 ROUNDS=1 to smoke-test)
 set -euo pipefail
 BIN=${BIN:-build/apps/aperture}

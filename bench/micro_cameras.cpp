@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "cameras/registry.h"
-#include "core/packet.h"
+#include "cameras/registry/registry.h"
+#include "core/engine/packet.h"
 
 namespace aperture {
 namespace {

@@ -1,5 +1,5 @@
 // What a calibrated sensor with distortion costs before its first ray: its direction table,
-// every pixel centre's ray by the lens's exact inverse (cameras/direction_table.h), at
+// every pixel centre's ray by the lens's exact inverse (cameras/lenses/direction_table.h), at
 // 1920x1080 (pixels/s). Paid once per sensor, so once per image where every image has its
 // own intrinsics (COLMAP's default when it calibrates). Threads: TBB's default (all cores).
 #include <benchmark/benchmark.h>
@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "cameras/direction_table.h"
+#include "cameras/lenses/direction_table.h"
 
 namespace aperture {
 namespace {

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Issue 13, item 2: the frame loop against bare rtcIntersect16 (`bench --baseline`) with and
-# without a way of resolving misses without Embree: the scene-box test (core/scene_box.h, rays
+# without a way of resolving misses without Embree: the scene-box test (core/engine/scene_box.h, rays
 # that miss the scene's box; OFF_FLAG=--no-scene-box, the default) or the coverage mask
-# (core/coverage_mask.h, blocks that see no occupied cell; OFF_FLAG=--no-coverage-mask), on the
+# (core/engine/coverage_mask.h, blocks that see no occupied cell; OFF_FLAG=--no-coverage-mask), on the
 # scenes of bench/run_benchmarks.sh at their reference cameras. Three variants, run in turn
 # for each scene, ROUNDS times:
 #   before:  the BEFORE binary (a build without it);

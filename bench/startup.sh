@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # What a process pays before and around its work: wall time and peak resident memory of short
 # aperture commands (`--version`, a 64x48 render to EXR, the same with a PNG preview, which
-# loads the OpenImageIO plugin, core/image_codec.h) and of `import aperture` in Python. Each is
+# loads the OpenImageIO plugin, core/io/image_codec.h) and of `import aperture` in Python. Each is
 # run RUNS times; the table gives the median wall time and the median peak RSS. With BEFORE=<an
 # aperture binary>, that binary runs the same commands, alternating with BIN run by run, so
 # drift in the machine's speed hits both alike. Peak RSS is GNU time's %M.

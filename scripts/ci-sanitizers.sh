@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # CI: the whole GoogleTest suite under AddressSanitizer + UndefinedBehaviorSanitizer (no
 # recovery: the first report fails the run), and the frame-loop and batch tests under
-# ThreadSanitizer. Debian's TBB is uninstrumented: core/parallel.h annotates the fork and join
+# ThreadSanitizer. Debian's TBB is uninstrumented: core/util/parallel.h annotates the fork and join
 # of our one parallel loop, and tests/tsan.supp names the TBB-internal frames that remain
 # (checked at -O0 and -O1: a deliberate race in a loop body is still reported).
 # Build trees: build-asan/ and build-tsan/ (with -g: TSan reports name source lines), gcc,

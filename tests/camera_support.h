@@ -8,9 +8,9 @@
 #include <memory>
 #include <vector>
 
-#include "cameras/base.h"
-#include "cameras/registry.h"
-#include "core/packet.h"
+#include "cameras/models/base.h"
+#include "cameras/registry/registry.h"
+#include "core/engine/packet.h"
 
 namespace aperture::test {
 
@@ -19,7 +19,7 @@ inline double angleBetween(const glm::dvec3& a, const glm::dvec3& b) {
   return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
 }
 
-/// The fields the packet contract (core/camera.h) fixes for lane k of an unclipped camera:
+/// The fields the packet contract (core/engine/camera.h) fixes for lane k of an unclipped camera:
 /// tnear 0, tfar +inf, time 0, mask all ones, id k, flags 0. Call through
 /// ASSERT_NO_FATAL_FAILURE.
 inline void assertFixedLaneFields(const RayLanes& l, int k) {
@@ -104,7 +104,7 @@ class PacketBuffer {
   RTCRayHit16 sixteen_{};
 };
 
-/// Block shape of a packet width, as the frame loop uses them (core/packet.h).
+/// Block shape of a packet width, as the frame loop uses them (core/engine/packet.h).
 inline void blockShape(int width, int& blockW, int& blockH) {
   blockW = blockWidthFor(width);
   blockH = blockHeightFor(width);

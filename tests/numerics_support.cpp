@@ -3,7 +3,7 @@
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "cameras/registry.h"
+#include "cameras/registry/registry.h"
 
 namespace aperture::test {
 

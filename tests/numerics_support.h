@@ -5,12 +5,12 @@
 #include <string>
 #include <vector>
 
-#include "cameras/params.h"
-#include "core/framebuffer.h"
-#include "core/mesh.h"
-#include "core/render.h"
-#include "core/scene.h"
-#include "core/units.h"
+#include "cameras/schema/params.h"
+#include "core/aov/framebuffer.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/mesh/mesh.h"
+#include "core/util/units.h"
 
 namespace aperture::test {
 

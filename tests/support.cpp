@@ -14,8 +14,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "apps/camera_flags.h"
-#include "core/error.h"
+#include "apps/cli/camera_flags.h"
+#include "core/util/error.h"
 
 namespace fs = std::filesystem;
 

@@ -11,10 +11,10 @@
 #include <type_traits>
 #include <vector>
 
-#include "cameras/params.h"
-#include "core/framebuffer.h"
-#include "core/image_codec.h"
-#include "core/render.h"
+#include "cameras/schema/params.h"
+#include "core/aov/framebuffer.h"
+#include "core/engine/render.h"
+#include "core/io/image_codec.h"
 
 namespace aperture::test {
 

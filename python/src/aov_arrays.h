@@ -1,12 +1,12 @@
 #pragma once
 // Framebuffers as NumPy arrays, generic over the AOVs a framebuffer holds (aovNames and
-// aovView, core/framebuffer.h): a new AOV of the core appears in Python with no code here.
+// aovView, core/aov/framebuffer.h): a new AOV of the core appears in Python with no code here.
 #include <nanobind/nanobind.h>
 
 #include <cstddef>
 #include <memory>
 
-#include "core/framebuffer.h"
+#include "core/aov/framebuffer.h"
 
 namespace aperture::python {
 

@@ -6,7 +6,7 @@
 
 #include <string>
 
-#include "cameras/params.h"
+#include "cameras/schema/params.h"
 
 namespace aperture::python {
 

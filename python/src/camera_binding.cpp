@@ -1,5 +1,5 @@
 // aperture.Camera and aperture.load_cameras. Keyword arguments take the road of a job file's
-// camera entry: each becomes a JSON value read by paramFromJson (apps/job_camera.cpp) against
+// camera entry: each becomes a JSON value read by paramFromJson (apps/jobs/job_camera.cpp) against
 // the camera parameter schema, then resolveCameraParams checks the set (types, ranges,
 // conflicts, companions) with messages naming "Camera(fov=...)".
 #include <nanobind/stl/optional.h>
@@ -9,16 +9,16 @@
 #include <optional>
 #include <variant>
 
-#include "apps/camera_files.h"
-#include "apps/job_camera.h"
-#include "apps/job_json.h"
+#include "apps/jobs/job_camera.h"
+#include "apps/jobs/job_json.h"
+#include "apps/services/camera_file_params.h"
 #include "bindings.h"
-#include "cameras/camera_file.h"
-#include "cameras/describe.h"
-#include "cameras/param_schema.h"
-#include "cameras/registry.h"
-#include "core/error.h"
-#include "core/spelling.h"
+#include "cameras/files/camera_file.h"
+#include "cameras/registry/describe.h"
+#include "cameras/registry/registry.h"
+#include "cameras/schema/param_schema.h"
+#include "core/util/error.h"
+#include "core/util/spelling.h"
 #include "file_errors.h"
 
 namespace aperture::python {

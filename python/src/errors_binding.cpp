@@ -6,7 +6,7 @@
 #include <cerrno>
 
 #include "bindings.h"
-#include "core/error.h"
+#include "core/util/error.h"
 #include "file_errors.h"
 
 namespace aperture::python {

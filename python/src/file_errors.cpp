@@ -5,7 +5,7 @@
 #include <cerrno>
 #include <filesystem>
 
-#include "core/error.h"
+#include "core/util/error.h"
 
 namespace aperture::python {
 

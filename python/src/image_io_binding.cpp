@@ -1,5 +1,5 @@
-// Image files from Python: read_exr (core/exr.h, every AOV of an EXR the CLI wrote), write
-// and read (the dataset formats of core/dataset_image.h: .png .pfm .npy .tif).
+// Image files from Python: read_exr (core/exr/exr.h, every AOV of an EXR the CLI wrote), write
+// and read (the dataset formats of core/io/dataset_image.h: .png .pfm .npy .tif).
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
@@ -9,9 +9,9 @@
 
 #include "aov_arrays.h"
 #include "bindings.h"
-#include "core/dataset_image.h"
-#include "core/error.h"
-#include "core/exr.h"
+#include "core/exr/exr.h"
+#include "core/io/dataset_image.h"
+#include "core/util/error.h"
 #include "file_errors.h"
 
 namespace aperture::python {

@@ -4,7 +4,7 @@
 
 #include <cstdint>
 
-#include "core/error.h"
+#include "core/util/error.h"
 
 namespace aperture::python {
 

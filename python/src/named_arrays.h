@@ -1,13 +1,13 @@
 #pragma once
-// Named one-dimensional arrays (core/npz.h's NpzArray, as apps/visibility_arrays.h names them)
-// handed to NumPy without a copy: the same names and dtypes the .npz of `aperture visibility`
-// holds.
+// Named one-dimensional arrays (core/io/npz.h's NpzArray, as apps/services/visibility_arrays.h
+// names them) handed to NumPy without a copy: the same names and dtypes the .npz of `aperture
+// visibility` holds.
 #include <nanobind/nanobind.h>
 
 #include <memory>
 #include <vector>
 
-#include "core/npz.h"
+#include "core/io/npz.h"
 
 namespace aperture::python {
 

@@ -1,6 +1,6 @@
-// aperture.Scene: meshes through the apps' one scene set-up (apps/scene_setup.h) or NumPy
-// arrays through finishMesh, Scene.render over renderImages (core/render.h) and the face and
-// point visibility (core/visibility.h), with the GIL released for the whole computation.
+// aperture.Scene: meshes through the apps' one scene set-up (apps/services/scene_setup.h) or NumPy
+// arrays through finishMesh, Scene.render over renderImages (core/engine/render.h) and the face and
+// point visibility (core/queries/visibility.h), with the GIL released for the whole computation.
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/function.h>
 #include <nanobind/stl/optional.h>
@@ -15,15 +15,15 @@
 #include <optional>
 
 #include "aov_arrays.h"
-#include "apps/render_options.h"
-#include "apps/scene_setup.h"
-#include "apps/visibility_arrays.h"
+#include "apps/services/render_options.h"
+#include "apps/services/scene_setup.h"
+#include "apps/services/visibility_arrays.h"
 #include "bindings.h"
-#include "cameras/registry.h"
-#include "core/error.h"
-#include "core/layers.h"
-#include "core/render.h"
-#include "core/visibility.h"
+#include "cameras/registry/registry.h"
+#include "core/engine/layers.h"
+#include "core/engine/render.h"
+#include "core/queries/visibility.h"
+#include "core/util/error.h"
 #include "file_errors.h"
 #include "named_arrays.h"
 
@@ -103,16 +103,7 @@ class PyScene {
   PyScene(Mesh mesh, const app::SceneOptions& o) : device_(std::make_unique<Device>()) {
     spec_ = o.spec();
     spec_.meshes = {{mesh.name, std::nullopt}};
-    finishMesh(mesh, o.loadOptions());
-    loaded_.meshes.push_back(std::move(mesh));
-    const Mesh& m = loaded_.meshes.back();
-    loaded_.objects.push_back({&m, glm::dmat4(1.0)});
-    loaded_.names.push_back(m.name);
-    loaded_.renderOrigin = m.anchor;
-    glm::vec3 lo, hi;
-    m.bounds(lo, hi);
-    loaded_.worldLo = m.anchor + glm::dvec3(lo);
-    loaded_.worldHi = m.anchor + glm::dvec3(hi);
+    loaded_ = app::loadedSceneOfMesh(std::move(mesh), o.loadOptions());
     app::buildLoadedScene(*device_, loaded_, spec_, true);
   }
 
@@ -185,8 +176,8 @@ class PyScene {
     return perFrameLists(frames);
   }
 
-  /// Scene.face_visibility: faceVisibility (core/visibility.h) with the GIL released, as the
-  /// arrays of the command's .npz (apps/visibility_arrays.h).
+  /// Scene.face_visibility: faceVisibility (core/queries/visibility.h) with the GIL released, as
+  /// the arrays of the command's .npz (apps/services/visibility_arrays.h).
   nb::dict faceVisibility(nb::handle cameras, bool frontOnly, int threads) {
     const std::vector<std::unique_ptr<Camera>> owned =
         camerasOf(cameraParamsOf(cameras, "Scene.face_visibility"));
@@ -199,8 +190,8 @@ class PyScene {
     return namedArrays(result, app::faceVisibilityArrays(*result));
   }
 
-  /// Scene.point_visibility: pointVisibility (core/visibility.h) of world points (N, 3) with
-  /// the GIL released.
+  /// Scene.point_visibility: pointVisibility (core/queries/visibility.h) of world points (N, 3)
+  /// with the GIL released.
   nb::dict pointVisibility(
       const nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>& points,
       nb::handle cameras, double tolerance, int threads) {

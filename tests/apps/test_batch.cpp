@@ -19,17 +19,17 @@
 #include <set>
 #include <sstream>
 
-#include "apps/batch_writer.h"
-#include "apps/job.h"
-#include "apps/resume.h"
-#include "apps/shard.h"
-#include "cameras/calibrated.h"
-#include "cameras/direction_table.h"
-#include "cameras/registry.h"
-#include "core/error.h"
-#include "core/exr.h"
-#include "core/image.h"
-#include "core/limits.h"
+#include "apps/batch/batch_writer.h"
+#include "apps/batch/resume.h"
+#include "apps/batch/shard.h"
+#include "apps/jobs/job.h"
+#include "apps/services/limits.h"
+#include "cameras/lenses/direction_table.h"
+#include "cameras/models/calibrated.h"
+#include "cameras/registry/registry.h"
+#include "core/exr/exr.h"
+#include "core/io/image.h"
+#include "core/util/error.h"
 #include "tests/apps/unwritable_dir.h"
 #include "tests/support.h"
 

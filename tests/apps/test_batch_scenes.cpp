@@ -16,11 +16,11 @@
 #include <string>
 #include <vector>
 
-#include "apps/job.h"
-#include "apps/scene_pipeline.h"
-#include "core/error.h"
-#include "core/exr.h"
-#include "core/limits.h"
+#include "apps/batch/scene_pipeline.h"
+#include "apps/jobs/job.h"
+#include "apps/services/limits.h"
+#include "core/exr/exr.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 using namespace aperture;
@@ -303,7 +303,7 @@ TEST(BatchScenes, MaxMemoryBudgetsTheLargestTwoConsecutiveScenes) {
         {{"name", cat("s", k)}, {"scene", {{"meshes", {{{"path", meshes[k]}}}}}}});
   j["aovs"] = "depth";
   const std::string path = writeJob(dir, j, "many.json");
-  // The estimate of scenes 1 and 2 alive together, computed here from core/limits.h: every
+  // The estimate of scenes 1 and 2 alive together, computed here from apps/services/limits.h: every
   // mesh of both, the largest image's two framebuffers.
   const uint64_t pixels = 48 * 32;
   const MemoryEstimate pair = estimateMemory({meshes[1], meshes[2]}, pixels, 1, AovSet{},

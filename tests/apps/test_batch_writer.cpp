@@ -1,4 +1,4 @@
-// The batch's writer threads (apps/batch_writer.h): how many, what they cost in framebuffers,
+// The batch's writer threads (apps/batch/batch_writer.h): how many, what they cost in framebuffers,
 // and that they write images in parallel, each exactly once.
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 #include <mutex>
 #include <vector>
 
-#include "apps/batch_writer.h"
+#include "apps/batch/batch_writer.h"
 
 namespace aperture::app {
 namespace batch_writer_test {

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "apps/bench_scaling.h"
-#include "core/error.h"
-#include "core/mesh.h"
+#include "bench/measure/bench_scaling.h"
+#include "core/mesh/mesh.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 namespace aperture::app {

@@ -27,9 +27,9 @@
 #include <string>
 #include <vector>
 
-#include "cameras/camera_file.h"
-#include "core/exr.h"
-#include "core/units.h"
+#include "cameras/files/camera_file.h"
+#include "core/exr/exr.h"
+#include "core/util/units.h"
 #include "tests/support.h"
 
 namespace aperture {

@@ -15,7 +15,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/exr.h"
+#include "core/exr/exr.h"
 #include "tests/apps/unwritable_dir.h"
 #include "tests/support.h"
 
@@ -75,7 +75,7 @@ std::string librariesLoadedBy(const std::string& args, const std::string& dir) {
 }
 
 TEST(Cli, OpenImageIoLoadsOnlyForTheFilesThatNeedIt) {
-  // OpenImageIO and its 261 libraries are a plugin (core/image_codec.h): a render to EXR never
+  // OpenImageIO and its 261 libraries are a plugin (core/io/image_codec.h): a render to EXR never
   // loads it, a PNG preview does.
   const std::string exrOnly = scratchDir() + "/exr";
   const std::string withPng = scratchDir() + "/png";

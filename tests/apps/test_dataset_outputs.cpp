@@ -9,10 +9,10 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "apps/job.h"
-#include "core/dataset_image.h"
-#include "core/error.h"
-#include "core/exr.h"
+#include "apps/jobs/job.h"
+#include "core/exr/exr.h"
+#include "core/io/dataset_image.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 namespace aperture {

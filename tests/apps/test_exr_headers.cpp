@@ -28,8 +28,8 @@
 #include <string>
 #include <vector>
 
-#include "core/exr.h"
-#include "core/units.h"
+#include "core/exr/exr.h"
+#include "core/util/units.h"
 #include "tests/support.h"
 
 namespace aperture {

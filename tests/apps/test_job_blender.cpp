@@ -6,10 +6,10 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "apps/job.h"
-#include "cameras/base.h"
-#include "cameras/registry.h"
-#include "core/error.h"
+#include "apps/jobs/job.h"
+#include "cameras/models/base.h"
+#include "cameras/registry/registry.h"
+#include "core/util/error.h"
 
 namespace aperture {
 namespace {

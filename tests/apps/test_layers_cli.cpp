@@ -7,8 +7,8 @@
 #include <cstring>
 #include <filesystem>
 
-#include "core/exr.h"
-#include "core/exr_deep.h"
+#include "core/exr/exr.h"
+#include "core/exr/exr_deep.h"
 #include "tests/support.h"
 
 namespace aperture {

@@ -8,8 +8,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "core/error.h"
-#include "core/exr.h"
+#include "core/exr/exr.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 namespace aperture {

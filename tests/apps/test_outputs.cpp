@@ -1,5 +1,6 @@
-// Output paths checked before any work (apps/outputs.h), the order in which a view's files are
-// written (writeViewOutputs, apps/view.h), and the depth range a batch's previews share.
+// Output paths checked before any work (apps/services/outputs.h), the order in which a view's files
+// are written (writeViewOutputs, apps/services/view.h), and the depth range a batch's previews
+// share.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -7,11 +8,11 @@
 #include <filesystem>
 #include <vector>
 
-#include "apps/outputs.h"
-#include "apps/view.h"
-#include "core/error.h"
-#include "core/exr.h"
-#include "core/image.h"
+#include "apps/services/outputs.h"
+#include "apps/services/view.h"
+#include "core/exr/exr.h"
+#include "core/io/image.h"
+#include "core/util/error.h"
 #include "tests/apps/unwritable_dir.h"
 #include "tests/support.h"
 

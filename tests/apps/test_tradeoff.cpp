@@ -11,7 +11,7 @@
 #include <set>
 #include <sstream>
 
-#include "core/exr.h"
+#include "core/exr/exr.h"
 #include "tests/support.h"
 
 using namespace aperture;

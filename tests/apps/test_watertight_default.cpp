@@ -15,9 +15,10 @@
 #include <string>
 #include <vector>
 
-#include "apps/scene_setup.h"
-#include "apps/view.h"
-#include "core/exr.h"
+#include "apps/cli/scene_flags.h"
+#include "apps/services/scene_setup.h"
+#include "apps/services/view.h"
+#include "core/exr/exr.h"
 #include "tests/support.h"
 
 namespace aperture {

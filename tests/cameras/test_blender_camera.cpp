@@ -8,14 +8,14 @@
 #include <string>
 #include <vector>
 
-#include "cameras/base.h"
-#include "cameras/conventions.h"
-#include "cameras/registry.h"
-#include "core/error.h"
-#include "core/framebuffer.h"
-#include "core/mesh.h"
-#include "core/render.h"
-#include "core/scene.h"
+#include "cameras/models/base.h"
+#include "cameras/registry/registry.h"
+#include "cameras/schema/conventions.h"
+#include "core/aov/framebuffer.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/mesh/mesh.h"
+#include "core/util/error.h"
 #include "tests/camera_support.h"
 #include "tests/support.h"
 

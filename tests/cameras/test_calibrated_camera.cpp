@@ -6,12 +6,12 @@
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "cameras/base.h"
-#include "cameras/calibrated.h"
-#include "cameras/direction_table.h"
-#include "cameras/param_schema.h"
-#include "cameras/registry.h"
-#include "core/error.h"
+#include "cameras/lenses/direction_table.h"
+#include "cameras/models/base.h"
+#include "cameras/models/calibrated.h"
+#include "cameras/registry/registry.h"
+#include "cameras/schema/param_schema.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 namespace aperture {

@@ -22,16 +22,16 @@
 #include <string>
 #include <vector>
 
-#include "cameras/base.h"
-#include "cameras/calibrated.h"
-#include "cameras/camera_file.h"
-#include "cameras/direction_table.h"
-#include "cameras/registry.h"
-#include "core/error.h"
-#include "core/framebuffer.h"
-#include "core/mesh.h"
-#include "core/render.h"
-#include "core/scene.h"
+#include "cameras/files/camera_file.h"
+#include "cameras/lenses/direction_table.h"
+#include "cameras/models/base.h"
+#include "cameras/models/calibrated.h"
+#include "cameras/registry/registry.h"
+#include "core/aov/framebuffer.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/mesh/mesh.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 namespace aperture {

@@ -3,11 +3,11 @@
 
 #include <cmath>
 
-#include "cameras/base.h"
-#include "cameras/conventions.h"
-#include "cameras/describe.h"
-#include "cameras/registry.h"
-#include "core/error.h"
+#include "cameras/models/base.h"
+#include "cameras/registry/describe.h"
+#include "cameras/registry/registry.h"
+#include "cameras/schema/conventions.h"
+#include "core/util/error.h"
 
 namespace aperture {
 namespace {

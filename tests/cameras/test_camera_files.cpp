@@ -12,10 +12,10 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 
-#include "cameras/calibration.h"
-#include "cameras/camera_file.h"
-#include "core/error.h"
-#include "core/units.h"
+#include "cameras/files/camera_file.h"
+#include "cameras/lenses/calibration.h"
+#include "core/util/error.h"
+#include "core/util/units.h"
 #include "tests/support.h"
 
 namespace aperture {

@@ -2,11 +2,11 @@
 // unshifted one, pixel for pixel on Z and primID.
 #include <gtest/gtest.h>
 
-#include "cameras/registry.h"
-#include "core/framebuffer.h"
-#include "core/mesh.h"
-#include "core/render.h"
-#include "core/scene.h"
+#include "cameras/registry/registry.h"
+#include "core/aov/framebuffer.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/mesh/mesh.h"
 
 namespace aperture {
 namespace {

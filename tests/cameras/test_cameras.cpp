@@ -8,12 +8,12 @@
 #include <string>
 #include <tuple>
 
-#include "cameras/base.h"
-#include "cameras/perspective.h"
-#include "cameras/registry.h"
-#include "cameras/view_volume.h"
-#include "core/error.h"
-#include "core/units.h"
+#include "cameras/models/base.h"
+#include "cameras/models/perspective.h"
+#include "cameras/models/view_volume.h"
+#include "cameras/registry/registry.h"
+#include "core/util/error.h"
+#include "core/util/units.h"
 #include "tests/camera_support.h"
 
 namespace aperture {

@@ -22,9 +22,9 @@
 #include <string>
 #include <vector>
 
-#include "cameras/base.h"
-#include "cameras/registry.h"
-#include "core/exr.h"
+#include "cameras/models/base.h"
+#include "cameras/registry/registry.h"
+#include "core/exr/exr.h"
 #include "tests/support.h"
 
 using namespace aperture;

@@ -15,9 +15,9 @@
 #include <string>
 #include <vector>
 
-#include "cameras/lens_model.h"
-#include "core/error.h"
-#include "core/units.h"
+#include "cameras/lenses/lens_model.h"
+#include "core/util/error.h"
+#include "core/util/units.h"
 #include "tests/camera_support.h"
 #include "tests/support.h"
 

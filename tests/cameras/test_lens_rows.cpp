@@ -9,15 +9,15 @@
 #include <string>
 #include <vector>
 
-#include "cameras/calibrated.h"
-#include "cameras/camera_file.h"
-#include "cameras/camera_file_formats.h"
-#include "cameras/lens_model.h"
-#include "cameras/registry.h"
-#include "core/framebuffer.h"
-#include "core/mesh.h"
-#include "core/render.h"
-#include "core/scene.h"
+#include "cameras/files/camera_file.h"
+#include "cameras/files/camera_file_formats.h"
+#include "cameras/lenses/lens_model.h"
+#include "cameras/models/calibrated.h"
+#include "cameras/registry/registry.h"
+#include "core/aov/framebuffer.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/mesh/mesh.h"
 #include "tests/support.h"
 
 namespace aperture {

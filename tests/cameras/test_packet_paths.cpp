@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "cameras/base.h"
-#include "cameras/registry.h"
+#include "cameras/models/base.h"
+#include "cameras/registry/registry.h"
 #include "tests/camera_support.h"
 
 namespace aperture {

@@ -1,4 +1,4 @@
-// Tests generated from the camera parameter schema (cameras/param_schema.h): for every
+// Tests generated from the camera parameter schema (cameras/schema/param_schema.h): for every
 // declared parameter, its default is what a camera without it uses, its range ends are
 // accepted or refused as declared (through the command-line and the job-file front ends),
 // and every declared conflict and companion is enforced with a message naming both sides.
@@ -10,12 +10,12 @@
 #include <string>
 #include <vector>
 
-#include "apps/job.h"
-#include "cameras/base.h"
-#include "cameras/describe.h"
-#include "cameras/param_schema.h"
-#include "cameras/registry.h"
-#include "core/error.h"
+#include "apps/jobs/job.h"
+#include "cameras/models/base.h"
+#include "cameras/registry/describe.h"
+#include "cameras/registry/registry.h"
+#include "cameras/schema/param_schema.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 using namespace aperture;

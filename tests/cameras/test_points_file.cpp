@@ -1,4 +1,4 @@
-// 3D points files (cameras/points_file.h): COLMAP points3D.txt and .bin written here from
+// 3D points files (cameras/files/points_file.h): COLMAP points3D.txt and .bin written here from
 // COLMAP's documented layout (tracks included), a COLMAP folder, PLY vertices (ASCII float with
 // faces, binary double without), NumPy .npy float32 / float64 with headers written by hand;
 // the errors name the file and the entry. Also CameraFile::imageIds of COLMAP models written
@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "cameras/camera_file.h"
-#include "cameras/points_file.h"
-#include "core/error.h"
+#include "cameras/files/camera_file.h"
+#include "cameras/files/points_file.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 namespace aperture {

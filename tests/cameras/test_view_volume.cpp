@@ -5,10 +5,10 @@
 #include <cmath>
 #include <random>
 
-#include "cameras/base.h"
-#include "cameras/registry.h"
-#include "cameras/view_volume.h"
-#include "core/error.h"
+#include "cameras/models/base.h"
+#include "cameras/models/view_volume.h"
+#include "cameras/registry/registry.h"
+#include "core/util/error.h"
 #include "tests/camera_support.h"
 
 namespace aperture {

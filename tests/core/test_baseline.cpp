@@ -1,17 +1,17 @@
-// The bench's bare-Embree baseline (core/baseline.h) traces the camera's rays: its minimal
+// The bench's bare-Embree baseline (bench/measure/baseline.h) traces the camera's rays: its minimal
 // float pinhole generation must give the frame loop's rays up to float rounding, pixel for
 // pixel (a half-pixel or axis slip would move them by far more), and count the same rays.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "cameras/base.h"
-#include "cameras/registry.h"
-#include "core/baseline.h"
-#include "core/framebuffer.h"
-#include "core/mesh.h"
-#include "core/packet.h"
-#include "core/render.h"
+#include "bench/measure/baseline.h"
+#include "cameras/models/base.h"
+#include "cameras/registry/registry.h"
+#include "core/aov/framebuffer.h"
+#include "core/engine/packet.h"
+#include "core/engine/render.h"
+#include "core/mesh/mesh.h"
 #include "tests/support.h"
 
 using namespace aperture;

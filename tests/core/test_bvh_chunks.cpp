@@ -9,15 +9,15 @@
 #include <string>
 #include <vector>
 
-#include "cameras/culling.h"
-#include "cameras/registry.h"
-#include "core/cull.h"
-#include "core/layers.h"
-#include "core/mesh.h"
-#include "core/render.h"
-#include "core/scene.h"
-#include "core/trace.h"
-#include "core/visibility.h"
+#include "cameras/registry/culling.h"
+#include "cameras/registry/registry.h"
+#include "core/engine/cull.h"
+#include "core/engine/layers.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/mesh/mesh.h"
+#include "core/queries/trace.h"
+#include "core/queries/visibility.h"
 #include "tests/numerics_support.h"
 #include "tests/support.h"
 

@@ -6,8 +6,8 @@
 
 #include <cmath>
 
-#include "core/mesh.h"
-#include "core/scene.h"
+#include "core/engine/scene.h"
+#include "core/mesh/mesh.h"
 #include "tests/numerics_support.h"
 
 namespace aperture {

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "cameras/base.h"
-#include "cameras/registry.h"
-#include "core/render.h"
+#include "cameras/models/base.h"
+#include "cameras/registry/registry.h"
+#include "core/engine/render.h"
 #include "tests/camera_support.h"
 #include "tests/numerics_support.h"
 #include "tests/support.h"

@@ -1,10 +1,10 @@
-// The coverage mask (core/occupancy.h, core/coverage_mask.h, RenderSettings::coverageMask): the
-// frame loop resolves the packets whose block sees no occupied cell as misses without Embree.
-// Checked four ways: every placed triangle lies in occupied cells; the rays the cameras
-// generate project into their own pixel through the projection the mask uses (and a flipped
-// convention is caught); every pixel the unmasked frame loop hits lies in a covered block,
-// over many random poses, while far blocks are left uncovered (and a mask built with the rows
-// flipped is caught); and every AOV and count is bit-identical with the mask on and off.
+// The coverage mask (core/engine/occupancy.h, core/engine/coverage_mask.h,
+// RenderSettings::coverageMask): the frame loop resolves the packets whose block sees no occupied
+// cell as misses without Embree. Checked four ways: every placed triangle lies in occupied cells;
+// the rays the cameras generate project into their own pixel through the projection the mask uses
+// (and a flipped convention is caught); every pixel the unmasked frame loop hits lies in a covered
+// block, over many random poses, while far blocks are left uncovered (and a mask built with the
+// rows flipped is caught); and every AOV and count is bit-identical with the mask on and off.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,13 +14,13 @@
 #include <string>
 #include <vector>
 
-#include "cameras/registry.h"
-#include "core/coverage_mask.h"
-#include "core/mesh.h"
-#include "core/occupancy.h"
-#include "core/packet.h"
-#include "core/render.h"
-#include "core/scene.h"
+#include "cameras/registry/registry.h"
+#include "core/engine/coverage_mask.h"
+#include "core/engine/occupancy.h"
+#include "core/engine/packet.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/mesh/mesh.h"
 #include "tests/numerics_support.h"
 #include "tests/support.h"
 

@@ -8,14 +8,14 @@
 #include <memory>
 #include <vector>
 
-#include "cameras/culling.h"
-#include "cameras/registry.h"
-#include "core/cull.h"
-#include "core/error.h"
-#include "core/exr.h"
-#include "core/mesh.h"
-#include "core/render.h"
-#include "core/scene.h"
+#include "cameras/registry/culling.h"
+#include "cameras/registry/registry.h"
+#include "core/engine/cull.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/exr/exr.h"
+#include "core/mesh/mesh.h"
+#include "core/util/error.h"
 #include "tests/numerics_support.h"
 #include "tests/support.h"
 

@@ -1,4 +1,4 @@
-// Dataset image writers (core/dataset_image.h): 16-bit PNG depth, PFM, NPY and float TIFF.
+// Dataset image writers (core/io/dataset_image.h): 16-bit PNG depth, PFM, NPY and float TIFF.
 // Every file is read back by a reader independent of the writer: OpenImageIO and a hand
 // parse of the PNG header for PNG16 (written through OpenImageIO), byte-level parses of the
 // PFM and NPY layouts written here from the format descriptions, OpenImageIO for TIFF.
@@ -13,8 +13,8 @@
 #include <utility>
 #include <vector>
 
-#include "core/dataset_image.h"
-#include "core/error.h"
+#include "core/io/dataset_image.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 namespace aperture {

@@ -25,9 +25,9 @@
 #include <map>
 #include <sstream>
 
-#include "core/atomic_file.h"
-#include "core/error.h"
-#include "core/exr.h"
+#include "core/exr/exr.h"
+#include "core/io/atomic_file.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 namespace aperture {

@@ -1,4 +1,4 @@
-// Deep EXR of the layered hits (core/exr_deep.h): written and read back bit for bit, and read
+// Deep EXR of the layered hits (core/exr/exr_deep.h): written and read back bit for bit, and read
 // independently through OpenEXR's DeepScanLineInputFile for the sample counts, the order and
 // the Z/ZBack convention of "Interpreting OpenEXR Deep Pixels".
 #include <Imath/ImathBox.h>
@@ -13,9 +13,9 @@
 #include <filesystem>
 #include <vector>
 
-#include "core/error.h"
-#include "core/exr.h"
-#include "core/exr_deep.h"
+#include "core/exr/exr.h"
+#include "core/exr/exr_deep.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 namespace aperture {

@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include "core/error.h"
-#include "core/framebuffer.h"
+#include "core/aov/framebuffer.h"
+#include "core/util/error.h"
 
 using namespace aperture;
 

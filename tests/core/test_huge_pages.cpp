@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "core/huge_pages.h"
+#include "core/util/huge_pages.h"
 #include "tests/support.h"
 
 namespace aperture {

@@ -8,8 +8,8 @@
 #include <map>
 #include <vector>
 
-#include "core/error.h"
-#include "core/image.h"
+#include "core/io/image.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 namespace aperture {
@@ -38,7 +38,7 @@ Png readPng(const std::string& path) {
           file.info.type,  file.info.description, file.samples};
 }
 
-/// sRGB byte of a linear value, written out independently of core/image.cpp.
+/// sRGB byte of a linear value, written out independently of core/io/image.cpp.
 int srgbByte(double linear) {
   double v = linear < 0 ? 0 : linear > 1 ? 1 : linear;
   v = v <= 0.0031308 ? v * 12.92 : 1.055 * std::exp(std::log(v) / 2.4) - 0.055;

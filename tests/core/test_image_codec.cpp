@@ -1,4 +1,4 @@
-// The image codec (core/image_codec.h), the OpenImageIO plugin loaded on first use (linked into
+// The image codec (core/io/image_codec.h), the OpenImageIO plugin loaded on first use (linked into
 // the test program of a sanitizer build): what it encodes reads back, and its comparison
 // statistics match their closed forms.
 #include <gtest/gtest.h>
@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "core/image_codec.h"
+#include "core/io/image_codec.h"
 #include "tests/support.h"
 
 using namespace aperture;

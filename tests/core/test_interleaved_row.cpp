@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <random>
 
-#include "core/interleaved_row.h"
+#include "core/engine/interleaved_row.h"
 
 namespace aperture {
 namespace {

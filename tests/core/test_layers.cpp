@@ -11,13 +11,13 @@
 #include <memory>
 #include <vector>
 
-#include "cameras/registry.h"
-#include "core/error.h"
-#include "core/layers.h"
-#include "core/mesh.h"
-#include "core/packet.h"
-#include "core/render.h"
-#include "core/scene.h"
+#include "cameras/registry/registry.h"
+#include "core/engine/layers.h"
+#include "core/engine/packet.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/mesh/mesh.h"
+#include "core/util/error.h"
 #include "tests/numerics_support.h"
 
 namespace aperture {

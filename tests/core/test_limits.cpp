@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "core/error.h"
-#include "core/limits.h"
-#include "core/mesh.h"
-#include "core/ply_writer.h"
+#include "apps/services/limits.h"
+#include "core/io/ply_writer.h"
+#include "core/mesh/mesh.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 namespace aperture {

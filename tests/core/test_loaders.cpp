@@ -10,8 +10,8 @@
 #include <sstream>
 #include <vector>
 
-#include "core/error.h"
-#include "core/mesh.h"
+#include "core/mesh/mesh.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 namespace aperture {

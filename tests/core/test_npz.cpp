@@ -1,5 +1,5 @@
-// .npy headers (core/npy.h) and .npz archives (core/npz.h). The archive's bytes are parsed
-// here independently of core/npz.cpp from the zip format (PKWARE's APPNOTE): signatures,
+// .npy headers (core/io/npy.h) and .npz archives (core/io/npz.h). The archive's bytes are parsed
+// here independently of core/io/npz.cpp from the zip format (PKWARE's APPNOTE): signatures,
 // sizes, offsets, the zip64 fields, and a CRC-32 computed bit by bit (the reflected
 // polynomial 0xEDB88320, no table, no zlib). When a Python with NumPy is found (the project's
 // .venv, or APERTURE_TEST_PYTHON), np.load reads the archives too.
@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "core/error.h"
-#include "core/npy.h"
-#include "core/npz.h"
+#include "core/io/npy.h"
+#include "core/io/npz.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 namespace aperture {

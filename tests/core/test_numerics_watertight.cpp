@@ -15,14 +15,14 @@
 #include <memory>
 #include <vector>
 
-#include "cameras/base.h"
-#include "cameras/registry.h"
-#include "core/error.h"
-#include "core/exr.h"
-#include "core/mesh.h"
-#include "core/render.h"
-#include "core/scene.h"
-#include "core/trace.h"
+#include "cameras/models/base.h"
+#include "cameras/registry/registry.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/exr/exr.h"
+#include "core/mesh/mesh.h"
+#include "core/queries/trace.h"
+#include "core/util/error.h"
 #include "tests/numerics_support.h"
 #include "tests/support.h"
 

@@ -16,7 +16,7 @@
 #include <sstream>
 #include <thread>
 
-#include "core/exr.h"
+#include "core/exr/exr.h"
 #include "tests/support.h"
 
 namespace aperture {

@@ -1,12 +1,12 @@
-// The packet contract of core/camera.h: which pixel each lane of a packet covers, and which
+// The packet contract of core/engine/camera.h: which pixel each lane of a packet covers, and which
 // lanes of a tail block fall outside the image. Expectations are written out pixel by pixel.
 #include <gtest/gtest.h>
 
 #include <utility>
 #include <vector>
 
-#include "core/camera.h"
-#include "core/packet.h"
+#include "core/engine/camera.h"
+#include "core/engine/packet.h"
 
 using namespace aperture;
 

@@ -1,4 +1,4 @@
-// PLY with per-face values (core/ply_writer.h): the header text, the binary body parsed here
+// PLY with per-face values (core/io/ply_writer.h): the header text, the binary body parsed here
 // byte by byte from the PLY format, and the project's loader reading the file back with the
 // face properties (world positions exact in double, -1 as 0xFFFFFFFF).
 #include <gtest/gtest.h>
@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "core/error.h"
-#include "core/mesh.h"
-#include "core/ply_writer.h"
+#include "core/io/ply_writer.h"
+#include "core/mesh/mesh.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 namespace aperture {

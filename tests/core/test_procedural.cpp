@@ -5,9 +5,9 @@
 #include <set>
 #include <utility>
 
-#include "core/error.h"
-#include "core/mesh.h"
-#include "core/units.h"
+#include "core/mesh/mesh.h"
+#include "core/util/error.h"
+#include "core/util/units.h"
 #include "tests/support.h"
 
 namespace aperture {

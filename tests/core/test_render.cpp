@@ -6,11 +6,11 @@
 #include <cmath>
 #include <cstring>
 
-#include "cameras/registry.h"
-#include "core/error.h"
-#include "core/mesh.h"
-#include "core/render.h"
-#include "core/scene.h"
+#include "cameras/registry/registry.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/mesh/mesh.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 using namespace aperture;
@@ -190,7 +190,7 @@ TEST(RenderSettingsCheck, RejectsBadValues) {
   EXPECT_THROW(validateRenderSettings(s), Error);
   s.tileSize = 32;
   EXPECT_NO_THROW(validateRenderSettings(s));
-  // spp has one check, the camera schema's (cameras/param_schema.h), run by makeCamera.
+  // spp has one check, the camera schema's (cameras/schema/param_schema.h), run by makeCamera.
   CameraParams p;
   p.spp = 0;
   EXPECT_THROW(makeCamera(p), Error);

@@ -6,11 +6,11 @@
 #include <memory>
 #include <vector>
 
-#include "cameras/registry.h"
-#include "core/error.h"
-#include "core/mesh.h"
-#include "core/render.h"
-#include "core/scene.h"
+#include "cameras/registry/registry.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/mesh/mesh.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 using namespace aperture;

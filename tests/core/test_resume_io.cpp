@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "core/atomic_file.h"
-#include "core/error.h"
-#include "core/exr.h"
+#include "core/exr/exr.h"
+#include "core/io/atomic_file.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 namespace aperture {

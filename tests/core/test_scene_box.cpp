@@ -1,6 +1,6 @@
-// The scene-box test (core/scene_box.h, RenderSettings::sceneBoxTest): the frame loop resolves
-// rays that miss the scene's box as misses without Embree. Checked three ways: the lane test
-// never clears a ray that reaches the box (rays aimed exactly at its faces, edges and corners,
+// The scene-box test (core/engine/scene_box.h, RenderSettings::sceneBoxTest): the frame loop
+// resolves rays that miss the scene's box as misses without Embree. Checked three ways: the lane
+// test never clears a ray that reaches the box (rays aimed exactly at its faces, edges and corners,
 // from near and far) and clears the rays that clearly miss it, both against a slab test of
 // its own in double; the Scene's box holds every placed vertex; and every AOV, layer and count
 // of the frame loop is bit-identical with the test on and off, for every camera kind and
@@ -14,12 +14,12 @@
 #include <random>
 #include <vector>
 
-#include "cameras/registry.h"
-#include "core/mesh.h"
-#include "core/packet.h"
-#include "core/render.h"
-#include "core/scene.h"
-#include "core/scene_box.h"
+#include "cameras/registry/registry.h"
+#include "core/engine/packet.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/engine/scene_box.h"
+#include "core/mesh/mesh.h"
 #include "tests/numerics_support.h"
 #include "tests/support.h"
 

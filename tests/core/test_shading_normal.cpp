@@ -8,12 +8,12 @@
 #include <string>
 #include <vector>
 
-#include "cameras/registry.h"
-#include "core/error.h"
-#include "core/mesh.h"
-#include "core/render.h"
-#include "core/scene.h"
-#include "core/units.h"
+#include "cameras/registry/registry.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/mesh/mesh.h"
+#include "core/util/error.h"
+#include "core/util/units.h"
 #include "tests/support.h"
 
 namespace aperture {

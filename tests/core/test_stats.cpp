@@ -1,10 +1,10 @@
-// Median and sample summaries of repeated timings (core/stats.h).
+// Median and sample summaries of repeated timings (core/util/stats.h).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
 
-#include "core/stats.h"
+#include "core/util/stats.h"
 
 namespace aperture {
 namespace {

@@ -11,16 +11,16 @@
 #include <string>
 #include <vector>
 
-#include "cameras/registry.h"
-#include "core/exr.h"
-#include "core/layers.h"
-#include "core/mesh.h"
-#include "core/ply_writer.h"
-#include "core/render.h"
-#include "core/scene.h"
-#include "core/trace.h"
-#include "core/triangle_order.h"
-#include "core/visibility.h"
+#include "cameras/registry/registry.h"
+#include "core/engine/layers.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/engine/triangle_order.h"
+#include "core/exr/exr.h"
+#include "core/io/ply_writer.h"
+#include "core/mesh/mesh.h"
+#include "core/queries/trace.h"
+#include "core/queries/visibility.h"
 #include "tests/numerics_support.h"
 #include "tests/support.h"
 
@@ -234,8 +234,8 @@ TEST(TriangleOrder, FaceVisibilityAndItsPlyKeepTheLoadedOrder) {
   EXPECT_NE(test::readFile(dir + "/c.ply"), test::readFile(dir + "/b.ply"));
 }
 
-// The command line orders a scattered file before its build (apps/scene_setup.cpp) and writes
-// the AOVs of its loaded order, culled or not.
+// The command line orders a scattered file before its build (apps/services/scene_setup.cpp) and
+// writes the AOVs of its loaded order, culled or not.
 TEST(TriangleOrderCli, AScatteredFileIsChunkedAndRendersAsLoaded) {
   const std::string dir = test::scratchDir(), ply = dir + "/scattered.ply";
   const Mesh loaded = scatteredSpheres();

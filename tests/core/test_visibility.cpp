@@ -1,4 +1,4 @@
-// Face and point visibility (core/visibility.h): hand-counted scenes, the primID renders'
+// Face and point visibility (core/queries/visibility.h): hand-counted scenes, the primID renders'
 // bincount, an independent pinhole and ray per seen face, and a brute-force double-precision
 // occlusion check of points.
 #include <embree3/rtcore.h>
@@ -13,12 +13,12 @@
 #include <string>
 #include <vector>
 
-#include "cameras/registry.h"
-#include "core/error.h"
-#include "core/mesh.h"
-#include "core/render.h"
-#include "core/scene.h"
-#include "core/visibility.h"
+#include "cameras/registry/registry.h"
+#include "core/engine/render.h"
+#include "core/engine/scene.h"
+#include "core/mesh/mesh.h"
+#include "core/queries/visibility.h"
+#include "core/util/error.h"
 #include "tests/numerics_support.h"
 #include "tests/support.h"
 

@@ -12,8 +12,8 @@
 #include <fstream>
 #include <string>
 
-#include "cameras/camera_file.h"
-#include "core/error.h"
+#include "cameras/files/camera_file.h"
+#include "core/util/error.h"
 
 namespace {
 

@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <string>
 
-#include "apps/job.h"
-#include "core/error.h"
+#include "apps/jobs/job.h"
+#include "core/util/error.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {

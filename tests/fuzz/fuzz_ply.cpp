@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "core/error.h"
-#include "core/mesh.h"
-#include "core/ply.h"
+#include "core/mesh/mesh.h"
+#include "core/mesh/ply.h"
+#include "core/util/error.h"
 
 namespace {
 

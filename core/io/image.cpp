@@ -1,0 +1,250 @@
+#include "core/io/image.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <vector>
+
+#include "core/io/atomic_file.h"
+#include "core/io/image_codec.h"
+#include "core/util/error.h"
+#include "core/util/sampling.h"
+
+namespace aperture {
+
+namespace {
+
+uint8_t toByte(double v) { return uint8_t(std::lround(std::clamp(v, 0.0, 1.0) * 255.0)); }
+
+/// The sRGB transfer function (IEC 61966-2-1) of a linear value in [0, 1].
+double srgbEncode(double linear) {
+  linear = std::clamp(linear, 0.0, 1.0);
+  return linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
+}
+
+/// Its inverse: the linear value of an sRGB-encoded value in [0, 1].
+double srgbDecode(double encoded) {
+  return encoded <= 0.04045 ? encoded / 12.92 : std::pow((encoded + 0.055) / 1.055, 2.4);
+}
+
+/// RGB bytes of a preview, 3 per pixel, and what they show (for ImageDescription).
+struct PreviewImage {
+  std::vector<uint8_t> rgb;
+  std::string description;
+};
+
+void setPixel(std::vector<uint8_t>& rgb, size_t i, const std::array<uint8_t, 3>& c) {
+  for (int k = 0; k < 3; ++k) rgb[3 * i + size_t(k)] = c[size_t(k)];
+}
+
+/// Every pixel starts as the background; the AOV's painters overwrite the hits.
+std::vector<uint8_t> backgroundPixels(size_t n) {
+  std::vector<uint8_t> rgb(3 * n);
+  for (size_t i = 0; i < n; ++i) setPixel(rgb, i, kPreviewBackground);
+  return rgb;
+}
+
+PreviewImage colorPreview(const Framebuffer& fb) {
+  const size_t n = fb.pixelCount();
+  PreviewImage out{std::vector<uint8_t>(3 * n), "color over the background"};
+  double background[3];
+  for (int c = 0; c < 3; ++c) background[c] = srgbDecode(kPreviewBackground[size_t(c)] / 255.0);
+  for (size_t i = 0; i < n; ++i) {
+    const double uncovered = 1.0 - std::clamp(double(fb.rgba[4 * i + 3]), 0.0, 1.0);
+    for (int c = 0; c < 3; ++c)
+      out.rgb[3 * i + size_t(c)] =
+          toByte(srgbEncode(fb.rgba[4 * i + size_t(c)] + uncovered * background[c]));
+  }
+  return out;
+}
+
+/// options.depthRange, else the nearest and farthest finite depth of the image (NaN, NaN when
+/// it has none).
+glm::dvec2 depthRangeOf(const Framebuffer& fb, const PreviewOptions& options) {
+  if (options.depthRange) return *options.depthRange;
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  for (float z : fb.depth)
+    if (std::isfinite(z)) lo = std::min(lo, z), hi = std::max(hi, z);
+  if (lo > hi) return glm::dvec2(std::numeric_limits<double>::quiet_NaN());
+  return {lo, hi};
+}
+
+/// `x` with 9 significant digits ("0.45", not cat's "0.45000000000000001").
+std::string shortNumber(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.9g", x);
+  return text;
+}
+
+PreviewImage depthPreview(const Framebuffer& fb, const PreviewOptions& options) {
+  const glm::dvec2 range = depthRangeOf(fb, options);
+  const double nearZ = range.x, farZ = range.y;
+  PreviewImage out{backgroundPixels(fb.pixelCount()),
+                   std::isnan(nearZ)
+                       ? std::string("depth (Z): no finite depth")
+                       : cat("depth (Z): ", shortNumber(nearZ), " white to ", shortNumber(farZ),
+                             " black (", options.depthRange ? "fixed" : "this image's", " range)")};
+  for (size_t i = 0; i < fb.pixelCount(); ++i) {
+    const double z = fb.depth[i];
+    if (!std::isfinite(z)) continue;
+    // Near is bright, far dark, as a display value (not sRGB-encoded); constant depth is white.
+    const uint8_t g = toByte(farZ > nearZ ? (farZ - z) / (farZ - nearZ) : 1.0);
+    setPixel(out.rgb, i, {g, g, g});
+  }
+  return out;
+}
+
+PreviewImage normalPreview(const Framebuffer& fb) {
+  PreviewImage out{backgroundPixels(fb.pixelCount()), "normal (N * 0.5 + 0.5)"};
+  for (size_t i = 0; i < fb.pixelCount(); ++i) {
+    const float* n = &fb.normal[3 * i];
+    if (n[0] == 0.0f && n[1] == 0.0f && n[2] == 0.0f) continue;  // a miss
+    setPixel(out.rgb, i,
+             {toByte(n[0] * 0.5 + 0.5), toByte(n[1] * 0.5 + 0.5), toByte(n[2] * 0.5 + 0.5)});
+  }
+  return out;
+}
+
+/// A colour per ID: three bytes of its hash, each lifted into [96, 255] so that no ID is as
+/// dark as the background. The ID is salted so that ID 0 (hash32(0) = 0) is not grey.
+std::array<uint8_t, 3> idColor(uint32_t id) {
+  const uint32_t h = hash32(id ^ 0x9e3779b9u);
+  std::array<uint8_t, 3> c;
+  for (int k = 0; k < 3; ++k) c[size_t(k)] = uint8_t(96 + ((h >> (8 * k)) & 0xffu) * 159u / 255u);
+  return c;
+}
+
+PreviewImage idPreview(const std::vector<uint32_t>& ids, const char* name) {
+  PreviewImage out{backgroundPixels(ids.size()), cat(name, " (hashed colours)")};
+  for (size_t i = 0; i < ids.size(); ++i)
+    if (ids[i] != kInvalidId) setPixel(out.rgb, i, idColor(ids[i]));
+  return out;
+}
+
+/// The preview of `fb` (its buffers must have the framebuffer's size).
+PreviewImage previewPixels(const Framebuffer& fb, const PreviewOptions& options,
+                           const std::string& path) {
+  const size_t n = fb.pixelCount();
+  switch (previewAov(fb.aovs)) {
+    case kAovColor:
+      if (fb.rgba.size() == 4 * n) return colorPreview(fb);
+      break;
+    case kAovDepth:
+      if (fb.depth.size() == n) return depthPreview(fb, options);
+      break;
+    case kAovNormal:
+      if (fb.normal.size() == 3 * n) return normalPreview(fb);
+      break;
+    case kAovPrimId:
+      if (fb.primId.size() == n) return idPreview(fb.primId, "primID");
+      break;
+    case kAovGeomId:
+      if (fb.geomId.size() == n) return idPreview(fb.geomId, "geomID");
+      break;
+    default:
+      throw Error(cat("cannot write preview '", path, "': none of the AOVs ",
+                      aovListString(fb.aovs), " can be previewed (",
+                      aovListString(kPreviewableAovs), " can)"));
+  }
+  throw Error(cat("cannot write preview '", path, "': the framebuffer's buffers are incomplete"));
+}
+
+/// The file `path` would hold, encoded by the image codec for its extension.
+std::vector<unsigned char> encodeRgb8(const std::string& path, int width, int height,
+                                      const PreviewImage& image) {
+  ImageToEncode rgb;
+  rgb.width = width, rgb.height = height, rgb.channels = 3;
+  rgb.type = SampleType::UInt8;
+  rgb.pixels = image.rgb.data();
+  rgb.attributes = {{"oiio:ColorSpace", "sRGB"},
+                    {"ImageDescription", "aperture preview: " + image.description}};
+  return encodeImage(path, rgb);
+}
+
+}  // namespace
+
+Aov previewAov(AovMask aovs) {
+  static constexpr Aov kOrder[] = {kAovColor, kAovDepth, kAovNormal, kAovPrimId, kAovGeomId};
+  for (const Aov a : kOrder)
+    if ((aovs & AovMask(a)) != 0) return a;
+  return Aov(0);
+}
+
+void writePreview(const std::string& path, const Framebuffer& fb, const PreviewOptions& options) {
+  if (fb.width <= 0 || fb.height <= 0)
+    throw Error(cat("cannot write preview '", path, "': empty framebuffer"));
+  const PreviewImage image = previewPixels(fb, options, path);
+  std::vector<unsigned char> bytes;
+  try {
+    bytes = encodeRgb8(path, fb.width, fb.height, image);
+  } catch (const Error& e) {
+    throw Error(cat("cannot write '", path, "': ", e.what()));
+  }
+  writeBytesAtomically(path, bytes.data(), bytes.size());
+}
+
+namespace {
+
+/// Mean relative depth error over pixels finite in both with Zref != 0.
+double depthRelativeError(const std::vector<float>& test, const std::vector<float>& ref) {
+  double sum = 0;
+  size_t count = 0;
+  for (size_t i = 0; i < test.size(); ++i) {
+    if (!std::isfinite(test[i]) || !std::isfinite(ref[i]) || ref[i] == 0.0f) continue;
+    sum += std::abs(double(test[i]) - ref[i]) / std::abs(double(ref[i]));
+    ++count;
+  }
+  return count ? sum / double(count) : 0.0;
+}
+
+}  // namespace
+
+ImageDiff compareFramebuffers(const Framebuffer& test, const Framebuffer& reference, double peak) {
+  if (test.width != reference.width || test.height != reference.height)
+    throw Error(cat("cannot compare images of different sizes: ", test.width, "x", test.height,
+                    " vs reference ", reference.width, "x", reference.height));
+  const size_t n = test.pixelCount();
+  const bool color = test.has(kAovColor) && reference.has(kAovColor) && test.rgba.size() == 4 * n &&
+                     reference.rgba.size() == 4 * n;
+  const bool depth = test.has(kAovDepth) && reference.has(kAovDepth) && test.depth.size() == n &&
+                     reference.depth.size() == n;
+  if (!color && !depth)
+    throw Error("cannot compare images: they share neither a color nor a depth AOV");
+
+  // Depth is copied so that misses (+inf in both) compare equal instead of giving
+  // inf − inf = NaN.
+  std::vector<float> a, b;
+  const float* pa = test.rgba.data();
+  const float* pb = reference.rgba.data();
+  if (!color) {
+    a = test.depth;
+    b = reference.depth;
+    for (size_t i = 0; i < n; ++i)
+      if (std::isinf(a[i]) && a[i] == b[i]) a[i] = b[i] = 0.0f;
+    pa = a.data();
+    pb = b.data();
+  }
+  SampleDifference d;
+  std::string error;
+  if (!imageCodec().compare(test.width, test.height, color ? 4 : 1, pa, pb, d, error))
+    throw Error(cat("image comparison failed: ", error));
+
+  ImageDiff diff;
+  diff.rmse = d.rms;
+  diff.maxError = d.max;
+  diff.meanError = d.mean;
+  diff.psnr =
+      diff.rmse > 0 ? 20.0 * std::log10(peak / diff.rmse) : std::numeric_limits<double>::infinity();
+  if (test.has(kAovPrimId) && reference.has(kAovPrimId) && test.primId.size() == n &&
+      reference.primId.size() == n && n > 0) {
+    size_t differ = 0;
+    for (size_t i = 0; i < n; ++i) differ += test.primId[i] != reference.primId[i];
+    diff.primIdMismatch = double(differ) / double(n);
+  }
+  if (depth) diff.depthRelError = depthRelativeError(test.depth, reference.depth);
+  return diff;
+}
+
+}  // namespace aperture

@@ -1,0 +1,64 @@
+#pragma once
+// Previews and image comparison through OpenImageIO (the image codec, core/io/image_codec.h).
+#include <array>
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <optional>
+#include <string>
+
+#include "core/aov/framebuffer.h"
+
+namespace aperture {
+
+/// How a preview maps its AOV to 8-bit display values.
+struct PreviewOptions {
+  /// NEAR, FAR in scene units (0 <= NEAR < FAR, both finite): a depth preview maps NEAR to
+  /// white (255) and FAR to black (0), linearly, clamped outside. Absent: each image uses its
+  /// own nearest and farthest finite depth. Ignored by previews of other AOVs.
+  std::optional<glm::dvec2> depthRange;
+};
+
+/// The colour of pixels that hit nothing in every preview (and what color previews are
+/// composited over): a dark slate blue, as sRGB bytes. No ID colour and no grey equals it.
+inline constexpr std::array<uint8_t, 3> kPreviewBackground = {38, 50, 72};
+
+/// The AOVs a preview can show, in order of preference: color, depth, normal, primID, geomID.
+inline constexpr AovMask kPreviewableAovs =
+    kAovColor | kAovDepth | kAovNormal | kAovPrimId | kAovGeomId;
+
+/// The requested AOVs a preview could show (`aovs & kPreviewableAovs`); 0 means a preview of
+/// such a framebuffer cannot be written, which callers check before rendering.
+inline AovMask previewableAovs(AovMask aovs) { return aovs & kPreviewableAovs; }
+
+/// The one AOV a preview of a framebuffer with `aovs` shows: the first previewable AOV in the
+/// order of kPreviewableAovs, or 0 when there is none.
+Aov previewAov(AovMask aovs);
+
+/// Writes an opaque 8-bit RGB preview of `fb` to `path` (PNG or any 8-bit format OpenImageIO
+/// writes, chosen by the extension), atomically. Throws Error naming `path`. It shows
+/// previewAov(fb.aovs):
+///  - color: R G B composited over kPreviewBackground by coverage A (the color AOV is
+///    premultiplied: c + (1 − A)·background, in linear light), clamped, sRGB-encoded;
+///  - depth: grey, NEAR white to FAR black (options.depthRange, else the image's own range;
+///    a constant depth is white), not sRGB-encoded; misses are the background;
+///  - normal: n·0.5 + 0.5 per channel; misses (zero normal) are the background;
+///  - primID / geomID: a colour hashed from the ID (hash32 of core/util/sampling.h), every
+///    channel in [96, 255]; equal IDs give equal colours; misses are the background.
+/// The file's ImageDescription says which AOV it shows and, for depth, the range used.
+void writePreview(const std::string& path, const Framebuffer& fb,
+                  const PreviewOptions& options = {});
+
+/// Error statistics of `test` against `reference` over a float channel set, computed with
+/// OpenImageIO's ImageBufAlgo::compare.
+struct ImageDiff {
+  double rmse = 0;
+  double psnr = 0;  ///< 20 log10(peak / rmse), peak given to compareColor; inf if equal
+  double maxError = 0;
+  double meanError = 0;
+  double primIdMismatch = 0;  ///< share of pixels whose primID differs (if both have it)
+  double depthRelError = 0;   ///< mean |Z − Zref| / |Zref| over pixels finite in both, Zref ≠ 0
+};
+ImageDiff compareFramebuffers(const Framebuffer& test, const Framebuffer& reference,
+                              double peak = 1.0);
+
+}  // namespace aperture
