@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "apps/services/camera_file_params.h"
+#include "cameras/registry/registry.h"
 #include "core/util/error.h"
 
 namespace aperture::app {
@@ -38,7 +39,7 @@ void CameraFlags::add(CLI::App& app, const CameraParams& defaults) {
   for (const ParamSpec* spec : allCameraParamSpecs()) {
     slots_.push_back(Slot{spec, nullptr, std::string(), false});
     Slot& slot = slots_.back();
-    const std::string help = spec->describeText(defaults);
+    const std::string help = describeCameraParam(*spec, defaults);
     if (spec->kind == ParamKind::Flag)
       slot.option = app.add_flag(spec->flag(), slot.present, help);
     else

@@ -28,6 +28,7 @@
 #include "apps/services/view.h"
 #include "cameras/files/camera_file.h"
 #include "cameras/models/calibrated.h"
+#include "cameras/registry/registry.h"
 #include "core/io/image_codec.h"
 #include "core/util/error.h"
 

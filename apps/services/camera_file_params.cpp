@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "cameras/models/calibrated.h"
+#include "cameras/registry/resolve.h"
 #include "core/util/error.h"
 #include "core/util/spelling.h"
 

@@ -26,6 +26,7 @@
 #include "apps/services/limits.h"
 #include "cameras/lenses/direction_table.h"
 #include "cameras/models/calibrated.h"
+#include "cameras/models/thinlens.h"
 #include "cameras/registry/registry.h"
 #include "core/exr/exr.h"
 #include "core/io/image.h"
