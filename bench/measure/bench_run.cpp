@@ -15,11 +15,13 @@
 #include "apps/services/command_camera.h"
 #include "bench/measure/baseline.h"
 #include "cameras/registry/registry.h"
+#include "core/aov/aov_table.h"
 #include "core/engine/layers.h"
 #include "core/io/atomic_file.h"
 #include "core/util/error.h"
 #include "core/util/parallel.h"
 #include "core/util/stats.h"
+#include "core/util/vector_kernel.h"
 
 namespace aperture::app {
 
@@ -97,6 +99,7 @@ void reportConfig(const Bench& b, nlohmann::json& j) {
                  {"threads", b.threads.threads()},
                  {"hardware_threads", std::thread::hardware_concurrency()},
                  {"isa", b.device.isaName()},
+                 {"kernel_isa", kernelIsaName(activeKernelIsa())},
                  {"packet_width", b.settings.packetWidth},
                  {"tile_size", b.settings.tileSize},
                  {"bvh_quality", a.scene.quality},
@@ -116,13 +119,15 @@ void reportConfig(const Bench& b, nlohmann::json& j) {
                  {"scene_box_test", b.settings.sceneBoxTest},
                  {"coverage_mask", b.settings.coverageMask}};
   std::printf(
-      "config: %s, %zu triangles; %d threads, Embree ISA %s; packet %d, tile %d; BVH %s%s%s; "
+      "config: %s, %zu triangles; %d threads, Embree ISA %s, kernels %s; packet %d, tile %d; "
+      "BVH %s%s%s; "
       "AOVs %s; layers %d (%s); %s %dx%d, %d spp\n",
       meshNames.c_str(), st.triangles, b.threads.threads(), b.device.isaName().c_str(),
-      b.settings.packetWidth, b.settings.tileSize, a.scene.quality.c_str(),
-      robust ? " robust" : " not robust", a.scene.compact ? " compact" : "",
-      aovListString(b.aovs).c_str(), b.aovs.layers, layerMethodName(defaultLayerMethod()),
-      b.params.type.c_str(), b.params.width, b.params.height, b.params.spp);
+      kernelIsaName(activeKernelIsa()), b.settings.packetWidth, b.settings.tileSize,
+      a.scene.quality.c_str(), robust ? " robust" : " not robust",
+      a.scene.compact ? " compact" : "", aovListString(b.aovs).c_str(), b.aovs.layers,
+      layerMethodName(defaultLayerMethod()), b.params.type.c_str(), b.params.width, b.params.height,
+      b.params.spp);
   if (a.nullTrace)
     std::printf(
         "null trace: no Embree call; every ray is a fake hit (t 1, normal -dir, geomID 0), so "
@@ -170,8 +175,13 @@ double fillFramebufferSeconds(Framebuffer& fb) {
       channels.emplace_back(reinterpret_cast<char*>(v.data()),
                             v.size() * sizeof(v[0]) / size_t(fb.height));
   };
-  add(fb.rgba), add(fb.depth), add(fb.distance), add(fb.normal), add(fb.position);
-  add(fb.primId), add(fb.geomId), add(fb.shadingNormal);
+  for (const AovRow& row : aovTable()) {
+    if (!fb.has(Aov(row.bit))) continue;
+    if (row.isFloat())
+      add(floatPixels(fb, row));
+    else
+      add(uintPixels(fb, row));
+  }
   const auto start = std::chrono::steady_clock::now();
   parallelFor(size_t(fb.height), 8, [&](size_t first, size_t last) {
     for (const auto& [data, rowBytes] : channels)
@@ -346,11 +356,9 @@ std::vector<std::vector<double>> timeAovSetsInterleaved(
 
 /// Depth alone .. all AOVs, each relative to depth alone.
 nlohmann::json sweepAovs(const Bench& b) {
-  const std::vector<std::pair<std::string, AovMask>> sets = {{"depth", kAovDepth},
-                                                             {"primid", kAovPrimId},
-                                                             {"color", kAovColor},
-                                                             {"color,depth", kAovColor | kAovDepth},
-                                                             {"all", parseAovList("all")}};
+  std::vector<std::pair<std::string, AovMask>> sets;
+  for (const char* list : {"depth", "primid", "color", "color,depth", "all"})
+    sets.emplace_back(list, parseAovList(list));
   const std::vector<std::vector<double>> mrays = timeAovSetsInterleaved(b, sets);
   nlohmann::json rows = nlohmann::json::object();
   const double depthOnly = summarize(mrays[0]).median;

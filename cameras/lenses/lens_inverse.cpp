@@ -463,6 +463,19 @@ bool unprojectFormula(const LensInverse& c, double px, double py, double dir[3])
   return true;
 }
 
+/// unprojectEight's kernel.
+void unprojectEightLanes(const LensInverse& lens, const double* px, const double* py, double* dirX,
+                         double* dirY, double* dirZ, bool* solve) {
+  Lanes x, y, dx = {}, dy = {}, dz = {};
+  LaneMasks wanted;
+  for (int k = 0; k < kLensLanes; ++k) x[k] = px[k], y[k] = py[k], wanted[k] = maskOf(solve[k]);
+  const LaneMasks solved = unproject(lens, x, y, dx, dy, dz, wanted);
+  for (int k = 0; k < kLensLanes; ++k) {
+    dirX[k] = dx[k], dirY[k] = dy[k], dirZ[k] = dz[k];
+    solve[k] = solved[k] != 0;
+  }
+}
+
 }  // namespace
 
 void distortByFormula(const LensInverse& c, double u, double v, double& du, double& dv, double* j) {
@@ -498,10 +511,9 @@ void distortByFormula(const LensInverse& c, double u, double v, double& du, doub
   }
 }
 
-APERTURE_VECTOR_KERNEL void unprojectEight(const LensInverse& lens, const double* px,
-                                           const double* py, double* dirX, double* dirY,
-                                           double* dirZ, bool* solve) {
-  if (lens.formula) {
+void unprojectEight(const LensInverse& lens, const double* px, const double* py, double* dirX,
+                    double* dirY, double* dirZ, bool* solve) {
+  if (lens.formula) {  // a model's own formula: one pixel at a time
     for (int k = 0; k < kLensLanes; ++k) {
       double dir[3] = {0, 0, 1};
       solve[k] = solve[k] && unprojectFormula(lens, px[k], py[k], dir);
@@ -509,14 +521,7 @@ APERTURE_VECTOR_KERNEL void unprojectEight(const LensInverse& lens, const double
     }
     return;
   }
-  Lanes x, y, dx = {}, dy = {}, dz = {};
-  LaneMasks wanted;
-  for (int k = 0; k < kLensLanes; ++k) x[k] = px[k], y[k] = py[k], wanted[k] = maskOf(solve[k]);
-  const LaneMasks solved = unproject(lens, x, y, dx, dy, dz, wanted);
-  for (int k = 0; k < kLensLanes; ++k) {
-    dirX[k] = dx[k], dirY[k] = dy[k], dirZ[k] = dz[k];
-    solve[k] = solved[k] != 0;
-  }
+  runKernel<&unprojectEightLanes>(lens, px, py, dirX, dirY, dirZ, solve);
 }
 
 bool unprojectOne(const LensInverse& lens, double px, double py, double dir[3]) {

@@ -15,7 +15,7 @@
 #include <mutex>
 
 #include "cameras/lenses/direction_table.h"
-#include "cameras/models/models.h"
+#include "cameras/models/camera_models.h"
 #include "core/util/error.h"
 #include "core/util/units.h"
 #include "core/util/vector_kernel.h"
@@ -232,8 +232,8 @@ inline void worldDirectionLane(const CalibratedFrame& f, double cx, double cy, d
 /// contiguous entries in lane order, read by one lane loop. The two loops keep their own
 /// copies of the lane's two lines: a shared lambda made the 16-wide kernel 13 % slower.
 template <int kBW, int kBH>
-APERTURE_VECTOR_KERNEL void tableCentres(const CalibratedFrame& f, const DirectionTable& table,
-                                         int x0, int y0, RayLanes& out, int* valid) {
+void tableCentres(const CalibratedFrame& f, const DirectionTable& table, int x0, int y0,
+                  RayLanes& out, int* valid) {
   constexpr int kLanes = kBW * kBH;
   const double *tx = table.x(), *ty = table.y(), *tz = table.z();
   const unsigned char* tv = table.validity();
@@ -274,8 +274,8 @@ struct PinholeLens {
 /// A kBW x kBH block of pixel centres of an undistorted pinhole lens, lanes past the image's
 /// edges included. x and y are divided once per column and row of the block.
 template <int kBW, int kBH>
-APERTURE_VECTOR_KERNEL void pinholeCentres(const CalibratedFrame& f, const PinholeLens& lens,
-                                           int x0, int y0, RayLanes& out, int* valid) {
+void pinholeCentres(const CalibratedFrame& f, const PinholeLens& lens, int x0, int y0,
+                    RayLanes& out, int* valid) {
   constexpr int kLanes = kBW * kBH;
   double xs[kBW], ys[kBH];
   for (int col = 0; col < kBW; ++col)
@@ -437,14 +437,14 @@ class CalibratedCamera final : public CameraBase {
     if (pinhole_)
       return withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
         constexpr int kBW = decltype(bw)::value, kBH = decltype(bh)::value;
-        pinholeCentres<kBW, kBH>(f, *pinhole_, req.x0, req.y0, out, valid);
+        runKernel<&pinholeCentres<kBW, kBH>>(f, *pinhole_, req.x0, req.y0, out, valid);
       });
     constexpr int kB = DirectionTable::kBlock;
     const bool whole = req.x0 + req.blockW <= width_ && req.y0 + req.blockH <= height_;
     if (!whole || req.x0 % kB + req.blockW > kB) return false;
     return withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
       constexpr int kBW = decltype(bw)::value, kBH = decltype(bh)::value;
-      tableCentres<kBW, kBH>(f, table(), req.x0, req.y0, out, valid);
+      runKernel<&tableCentres<kBW, kBH>>(f, table(), req.x0, req.y0, out, valid);
     });
   }
 
