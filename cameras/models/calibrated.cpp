@@ -50,6 +50,28 @@ CalibratedSensor calibratedSensorOf(const CameraParams& p) {
   const std::vector<double>& k = *p.intrinsics;
   const double fx = k[0], fy = k[1], cx = k[2], cy = k[3];
   std::vector<double> params;
+  if (model.ownMap()) {
+    // Its parameters are all "distortion" (EQUIRECTANGULAR: w, h); the intrinsics must be the
+    // linear part of its map, as Lens reports them (and calibratedCameraParams writes them).
+    if (!p.distortion)
+      throw Error(cat("--distortion: camera model ", model.name, " needs its parameters (",
+                      join(model.paramNames, ","), ")"));
+    const Lens lens(model.id, *p.distortion);
+    const double want[4] = {lens.fx(), lens.fy(), lens.cx(), lens.cy()};
+    for (int i = 0; i < 4; ++i)
+      if (!(std::abs(k[size_t(i)] - want[i]) <= 1e-9 * std::abs(want[i])))
+        throw Error(cat("--intrinsics: camera model ", model.name, " with ",
+                        join(model.paramNames, ","), " = ",
+                        join(*p.distortion, ",", [](double d) { return cat(d); }),
+                        " has fx,fy,cx,cy = ", want[0], ",", want[1], ",", want[2], ",", want[3],
+                        "; got ", fx, ",", fy, ",", cx, ",", cy));
+    CalibratedSensor s;
+    s.width = p.width;
+    s.height = p.height;
+    s.lens = lens;
+    s.pixelCentre = parsePixelCentre(p.pixelCentre);
+    return s;
+  }
   if (model.singleFocal()) {
     if (fx != fy)
       throw Error(cat("--intrinsics: camera model ", model.name,
@@ -390,7 +412,7 @@ class CalibratedCamera final : public CameraBase {
     lp.params = lens.params();
     lp.pixelCentre = pixelCentreName(sensor_.pixelCentre);
     c.lens = lp;
-    c.extra.emplace_back("valid_region", lens.validRegion().text(lens.info().fisheye));
+    c.extra.emplace_back("valid_region", lens.validRegion().text(lens.overTheta()));
   }
 
   void describeCounts(CameraDescription& c) const override {
@@ -481,7 +503,7 @@ const ParamSpec kIntrinsics =
 const ParamSpec kLensModel =
     ParamSpec("lens_model", K::Choice, fieldAccess<&CameraParams::lensModel>())
         .withHelp("COLMAP camera model of the lens (src/colmap/sensor/models.h)")
-        .withChoices(lensModelNames());
+        .withChoicesNow(lensModelNames);
 const ParamSpec kDistortion =
     ParamSpec("distortion", K::Numbers, fieldAccess<&CameraParams::distortion>())
         .withHelp(
