@@ -424,7 +424,7 @@ void writeRenderedCameras(const BatchPlan& plan, const SceneImages& images, bool
     const std::string name = std::filesystem::path(r.image->output)
                                  .lexically_relative(job.outputDirectory)
                                  .generic_string();
-    file.images.push_back({name, int(same - file.sensors.begin()), view->worldToCamera});
+    file.images.push_back({name, int(same - file.sensors.begin()), view->cvCameraFromWorld});
   }
   if (file.images.empty()) return;
   bool sharedDirectory = false;

@@ -41,7 +41,7 @@ void exportCamera(const CameraArgs& a, const CameraParams& params) {
   file.path = a.out;
   file.sensors = {view->sensor};
   file.sensorIds = {"1"};
-  file.images = {{a.exportImage, 0, view->worldToCamera}};
+  file.images = {{a.exportImage, 0, view->cvCameraFromWorld}};
   if (a.exportFormat == "colmap") writeColmapText(file, a.out);
   if (a.exportFormat == "nerf") writeNerfstudioJson(file, a.out);
   if (a.exportFormat == "opencv") writeOpenCVJson(file, a.out);

@@ -87,7 +87,8 @@ int runRender(const RenderArgs& a) {
                     imageCodec, {unframed});
   if (imageCodec) aperture::imageCodec();  // a missing plugin fails before the mesh loads
   const PreviewOptions preview = checkRenderOutputs(a, aovs);
-  if (given.has("eye") || unframed.worldToCamera || unframed.cameraToWorld) makeCamera(unframed);
+  if (given.has("eye") || unframed.sourceCameraFromWorld || unframed.worldFromSourceCamera)
+    makeCamera(unframed);
 
   ThreadLimit threads(a.render.threads);
   const ExrEncodingThreads encoding(threads.threads(), exr.compression);

@@ -33,7 +33,7 @@ std::vector<const CalibratedImage*> selectImages(const CameraFile& file,
 
 ParamSet imageParamSet(const CameraFile& file, const CalibratedImage& image) {
   return paramSetOf(
-      calibratedCameraParams(file.sensors.at(size_t(image.sensor)), image.worldToCamera),
+      calibratedCameraParams(file.sensors.at(size_t(image.sensor)), image.cvCameraFromWorld),
       cat(file.path, " image '", image.name, "'"));
 }
 

@@ -11,7 +11,7 @@ namespace aperture::app {
 CameraParams resolveCommandCamera(const ParamSet& given, const CameraParams& defaults,
                                   const glm::dvec3& lo, const glm::dvec3& hi) {
   CameraParams p = resolveCameraParams(given, defaults);
-  if (p.worldToCamera || p.cameraToWorld) return p;  // posed by its matrix
+  if (p.sourceCameraFromWorld || p.worldFromSourceCamera) return p;  // posed by its matrix
   const glm::dvec3 centre = 0.5 * (lo + hi);
   if (given.has("eye")) {
     if (!p.at && !p.dir) p.at = centre;

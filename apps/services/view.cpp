@@ -109,7 +109,7 @@ void writeViewOutputs(const RenderedView& view, const ExrMetadata& meta, const E
     if (const std::optional<CalibratedView> cal = calibratedViewOf(view.camera)) {
       const std::string path = cameraSidecarPath(sidecarBeside);
       ensureParentDirectory(path, "camera sidecar");
-      writeTextAtomically(path, cameraSidecarJson(cal->sensor, cal->worldToCamera));
+      writeTextAtomically(path, cameraSidecarJson(cal->sensor, cal->cvCameraFromWorld));
     }
   if (exrPath.empty()) return;
   ensureParentDirectory(exrPath, "output");

@@ -206,7 +206,7 @@ CameraFile readCameraFile(const std::string& path) {
 
 // The sidecar is JSON written by nlohmann::json, whose numbers print in the shortest form that
 // reads back to the same double (at most 17 significant digits): every value is exact.
-std::string cameraSidecarJson(const CalibratedSensor& sensor, const glm::dmat4& worldToCameraCv) {
+std::string cameraSidecarJson(const CalibratedSensor& sensor, const glm::dmat4& cvCameraFromWorld) {
   const Lens& lens = sensor.lens;
   json j;
   j["width"] = sensor.width;
@@ -218,13 +218,13 @@ std::string cameraSidecarJson(const CalibratedSensor& sensor, const glm::dmat4& 
   j["params"] = lens.params();
   if (const auto cv = camera_files::openCVLens(lens))
     j[cv->fisheye ? "distortion_opencv_fisheye" : "distortion_opencv"] = cv->dist;
-  j["world_to_camera_opencv"] = camera_files::rowMajorJson(worldToCameraCv);
-  j["world_to_camera_opengl"] =
-      camera_files::rowMajorJson(poseInConvention(worldToCameraCv, AxisConvention::OpenGL, false));
+  j["world_to_camera_opencv"] = camera_files::rowMajorJson(cvCameraFromWorld);
+  j["world_to_camera_opengl"] = camera_files::rowMajorJson(
+      poseInConvention(cvCameraFromWorld, AxisConvention::OpenGL, false));
   j["camera_to_world_opencv"] =
-      camera_files::rowMajorJson(poseInConvention(worldToCameraCv, AxisConvention::OpenCV, true));
+      camera_files::rowMajorJson(poseInConvention(cvCameraFromWorld, AxisConvention::OpenCV, true));
   j["camera_to_world_opengl"] =
-      camera_files::rowMajorJson(poseInConvention(worldToCameraCv, AxisConvention::OpenGL, true));
+      camera_files::rowMajorJson(poseInConvention(cvCameraFromWorld, AxisConvention::OpenGL, true));
   return camera_files::jsonFileText(j, "the sidecar JSON");
 }
 

@@ -25,7 +25,7 @@ const char* cameraFileFormatName(CameraFileFormat f);
 struct CalibratedImage {
   std::string name;  ///< as the file names it (COLMAP NAME, nerf file_path), subfolders kept
   int sensor = 0;    ///< index into CameraFile::sensors
-  glm::dmat4 worldToCamera{1.0};  ///< OpenCV axes (x right, y down, z forward)
+  glm::dmat4 cvCameraFromWorld{1.0};  ///< OpenCV axes (x right, y down, z forward)
 };
 
 struct CameraFile {
@@ -54,6 +54,6 @@ void writeOpenCVJson(const CameraFile& file, const std::string& path);
 /// The sidecar JSON of one rendered image: K, the distortion model and coefficients (COLMAP
 /// names and OpenCV order), the pixel convention, image size, world-to-camera in OpenCV and
 /// in OpenGL axes, and camera-to-world in both.
-std::string cameraSidecarJson(const CalibratedSensor& sensor, const glm::dmat4& worldToCameraCv);
+std::string cameraSidecarJson(const CalibratedSensor& sensor, const glm::dmat4& cvCameraFromWorld);
 
 }  // namespace aperture

@@ -158,7 +158,7 @@ CameraFile assemble(const std::string& dir, CameraFileFormat format,
     glm::dmat4 pose(rotationOfQuaternion(unitQuaternion(im.q, im.context)));
     pose[3] = glm::dvec4(im.t, 1.0);
     file.images.push_back({im.name, sensor->second,
-                           worldToCameraOpenCV(pose, AxisConvention::OpenCV, false, im.context)});
+                           cvCameraFromWorldOf(pose, AxisConvention::OpenCV, false, im.context)});
     file.imageIds.push_back(std::to_string(im.id));
   }
   return file;
@@ -334,7 +334,7 @@ ColmapModel colmapModel(const CameraFile& file, const std::string& dir, bool tex
                       " models need a non-empty name without ",
                       text ? "spaces, tabs or line breaks" : "NUL bytes", ")"));
     const glm::dmat4 pose =
-        worldToCameraOpenCV(im.worldToCamera, AxisConvention::OpenCV, false, context);
+        cvCameraFromWorldOf(im.cvCameraFromWorld, AxisConvention::OpenCV, false, context);
     m.q.push_back(quaternionOfRotation(glm::dmat3(pose)));
     m.t.emplace_back(pose[3]);
   }

@@ -295,10 +295,10 @@ CameraFile readNerfJson(const std::string& path, const json& doc) {
                                   PixelCentre::HalfInteger};
     if (!frame.contains("transform_matrix"))
       throw Error(cat(context, ": needs a transform_matrix (camera-to-world, 4×4)"));
-    const glm::dmat4 cameraToWorld =
+    const glm::dmat4 worldFromGlCamera =
         dmat4FromJson(frame["transform_matrix"], context + " transform_matrix");
     file.images.push_back({name, shareSensor(file, sensor),
-                           worldToCameraOpenCV(cameraToWorld, AxisConvention::OpenGL, true,
+                           cvCameraFromWorldOf(worldFromGlCamera, AxisConvention::OpenGL, true,
                                                context + " transform_matrix")});
   }
   return file;
@@ -345,7 +345,7 @@ void writeNerfstudioJson(const CameraFile& file, const std::string& path) {
       json f;
       f["file_path"] = im.name;
       f["transform_matrix"] = camera_files::rowMajorJson(
-          poseInConvention(im.worldToCamera, AxisConvention::OpenGL, true));
+          poseInConvention(im.cvCameraFromWorld, AxisConvention::OpenGL, true));
       if (used.size() > 1) {
         if (!sameModel) f["camera_model"] = sensors[size_t(im.sensor)].model;
         camera_files::putIntrinsics(f, sensors[size_t(im.sensor)]);

@@ -268,7 +268,7 @@ CameraFile readOpenCVDocument(const std::string& path, const json& doc, CameraFi
     glm::dmat4 pose(rotation);
     pose[3] = glm::dvec4(t[0], t[1], t[2], 1.0);
     file.images.push_back({nc.name, shareSensor(file, sensor),
-                           worldToCameraOpenCV(pose, AxisConvention::OpenCV, false, context)});
+                           cvCameraFromWorldOf(pose, AxisConvention::OpenCV, false, context)});
   }
   return file;
 }
@@ -316,7 +316,7 @@ void writeOpenCVJson(const CameraFile& file, const std::string& path) {
                       " is not OpenCV's standard model (fisheye lenses are not written to OpenCV "
                       "files)"));
     const glm::dmat4 pose =
-        worldToCameraOpenCV(im.worldToCamera, AxisConvention::OpenCV, false, context);
+        cvCameraFromWorldOf(im.cvCameraFromWorld, AxisConvention::OpenCV, false, context);
     json c;
     c["name"] = im.name;
     c["width"] = s.width;

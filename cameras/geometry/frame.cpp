@@ -54,6 +54,6 @@ CameraFrame CameraFrame::fromLookAt(const glm::dvec3& eye, const glm::dvec3& at,
   return fromDirection(eye, at - eye, up);
 }
 
-glm::dmat4 CameraFrame::cameraFromWorld() const { return standardCameraFromWorld(e, u, v, w); }
+glm::dmat4 CameraFrame::exrCameraFromWorld() const { return exrCameraFromFrame(e, u, v, w); }
 
 }  // namespace aperture

@@ -19,8 +19,8 @@ struct CameraFrame {
   static CameraFrame fromLookAt(const glm::dvec3& eye, const glm::dvec3& at, const glm::dvec3& up);
 
   /// OpenEXR's camera space from world (left-handed: x = U, y = V, z = −W, the viewing
-  /// direction), column-vector convention; standardCameraFromWorld() of core/engine/camera.h.
-  glm::dmat4 cameraFromWorld() const;
+  /// direction), column-vector convention; exrCameraFromFrame() of core/engine/camera.h.
+  glm::dmat4 exrCameraFromWorld() const;
 };
 
 /// Throws Error naming `what` if any component of v is NaN or infinite.

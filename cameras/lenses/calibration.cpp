@@ -26,14 +26,14 @@ constexpr AxisConventionName kAxisConventionNames[] = {
 // carry rotations printed to float precision (NeRF's synthetic scenes) or better.
 constexpr double kRotationTolerance = 1e-6;
 
-// A world-to-camera transform from OpenGL (and Blender) camera axes to OpenCV's or back: x
-// stays, y and z flip, so rows 1 and 2 are negated (exactly). Its own inverse.
-glm::dmat4 flipCameraYZ(glm::dmat4 worldToCamera) {
+// glCameraFromWorld as cvCameraFromWorld or back (OpenGL and Blender camera axes to OpenCV's):
+// x stays, y and z flip, so rows 1 and 2 are negated (exactly). Its own inverse.
+glm::dmat4 flipCameraYZ(glm::dmat4 cameraFromWorld) {
   for (int c = 0; c < 4; ++c) {
-    worldToCamera[c][1] = -worldToCamera[c][1];
-    worldToCamera[c][2] = -worldToCamera[c][2];
+    cameraFromWorld[c][1] = -cameraFromWorld[c][1];
+    cameraFromWorld[c][2] = -cameraFromWorld[c][2];
   }
-  return worldToCamera;
+  return cameraFromWorld;
 }
 
 // The inverse of a rigid transform [R t; 0 1]: [Rᵀ −Rᵀt; 0 1]. The rotation part is exact
@@ -90,18 +90,20 @@ const char* pixelCentreName(PixelCentre c) {
   return c == PixelCentre::HalfInteger ? "half-integer" : "integer";
 }
 
-glm::dmat4 worldToCameraOpenCV(const glm::dmat4& pose, AxisConvention from, bool cameraToWorld,
-                               const std::string& context) {
+glm::dmat4 cvCameraFromWorldOf(const glm::dmat4& pose, AxisConvention from,
+                               bool poseIsWorldFromCamera, const std::string& context) {
   checkRigid(pose, context);
-  const glm::dmat4 worldToCamera = cameraToWorld ? rigidInverse(pose) : pose;
-  return from == AxisConvention::OpenCV ? worldToCamera : flipCameraYZ(worldToCamera);
+  // The camera in `from` axes.
+  const glm::dmat4 cameraFromWorld = poseIsWorldFromCamera ? rigidInverse(pose) : pose;
+  return from == AxisConvention::OpenCV ? cameraFromWorld : flipCameraYZ(cameraFromWorld);
 }
 
-glm::dmat4 poseInConvention(const glm::dmat4& worldToCameraCv, AxisConvention to,
-                            bool cameraToWorld) {
-  const glm::dmat4 worldToCamera =
-      to == AxisConvention::OpenCV ? worldToCameraCv : flipCameraYZ(worldToCameraCv);
-  return cameraToWorld ? rigidInverse(worldToCamera) : worldToCamera;
+glm::dmat4 poseInConvention(const glm::dmat4& cvCameraFromWorld, AxisConvention to,
+                            bool poseIsWorldFromCamera) {
+  // The camera in `to` axes.
+  const glm::dmat4 cameraFromWorld =
+      to == AxisConvention::OpenCV ? cvCameraFromWorld : flipCameraYZ(cvCameraFromWorld);
+  return poseIsWorldFromCamera ? rigidInverse(cameraFromWorld) : cameraFromWorld;
 }
 
 }  // namespace aperture

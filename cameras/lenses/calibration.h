@@ -5,9 +5,16 @@
 //  - pixel centres: COLMAP, nerfstudio and instant-ngp put the centre of pixel (row i,
 //    column j) at (j + 0.5, i + 0.5), OpenCV at (j, i) (sourcePixelOfRaster);
 //  - camera axes: COLMAP and OpenCV x right, y down, z forward; OpenGL, nerfstudio,
-//    instant-ngp and Blender x right, y up, z backwards (worldToCameraOpenCV).
+//    instant-ngp and Blender x right, y up, z backwards (cvCameraFromWorldOf).
 // Internally every pose is world-to-camera in OpenCV axes and every lens in COLMAP's pixel
 // convention plus the PixelCentre of its source.
+//
+// Names of transforms: aFromB maps B's coordinates to A's (compositions read right to left),
+// and a camera space carries its axes as a prefix, one per AxisConvention: cvCamera (OpenCV:
+// x right, y down, z forward), glCamera (OpenGL and Blender: x right, y up, z backwards);
+// exrCamera is OpenEXR's (x right, y up, z forward; CameraDescription::exrCameraFromWorld in
+// core/engine/camera.h). A pose as a source gives it, in the axes its `convention` names, is
+// sourceCameraFromWorld / worldFromSourceCamera (CameraParams, cameras/schema/params.h).
 #include <glm/glm.hpp>
 #include <string>
 
@@ -44,15 +51,16 @@ inline glm::dvec2 rasterOfSourcePixel(const glm::dvec2& sourcePixel, PixelCentre
   return centre == PixelCentre::HalfInteger ? sourcePixel : sourcePixel + glm::dvec2(0.5);
 }
 
-/// The one axis conversion: a source's pose (world-to-camera, or camera-to-world when
-/// `cameraToWorld`) in its axes, as world-to-camera in OpenCV axes. Throws Error (naming
+/// The one axis conversion: a source's pose (cameraFromWorld, or worldFromCamera when
+/// `poseIsWorldFromCamera`) in its axes, as cvCameraFromWorld. Throws Error (naming
 /// `context`) when the rotation part is not a rotation (orthonormal to 1e-6, determinant +1)
 /// or the last row is not (0, 0, 0, 1).
-glm::dmat4 worldToCameraOpenCV(const glm::dmat4& pose, AxisConvention from, bool cameraToWorld,
-                               const std::string& context);
-/// The inverse: world-to-camera in OpenCV axes as a pose in `to` axes.
-glm::dmat4 poseInConvention(const glm::dmat4& worldToCameraCv, AxisConvention to,
-                            bool cameraToWorld);
+glm::dmat4 cvCameraFromWorldOf(const glm::dmat4& pose, AxisConvention from,
+                               bool poseIsWorldFromCamera, const std::string& context);
+/// The inverse: cvCameraFromWorld as a pose in `to` axes (cameraFromWorld, or worldFromCamera
+/// when `poseIsWorldFromCamera`).
+glm::dmat4 poseInConvention(const glm::dmat4& cvCameraFromWorld, AxisConvention to,
+                            bool poseIsWorldFromCamera);
 
 /// One physical camera: image size, lens (COLMAP parameter order) and the pixel convention
 /// its principal point is given in.

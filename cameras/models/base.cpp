@@ -322,9 +322,9 @@ CameraDescription CameraBase::describeWithoutCounts() const {
   c.width = width_;
   c.height = height_;
   c.spp = spp_;
-  c.cameraFromWorld = frame_.cameraFromWorld();
+  c.exrCameraFromWorld = frame_.exrCameraFromWorld();
   if (const std::optional<glm::dmat4> plane = planeFromCamera())
-    c.ndcFromWorld = ndcFromPlane() * *plane * c.cameraFromWorld;
+    c.ndcFromWorld = ndcFromPlane() * *plane * c.exrCameraFromWorld;
   c.pixelAspectRatio = (vw_ / width_) / (vh_ / height_);
   c.extra.emplace_back("shift", cat(shift_.x, ",", shift_.y));
   if (params_.architectural) {

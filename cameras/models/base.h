@@ -126,7 +126,7 @@ class CameraBase : public Camera {
   glm::dmat4 ndcFromPlane() const;
 
  protected:
-  /// The model's projection from OpenEXR camera space (CameraDescription::cameraFromWorld) to
+  /// The model's projection from OpenEXR camera space (CameraDescription::exrCameraFromWorld) to
   /// homogeneous image-plane coordinates (u, v, z', w): u / w and v / w are the (u, v) of
   /// planeFromRaster. Nothing where no 4x4 matrix expresses the projection (panoramas); then
   /// describe() leaves ndcFromWorld empty.

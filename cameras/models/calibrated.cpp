@@ -98,7 +98,7 @@ CalibratedSensor calibratedSensorOf(const CameraParams& p) {
   return s;
 }
 
-CameraFrame frameOfWorldToCamera(const glm::dmat4& m) {
+CameraFrame frameOfCvCameraFromWorld(const glm::dmat4& m) {
   // GLM m[column][row]: row r of R is (m[0][r], m[1][r], m[2][r]); t is column 3.
   const glm::dvec3 x(m[0][0], m[1][0], m[2][0]), y(m[0][1], m[1][1], m[2][1]),
       z(m[0][2], m[1][2], m[2][2]);
@@ -115,8 +115,8 @@ namespace {
 
 /// OpenCV camera space (x right, y down, z forwards) from the space of frame U, V, W about
 /// `eye`: rows U, −V, −W, translated by −R·eye.
-glm::dmat4 openCvCameraFromFrame(const glm::dvec3& u, const glm::dvec3& v, const glm::dvec3& w,
-                                 const glm::dvec3& eye) {
+glm::dmat4 cvCameraFromFrame(const glm::dvec3& u, const glm::dvec3& v, const glm::dvec3& w,
+                             const glm::dvec3& eye) {
   glm::dmat4 m(1.0);  // GLM: m[column][row]
   const glm::dvec3 rows[3] = {u, -v, -w};
   for (int r = 0; r < 3; ++r) {
@@ -128,29 +128,31 @@ glm::dmat4 openCvCameraFromFrame(const glm::dvec3& u, const glm::dvec3& v, const
 
 }  // namespace
 
-glm::dmat4 calibratedWorldToCamera(const CameraParams& p) {
+glm::dmat4 calibratedCvCameraFromWorld(const CameraParams& p) {
   const AxisConvention axes = parseAxisConvention(p.convention);
-  if (p.worldToCamera)
-    return worldToCameraOpenCV(matrixOfRowMajor(*p.worldToCamera), axes, false,
+  if (p.sourceCameraFromWorld)
+    return cvCameraFromWorldOf(matrixOfRowMajor(*p.sourceCameraFromWorld), axes, false,
                                "--world-to-camera");
-  if (p.cameraToWorld)
-    return worldToCameraOpenCV(matrixOfRowMajor(*p.cameraToWorld), axes, true, "--camera-to-world");
+  if (p.worldFromSourceCamera)
+    return cvCameraFromWorldOf(matrixOfRowMajor(*p.worldFromSourceCamera), axes, true,
+                               "--camera-to-world");
   const CameraFrame f = frameFromParams(p);
-  return openCvCameraFromFrame(f.u, f.v, f.w, f.e);
+  return cvCameraFromFrame(f.u, f.v, f.w, f.e);
 }
 
 namespace {
 
 /// The frame of the pose matrix when one is given, else of eye / at / dir / up.
 CameraFrame poseFrame(const CameraParams& p) {
-  if (p.worldToCamera || p.cameraToWorld) return frameOfWorldToCamera(calibratedWorldToCamera(p));
+  if (p.sourceCameraFromWorld || p.worldFromSourceCamera)
+    return frameOfCvCameraFromWorld(calibratedCvCameraFromWorld(p));
   return frameFromParams(p);
 }
 
 }  // namespace
 
 CameraParams calibratedCameraParams(const CalibratedSensor& sensor,
-                                    const glm::dmat4& worldToCameraCv) {
+                                    const glm::dmat4& cvCameraFromWorld) {
   CameraParams p;
   p.type = "calibrated";
   p.width = sensor.width;
@@ -161,7 +163,7 @@ CameraParams calibratedCameraParams(const CalibratedSensor& sensor,
   const std::vector<double> dist = lens.distortion();
   if (!dist.empty()) p.distortion = dist;
   p.pixelCentre = pixelCentreName(sensor.pixelCentre);
-  p.worldToCamera = rowMajor(worldToCameraCv);
+  p.sourceCameraFromWorld = rowMajor(cvCameraFromWorld);
   p.convention = axisConventionName(AxisConvention::OpenCV);
   return p;
 }
@@ -171,7 +173,7 @@ std::optional<CalibratedView> calibratedViewOf(const CameraDescription& c) {
   glm::dmat4 flipY(1.0);
   flipY[1][1] = -1.0;
   CalibratedView view;
-  view.worldToCamera = flipY * c.cameraFromWorld;
+  view.cvCameraFromWorld = flipY * c.exrCameraFromWorld;
   view.sensor.width = c.width;
   view.sensor.height = c.height;
   if (c.lens) {
@@ -323,7 +325,7 @@ class CalibratedCamera final : public CameraBase {
     const DirectionTable& table = this->table();
     LensBlockBounds b;
     // The table's camera space from render space: the inverse of worldDirection's rotation.
-    b.cameraFromRender = openCvCameraFromFrame(frame_.u, frame_.v, frame_.w, renderEyeD_);
+    b.cameraFromRender = cvCameraFromFrame(frame_.u, frame_.v, frame_.w, renderEyeD_);
     b.eye = renderEyeD_;
     b.width = width_;
     b.height = height_;
@@ -518,14 +520,14 @@ const ParamSpec kPixelCentre =
             "as COLMAP and nerfstudio, integer = (j, i) as OpenCV")
         .withChoices({"half-integer", "integer"});
 const ParamSpec kWorldToCamera =
-    ParamSpec("world_to_camera", K::Numbers, fieldAccess<&CameraParams::worldToCamera>())
+    ParamSpec("world_to_camera", K::Numbers, fieldAccess<&CameraParams::sourceCameraFromWorld>())
         .withHelp("4x4 world-to-camera matrix, row-major, in `convention` axes")
         .withDefaultRule("none (eye, at / dir and up pose the camera)")
         .withConflicts({"camera_to_world", "eye", "at", "dir", "up"})
         .withCount(16)
         .withSelectsModel("calibrated");
 const ParamSpec kCameraToWorld =
-    ParamSpec("camera_to_world", K::Numbers, fieldAccess<&CameraParams::cameraToWorld>())
+    ParamSpec("camera_to_world", K::Numbers, fieldAccess<&CameraParams::worldFromSourceCamera>())
         .withHelp(
             "4x4 camera-to-world matrix, row-major, in `convention` axes (nerfstudio's "
             "transform_matrix, Blender's matrix_world)")

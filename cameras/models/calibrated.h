@@ -31,21 +31,21 @@ uint64_t directionTableBytes(const std::vector<CameraParams>& cameras);
 
 /// World-to-camera in OpenCV axes: from world_to_camera / camera_to_world (in `convention`
 /// axes) when given, else from the frame of eye / at / up (x = U, y = −V, z = −W).
-glm::dmat4 calibratedWorldToCamera(const CameraParams& p);
+glm::dmat4 calibratedCvCameraFromWorld(const CameraParams& p);
 
 /// The lecture frame of a world-to-camera pose in OpenCV axes: e = −Rᵀt, U = x, V = −y, W = −z
 /// (the rows of R).
-CameraFrame frameOfWorldToCamera(const glm::dmat4& worldToCameraCv);
+CameraFrame frameOfCvCameraFromWorld(const glm::dmat4& cvCameraFromWorld);
 
 /// Calibrated parameters (type "calibrated") for one image of a camera file: every number is
 /// carried over exactly.
 CameraParams calibratedCameraParams(const CalibratedSensor& sensor,
-                                    const glm::dmat4& worldToCameraCv);
+                                    const glm::dmat4& cvCameraFromWorld);
 
 /// A camera as a calibrated camera file holds it: sensor and world-to-camera (OpenCV axes).
 struct CalibratedView {
   CalibratedSensor sensor;
-  glm::dmat4 worldToCamera{1.0};
+  glm::dmat4 cvCameraFromWorld{1.0};
 };
 
 /// The calibrated form of a described camera: a calibrated camera as it is; a pinhole

@@ -36,7 +36,7 @@ void describeExrHeader(std::ostream& s, const CameraDescription& desc) {
     << desc.screenWindowCenter.x + 0.0 << ", " << desc.screenWindowCenter.y + 0.0
     << "), screenWindowWidth " << desc.screenWindowWidth << "\n";
   s << "  worldToCamera (p' = p·M; camera space left-handed: +x right, +y up, +z forward):\n";
-  printRowVectorMatrix(s, desc.cameraFromWorld);
+  printRowVectorMatrix(s, desc.exrCameraFromWorld);
   if (desc.ndcFromWorld) {
     s << "  worldToNDC (p' = p·M, then divide by w; NDC (0, 0) top-left, (1, 1) bottom-right):\n";
     printRowVectorMatrix(s, *desc.ndcFromWorld);

@@ -46,7 +46,7 @@ ViewVolume viewVolumeFor(const CameraParams& params, double nearDist, double far
 
 std::optional<CalibratedView> calibratedViewOf(const CameraParams& p) {
   if (p.type == "calibrated")
-    return CalibratedView{calibratedSensorOf(p), calibratedWorldToCamera(p)};
+    return CalibratedView{calibratedSensorOf(p), calibratedCvCameraFromWorld(p)};
   if (p.type != "perspective") return std::nullopt;
   return calibratedViewOf(makeCameraModel(p)->describe());
 }

@@ -76,8 +76,10 @@ struct CameraParams {
   std::string lensModel = "PINHOLE";  ///< a COLMAP model name (cameras/lenses/lens_model.h)
   std::optional<std::vector<double>> distortion;  ///< the model's coefficients, COLMAP's order
   std::string pixelCentre = "half-integer";       ///< "half-integer" (COLMAP) or "integer" (OpenCV)
-  std::optional<std::vector<double>> worldToCamera;
-  std::optional<std::vector<double>> cameraToWorld;
+  // The pose in the camera axes `convention` names (the source camera, see AxisConvention in
+  // cameras/lenses/calibration.h): world_to_camera and camera_to_world.
+  std::optional<std::vector<double>> sourceCameraFromWorld;
+  std::optional<std::vector<double>> worldFromSourceCamera;
   std::string convention = "opencv";  ///< axes of the pose matrix: opencv, opengl, blender
 };
 

@@ -120,10 +120,11 @@ struct CameraDescription {
   double vw = 1, vh = 1;                          ///< viewport size on the image plane, scene units
   int width = 0, height = 0;                      ///< image size, pixels
   int spp = 1;                                    ///< samples per pixel
-  /// OpenEXR's worldToCamera: camera space is left-handed with its origin at e, +x right (U),
-  /// +y up (V), +z the viewing direction (−W), so points in front have z > 0 and z is the
-  /// planar depth Z. Built by standardCameraFromWorld() only.
-  glm::dmat4 cameraFromWorld{1.0};
+  /// What OpenEXR's worldToCamera attribute holds. Its space is named exrCamera (the others
+  /// are cvCamera and glCamera, cameras/lenses/calibration.h): left-handed with its origin at
+  /// e, +x right (U), +y up (V), +z the viewing direction (−W), so points in front have z > 0
+  /// and z is the planar depth Z. Built by exrCameraFromFrame() only.
+  glm::dmat4 exrCameraFromWorld{1.0};
   /// OpenEXR's worldToNDC: after the homogeneous divide, (0, 0) is the top-left and (1, 1) the
   /// bottom-right corner of the display window (outer pixel edges), x right, y down: x =
   /// column / W, y = row / H, pixel (i, j) centre at ((j + ½) / W, (i + ½) / H). Empty for the
@@ -153,11 +154,11 @@ inline constexpr std::string_view kValidPixelsExtra = "valid_pixels";
 /// size), so comparisons of cameras leave it out, and describeWithoutCounts() does not count it.
 inline bool isCountedExtra(std::string_view name) { return name == kValidPixelsExtra; }
 
-/// The one definition of OpenEXR's camera space (see CameraDescription::cameraFromWorld) from
+/// The one definition of OpenEXR's camera space (see CameraDescription::exrCameraFromWorld) from
 /// the frame e, U (right), V (up), W (backwards): rows U, V, −W and translation (−U·e, −V·e,
 /// W·e). Column-vector GLM convention.
-inline glm::dmat4 standardCameraFromWorld(const glm::dvec3& eye, const glm::dvec3& u,
-                                          const glm::dvec3& v, const glm::dvec3& w) {
+inline glm::dmat4 exrCameraFromFrame(const glm::dvec3& eye, const glm::dvec3& u,
+                                     const glm::dvec3& v, const glm::dvec3& w) {
   const glm::dvec3 forward = -w;
   glm::dmat4 m(1.0);  // GLM: m[column][row]
   for (int c = 0; c < 3; ++c) {

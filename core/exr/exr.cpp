@@ -135,7 +135,7 @@ std::optional<LensProjection> readLensAttributes(const Imf::Header& header) {
 /// The standard worldToCamera and worldToNDC (float) with their double copies, and the
 /// projection attributes of the panoramas, which have no worldToNDC (README, "EXR channels").
 void addProjectionAttributes(Imf::Header& header, const CameraDescription& cam) {
-  const Imath::M44d worldToCamera = toImath(cam.cameraFromWorld);
+  const Imath::M44d worldToCamera = toImath(cam.exrCameraFromWorld);
   Imf::addWorldToCamera(header, Imath::M44f(worldToCamera));
   header.insert("aperture.worldToCamera", Imf::M44dAttribute(worldToCamera));
   if (cam.ndcFromWorld) {
@@ -214,9 +214,9 @@ void readProjection(const Imf::Header& header, CameraDescription& cam) {
   cam.screenWindowCenter = glm::dvec2(header.screenWindowCenter().x, header.screenWindowCenter().y);
   cam.screenWindowWidth = header.screenWindowWidth();
   if (auto* m = findValue<Imath::M44d, Imf::M44dAttribute>(header, "aperture.worldToCamera"))
-    cam.cameraFromWorld = toGlm(*m);
+    cam.exrCameraFromWorld = toGlm(*m);
   else if (Imf::hasWorldToCamera(header))
-    cam.cameraFromWorld = toGlm(Imath::M44d(Imf::worldToCamera(header)));
+    cam.exrCameraFromWorld = toGlm(Imath::M44d(Imf::worldToCamera(header)));
   if (auto* m = findValue<Imath::M44d, Imf::M44dAttribute>(header, "aperture.worldToNDC"))
     cam.ndcFromWorld = toGlm(*m);
   else if (Imf::hasWorldToNDC(header))

@@ -161,13 +161,13 @@ void expectSidecarOf(const std::string& exr, const InputCamera& c) {
     EXPECT_EQ(j["distortion_opencv"].get<std::vector<double>>(),
               std::vector<double>(c.params.begin() + 4, c.params.end()));
   }
-  const json& w2c = j["world_to_camera_opencv"];
+  const json& cvCameraFromWorld = j["world_to_camera_opencv"];
   for (size_t r = 0; r < 3; ++r) {
     for (size_t k = 0; k < 3; ++k)
-      EXPECT_NEAR(w2c[r][k].get<double>(), c.R[r][k], kPoseTolerance) << r << k;
-    EXPECT_NEAR(w2c[r][3].get<double>(), c.t[r], kPoseTolerance) << r;
+      EXPECT_NEAR(cvCameraFromWorld[r][k].get<double>(), c.R[r][k], kPoseTolerance) << r << k;
+    EXPECT_NEAR(cvCameraFromWorld[r][3].get<double>(), c.t[r], kPoseTolerance) << r;
   }
-  EXPECT_EQ(w2c[3], json({0.0, 0.0, 0.0, 1.0}));
+  EXPECT_EQ(cvCameraFromWorld[3], json({0.0, 0.0, 0.0, 1.0}));
   for (size_t r = 0; r < 3; ++r)
     EXPECT_NEAR(j["camera_to_world_opencv"][r][3].get<double>(), c.centre[r], kPoseTolerance);
 }
@@ -182,8 +182,8 @@ void expectSameCamera(const CameraFile& file, const CalibratedImage& image, cons
   EXPECT_EQ(s.lens.params(), c.params);
   for (int r = 0; r < 3; ++r) {
     for (int k = 0; k < 3; ++k)
-      EXPECT_NEAR(image.worldToCamera[k][r], c.R[size_t(r)][size_t(k)], kPoseTolerance);
-    EXPECT_NEAR(image.worldToCamera[3][r], c.t[size_t(r)], kPoseTolerance);
+      EXPECT_NEAR(image.cvCameraFromWorld[k][r], c.R[size_t(r)][size_t(k)], kPoseTolerance);
+    EXPECT_NEAR(image.cvCameraFromWorld[3][r], c.t[size_t(r)], kPoseTolerance);
   }
 }
 
@@ -552,9 +552,9 @@ const CalibratedImage& onlyImage(const CameraFile& f) {
 }
 
 /// The camera centre −Rᵀt of a world-to-camera matrix.
-glm::dvec3 centreOf(const glm::dmat4& w2c) {
-  const glm::dmat3 r(w2c);
-  return -(glm::transpose(r) * glm::dvec3(w2c[3]));
+glm::dvec3 centreOf(const glm::dmat4& cvCameraFromWorld) {
+  const glm::dmat3 r(cvCameraFromWorld);
+  return -(glm::transpose(r) * glm::dvec3(cvCameraFromWorld[3]));
 }
 
 /// A lecture perspective camera exported in every format: K = (W·d/vw, H·d/vh, principal
@@ -594,11 +594,11 @@ void expectExported(const std::string& dir, const ExportCase& c) {
     ASSERT_EQ(s.lens.params().size(), 4u);
     for (size_t k = 0; k < 4; ++k)
       EXPECT_NEAR(s.lens.params()[k], expected[k], 1e-9 * std::abs(expected[k]) + 1e-12) << k;
-    const glm::dvec3 centre = centreOf(image.worldToCamera);
+    const glm::dvec3 centre = centreOf(image.cvCameraFromWorld);
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(centre[k], c.eye[k], 1e-12) << k;
     // OpenCV's z axis (third row of R) looks at --at.
-    const glm::dvec3 forward(image.worldToCamera[0][2], image.worldToCamera[1][2],
-                             image.worldToCamera[2][2]);
+    const glm::dvec3 forward(image.cvCameraFromWorld[0][2], image.cvCameraFromWorld[1][2],
+                             image.cvCameraFromWorld[2][2]);
     EXPECT_NEAR(glm::length(forward - glm::normalize(c.at - c.eye)), 0, 1e-12);
   }
 }

@@ -75,7 +75,8 @@ TEST(CalibratedCamera, PinholeIsTheLecturePerspectiveCamera) {
     EXPECT_NEAR(view->sensor.lens.fx(), fx, 1e-12 * fx);
     EXPECT_NEAR(view->sensor.lens.cx(), (0.5 - shift.x) * W, 1e-12 * W);
     EXPECT_NEAR(view->sensor.lens.cy(), (0.5 + shift.y) * H, 1e-12 * H);
-    const auto back = makeCameraModel(calibratedCameraParams(view->sensor, view->worldToCamera));
+    const auto back =
+        makeCameraModel(calibratedCameraParams(view->sensor, view->cvCameraFromWorld));
     EXPECT_LT(largestRayAngle(*lecture, *back), 1e-14);
   }
 }
@@ -113,7 +114,7 @@ TEST(CalibratedCamera, RayIsTheClosedFormInOpenCvAxes) {
 }
 
 /// Row-major world-to-camera in OpenCV axes from the lecture frame, built here independently.
-std::vector<double> openCvWorldToCamera(const CameraFrame& f) {
+std::vector<double> cvCameraFromWorldRowMajor(const CameraFrame& f) {
   const glm::dvec3 rows[3] = {f.u, -f.v, -f.w};
   std::vector<double> m(16, 0.0);
   for (int r = 0; r < 3; ++r) {
@@ -143,36 +144,36 @@ std::vector<double> flipYZRows(const std::vector<double>& m) {
 TEST(CalibratedCamera, PoseMatricesInEveryConventionAgree) {
   const CameraParams base = calibratedPinhole(30, 31, 18.5, 11.5);
   const auto reference = makeCameraModel(base);
-  const std::vector<double> w2cCv = openCvWorldToCamera(reference->frame());
-  const std::vector<double> w2cGl = flipYZRows(w2cCv);
+  const std::vector<double> cvCameraFromWorld = cvCameraFromWorldRowMajor(reference->frame());
+  const std::vector<double> glCameraFromWorld = flipYZRows(cvCameraFromWorld);
   struct Case {
     const char* convention;
-    bool cameraToWorld;
+    bool poseIsWorldFromCamera;
     std::vector<double> m;
   };
-  const std::vector<Case> cases = {{"opencv", false, w2cCv},
-                                   {"opencv", true, invertRigid(w2cCv)},
-                                   {"opengl", false, w2cGl},
-                                   {"opengl", true, invertRigid(w2cGl)},
-                                   {"blender", true, invertRigid(w2cGl)}};
+  const std::vector<Case> cases = {{"opencv", false, cvCameraFromWorld},
+                                   {"opencv", true, invertRigid(cvCameraFromWorld)},
+                                   {"opengl", false, glCameraFromWorld},
+                                   {"opengl", true, invertRigid(glCameraFromWorld)},
+                                   {"blender", true, invertRigid(glCameraFromWorld)}};
   for (const Case& c : cases) {
-    SCOPED_TRACE(std::string(c.convention) + (c.cameraToWorld ? " c2w" : " w2c"));
+    SCOPED_TRACE(std::string(c.convention) + (c.poseIsWorldFromCamera ? " c2w" : " w2c"));
     CameraParams p = base;
     p.at.reset();
     p.eye = glm::dvec3(0.0);
     p.up = glm::dvec3(0, 1, 0);
     p.convention = c.convention;
-    (c.cameraToWorld ? p.cameraToWorld : p.worldToCamera) = c.m;
+    (c.poseIsWorldFromCamera ? p.worldFromSourceCamera : p.sourceCameraFromWorld) = c.m;
     EXPECT_LT(largestRayAngle(*reference, *makeCameraModel(p)), 1e-13);
   }
   CameraParams wrong = base;
   wrong.at.reset();
-  wrong.worldToCamera = w2cGl;  // an OpenGL matrix read as OpenCV
+  wrong.sourceCameraFromWorld = glCameraFromWorld;  // an OpenGL matrix read as OpenCV
   EXPECT_GT(largestRayAngle(*reference, *makeCameraModel(wrong)), 1.9);  // nearly opposite
   // A matrix that is not a rotation is refused, naming the flag.
-  std::vector<double> sheared = w2cCv;
+  std::vector<double> sheared = cvCameraFromWorld;
   sheared[1] += 0.1;
-  wrong.worldToCamera = sheared;
+  wrong.sourceCameraFromWorld = sheared;
   try {
     makeCameraModel(wrong);
     FAIL() << "no error";
@@ -325,7 +326,7 @@ TEST(CalibratedCamera, BuildsItsTableAtItsFirstRayNotWhenMade) {
   EXPECT_EQ(stated.u, described.u);
   EXPECT_EQ(stated.w, described.w);
   EXPECT_EQ(stated.d, described.d);
-  EXPECT_EQ(stated.cameraFromWorld, described.cameraFromWorld);
+  EXPECT_EQ(stated.exrCameraFromWorld, described.exrCameraFromWorld);
   ASSERT_TRUE(stated.lens && described.lens);
   EXPECT_EQ(stated.lens->params, described.lens->params);
 }

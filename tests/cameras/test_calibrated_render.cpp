@@ -106,7 +106,7 @@ Frame frameOf(const glm::dvec3& eye, const glm::dvec3& at, const glm::dvec3& up)
 }
 
 /// World-to-camera in OpenCV axes (rows U, −V, −W; t = −R·e), GLM m[column][row].
-glm::dmat4 worldToCameraCv(const Frame& f) {
+glm::dmat4 cvCameraFromWorldOfFrame(const Frame& f) {
   const glm::dvec3 rows[3] = {f.u, -f.v, -f.w};
   glm::dmat4 m(1.0);
   for (int r = 0; r < 3; ++r) {
@@ -204,14 +204,14 @@ CameraFile everyModelFile() {
     file.sensorIds.push_back(std::to_string(file.sensors.size()));
     file.images.push_back({std::string("bunny_") + lens.info().name + ".png",
                            int(file.sensors.size() - 1),
-                           worldToCameraCv(fisheye ? fisheyeView() : perspectiveView())});
+                           cvCameraFromWorldOfFrame(fisheye ? fisheyeView() : perspectiveView())});
   }
   return file;
 }
 
 CameraParams paramsOfImage(const CameraFile& file, size_t k) {
   const CalibratedImage& im = file.images.at(k);
-  return calibratedCameraParams(file.sensors.at(size_t(im.sensor)), im.worldToCamera);
+  return calibratedCameraParams(file.sensors.at(size_t(im.sensor)), im.cvCameraFromWorld);
 }
 
 TEST(CalibratedRenderColmap, EveryModelReprojectsOntoPixelCentresAndTextEqualsBinary) {
@@ -272,7 +272,7 @@ TEST(CalibratedRenderFold, PixelsPastTheFoldAreMissesAndPixelsJustInsideHit) {
   CalibratedSensor sensor{kW, kH, Lens(LensModelId::SimpleRadial, {f, cx, cy, k}),
                           PixelCentre::HalfInteger};
   const Frame inside = frameOf({-0.025, 0.09, 0.0}, {-0.1, 0.09, -0.02}, {0, 1, 0});
-  const CameraParams p = calibratedCameraParams(sensor, worldToCameraCv(inside));
+  const CameraParams p = calibratedCameraParams(sensor, cvCameraFromWorldOfFrame(inside));
   const Framebuffer reference = renderAllAovs(scene, p);
   for (int width : {1, 4, 8, 16}) {
     SCOPED_TRACE(width);
@@ -311,7 +311,7 @@ std::string num(double x) {
 }
 
 /// The camera-to-world matrix in OpenGL axes (columns U, V, W, e) as JSON rows.
-std::string openGLCameraToWorldJson(const Frame& f) {
+std::string worldFromGlCameraJson(const Frame& f) {
   std::ostringstream s;
   s << "[";
   for (int r = 0; r < 3; ++r)
@@ -392,7 +392,7 @@ TEST(CalibratedRenderNerf, NerfstudioWithOpenCVDistortion) {
                       ", \"p2\": " + num(k.dist[3]) +
                       ",\n \"frames\": [{\"file_path\": \"images/frame_00001.png\", "
                       "\"transform_matrix\": " +
-                      openGLCameraToWorldJson(f) + "}]}\n");
+                      worldFromGlCameraJson(f) + "}]}\n");
   expectReprojectsByOwnReading(scene, path, f, k, 0.5, CameraFileFormat::Nerfstudio);
 }
 
@@ -407,7 +407,7 @@ TEST(CalibratedRenderNerf, OriginalNerfWithCameraAngleXOnly) {
   writeFile(path, "{\"camera_angle_x\": " + num(angleX) +
                       ", \"w\": 160, \"h\": 120,\n \"frames\": [{\"file_path\": \"./train/r_0\", "
                       "\"rotation\": 0.012566370614359171, \"transform_matrix\": " +
-                      openGLCameraToWorldJson(f) + "}]}\n");
+                      worldFromGlCameraJson(f) + "}]}\n");
   expectReprojectsByOwnReading(scene, path, f, k, 0.5, CameraFileFormat::InstantNgp);
 }
 
@@ -574,7 +574,7 @@ TEST(CalibratedRenderRoundTrip, LectureCameraThroughEveryWriterRendersAsItself) 
     EXPECT_GE(hitCount(reference), 500u) << label;
     CameraFile file;
     file.sensors = {view->sensor};
-    file.images = {{"view.png", 0, view->worldToCamera}};
+    file.images = {{"view.png", 0, view->cvCameraFromWorld}};
     for (const Writer& w : writers()) {
       const std::string out = cat(dir, "/", n++);
       const std::string path = *w.file ? out + "/" + w.file : out;
@@ -593,7 +593,7 @@ TEST(CalibratedRenderRoundTrip, LectureCameraThroughEveryWriterRendersAsItself) 
     slipped.sensor.lens = Lens(LensModelId::Pinhole, q);
     const RenderDifference d = differenceOf(
         reference,
-        renderAllAovs(scene, calibratedCameraParams(slipped.sensor, slipped.worldToCamera)));
+        renderAllAovs(scene, calibratedCameraParams(slipped.sensor, slipped.cvCameraFromWorld)));
     EXPECT_GT(d.pixels, hitCount(reference) / 2) << "a half-pixel slip: " << d.text();
   }
 }

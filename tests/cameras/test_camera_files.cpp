@@ -58,7 +58,7 @@ void expectSameFile(const CameraFile& a, const CameraFile& b) {
     EXPECT_EQ(a.images[k].sensor, b.images[k].sensor);
     for (int c = 0; c < 4; ++c)
       for (int r = 0; r < 4; ++r)
-        EXPECT_EQ(a.images[k].worldToCamera[c][r], b.images[k].worldToCamera[c][r])
+        EXPECT_EQ(a.images[k].cvCameraFromWorld[c][r], b.images[k].cvCameraFromWorld[c][r])
             << "image " << k << " (row " << r << ", column " << c << ")";
   }
 }
@@ -68,7 +68,8 @@ void expectSamePoses(const CameraFile& a, const CameraFile& b, double tolerance)
   for (size_t k = 0; k < a.images.size(); ++k)
     for (int c = 0; c < 4; ++c)
       for (int r = 0; r < 4; ++r)
-        EXPECT_NEAR(a.images[k].worldToCamera[c][r], b.images[k].worldToCamera[c][r], tolerance)
+        EXPECT_NEAR(a.images[k].cvCameraFromWorld[c][r], b.images[k].cvCameraFromWorld[c][r],
+                    tolerance)
             << "image " << k << " (row " << r << ", column " << c << ")";
 }
 
@@ -167,7 +168,7 @@ TEST(CameraFileColmap, TextValuesAreTheFilesAndTheQuaternionsRotation) {
   EXPECT_EQ(f.images[1].name, "b.png");
   EXPECT_EQ(f.images[1].sensor, 1);
   // A 90° turn about +y maps x to −z and z to x: R = [0 0 1; 0 1 0; −1 0 0].
-  const glm::dmat4& m = f.images[0].worldToCamera;
+  const glm::dmat4& m = f.images[0].cvCameraFromWorld;
   const double expected[3][3] = {{0, 0, 1}, {0, 1, 0}, {-1, 0, 0}};
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(rc(m, r, c), expected[r][c], 1e-15) << r << c;
@@ -177,7 +178,7 @@ TEST(CameraFileColmap, TextValuesAreTheFilesAndTheQuaternionsRotation) {
   EXPECT_NEAR(p.x, 1, 1e-15);
   EXPECT_NEAR(p.y, 2, 1e-15);
   EXPECT_NEAR(p.z, 2, 1e-15);
-  EXPECT_EQ(f.images[1].worldToCamera,
+  EXPECT_EQ(f.images[1].cvCameraFromWorld,
             glm::dmat4(glm::dvec4(1, 0, 0, 0), glm::dvec4(0, 1, 0, 0), glm::dvec4(0, 0, 1, 0),
                        glm::dvec4(-0.5, 0.25, 4, 1)));
 }
@@ -261,7 +262,7 @@ TEST(CameraFileColmap, ImageLinesSplitAtEveryWhiteSpaceTheTokensDo) {
   EXPECT_EQ(f.imageIds, (std::vector<std::string>{"4", "6"}));
   EXPECT_EQ(f.images[0].name, "my image.png");
   EXPECT_EQ(f.images[1].name, "b.png");
-  EXPECT_EQ(f.images[0].worldToCamera, glm::dmat4(1.0));
+  EXPECT_EQ(f.images[0].cvCameraFromWorld, glm::dmat4(1.0));
 }
 
 TEST(CameraFileColmap, MalformedFilesNameTheFileAndTheEntry) {
@@ -374,31 +375,31 @@ TEST(CameraFileNerf, NerfstudioValuesAndTheOpenGLAxes) {
   for (const CalibratedImage& im : f.images) {
     // The origin is 5 in front (OpenCV: z > 0); a point above it (+y world, the cameras' up)
     // is up in the image (OpenCV: y < 0).
-    const glm::dvec3 origin = apply(im.worldToCamera, {0, 0, 0});
+    const glm::dvec3 origin = apply(im.cvCameraFromWorld, {0, 0, 0});
     EXPECT_NEAR(origin.z, 5, 1e-15) << im.name;
     EXPECT_NEAR(origin.x, 0, 1e-15) << im.name;
-    const glm::dvec3 above = apply(im.worldToCamera, {0, 1, 0});
+    const glm::dvec3 above = apply(im.cvCameraFromWorld, {0, 1, 0});
     EXPECT_LT(above.y, 0) << im.name;
     EXPECT_NEAR(above.z, 5, 1e-15) << im.name;
   }
   // The second camera sits at (5, 0, 0) looking along −x; its x axis (the first column) is
   // (0, 0, −1), so a point at world z = −1 is right of the image centre (x > 0).
-  EXPECT_GT(apply(f.images[1].worldToCamera, {0, 0, -1}).x, 0);
+  EXPECT_GT(apply(f.images[1].cvCameraFromWorld, {0, 0, -1}).x, 0);
 }
 
 TEST(CameraFileNerf, ReadingOpenGLPosesAsOpenCVWouldBeCaught) {
-  // The same c2w read with the wrong axes puts the scene behind the camera: the check that a
-  // world point in front has z > 0 fails for the wrong convention.
-  const glm::dmat4 c2w(glm::dvec4(1, 0, 0, 0), glm::dvec4(0, 1, 0, 0), glm::dvec4(0, 0, 1, 0),
-                       glm::dvec4(0, 0, 5, 1));
+  // The same worldFromCamera read with the wrong axes puts the scene behind the camera: the check
+  // that a world point in front has z > 0 fails for the wrong convention.
+  const glm::dmat4 worldFromCamera(glm::dvec4(1, 0, 0, 0), glm::dvec4(0, 1, 0, 0),
+                                   glm::dvec4(0, 0, 1, 0), glm::dvec4(0, 0, 5, 1));
   const glm::dvec3 right =
-      apply(worldToCameraOpenCV(c2w, AxisConvention::OpenGL, true, "t"), {0, 0, 0});
+      apply(cvCameraFromWorldOf(worldFromCamera, AxisConvention::OpenGL, true, "t"), {0, 0, 0});
   const glm::dvec3 wrong =
-      apply(worldToCameraOpenCV(c2w, AxisConvention::OpenCV, true, "t"), {0, 0, 0});
+      apply(cvCameraFromWorldOf(worldFromCamera, AxisConvention::OpenCV, true, "t"), {0, 0, 0});
   EXPECT_GT(right.z, 0);
   EXPECT_LT(wrong.z, 0);
-  EXPECT_EQ(worldToCameraOpenCV(c2w, AxisConvention::Blender, true, "t"),
-            worldToCameraOpenCV(c2w, AxisConvention::OpenGL, true, "t"));
+  EXPECT_EQ(cvCameraFromWorldOf(worldFromCamera, AxisConvention::Blender, true, "t"),
+            cvCameraFromWorldOf(worldFromCamera, AxisConvention::OpenGL, true, "t"));
 }
 
 // nerfstudio's perspective distortion (camera_utils.py) and COLMAP's FULL_OPENCV, each
@@ -570,8 +571,8 @@ TEST(CameraFileOpenCV, JsonWithRodriguesAndFiveCoefficients) {
   const double expected[3][3] = {{0, 0, 1}, {0, 1, 0}, {-1, 0, 0}};
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)
-      EXPECT_NEAR(rc(f.images[0].worldToCamera, r, c), expected[r][c], 1e-15) << r << c;
-  EXPECT_EQ(glm::dvec3(f.images[0].worldToCamera[3]), glm::dvec3(0.1, -0.2, 0.3));
+      EXPECT_NEAR(rc(f.images[0].cvCameraFromWorld, r, c), expected[r][c], 1e-15) << r << c;
+  EXPECT_EQ(glm::dvec3(f.images[0].cvCameraFromWorld[3]), glm::dvec3(0.1, -0.2, 0.3));
 }
 
 const char* kOpenCVYaml =
@@ -617,8 +618,8 @@ TEST(CameraFileOpenCV, FileStorageYamlCamerasByName) {
   EXPECT_EQ(f.sensors[0].lens.params(),
             (std::vector<double>{500, 500, 319.5, 239.5, -0.25, 0.125, 0, 0}));
   EXPECT_EQ(f.sensors[1].lens.model(), LensModelId::Pinhole);  // 14 zero coefficients
-  EXPECT_EQ(f.images[0].worldToCamera[3], glm::dvec4(0.5, 0, 0, 1));
-  EXPECT_EQ(f.images[1].worldToCamera,
+  EXPECT_EQ(f.images[0].cvCameraFromWorld[3], glm::dvec4(0.5, 0, 0, 1));
+  EXPECT_EQ(f.images[1].cvCameraFromWorld,
             glm::dmat4(glm::dvec4(1, 0, 0, 0), glm::dvec4(0, 1, 0, 0), glm::dvec4(0, 0, 1, 0),
                        glm::dvec4(-0.5, 0, 0, 1)));
 }
@@ -698,8 +699,8 @@ TEST(CameraFileRoundTrip, NerfstudioIsExactButForTheRoundedTranslation) {
   ASSERT_EQ(back.images.size(), original.images.size());
   for (size_t k = 0; k < back.images.size(); ++k) {
     EXPECT_EQ(back.images[k].name, original.images[k].name);
-    EXPECT_EQ(glm::dmat3(back.images[k].worldToCamera),
-              glm::dmat3(original.images[k].worldToCamera));
+    EXPECT_EQ(glm::dmat3(back.images[k].cvCameraFromWorld),
+              glm::dmat3(original.images[k].cvCameraFromWorld));
   }
   expectSamePoses(back, original, 1e-14);
 
@@ -766,18 +767,20 @@ TEST(CameraFileConventions, AxisNamesAndPoseChecks) {
   EXPECT_ERROR_MENTIONS(parseAxisConvention("opengll"), "opengll", "did you mean 'opengl'");
   glm::dmat4 pose(1.0);
   pose[0][0] = 1.00001;
-  EXPECT_ERROR_MENTIONS(worldToCameraOpenCV(pose, AxisConvention::OpenCV, false, "entry X"),
+  EXPECT_ERROR_MENTIONS(cvCameraFromWorldOf(pose, AxisConvention::OpenCV, false, "entry X"),
                         "entry X", "not a rotation");
   pose[0][0] = 1.0000001;  // within 1e-6
-  EXPECT_NO_THROW(worldToCameraOpenCV(pose, AxisConvention::OpenCV, false, "entry X"));
-  // poseInConvention inverts worldToCameraOpenCV for every convention, both directions.
-  glm::dmat4 w2c(glm::dvec4(0, 0, -1, 0), glm::dvec4(0, 1, 0, 0), glm::dvec4(1, 0, 0, 0),
-                 glm::dvec4(1, 2, 3, 1));
+  EXPECT_NO_THROW(cvCameraFromWorldOf(pose, AxisConvention::OpenCV, false, "entry X"));
+  // poseInConvention inverts cvCameraFromWorldOf for every convention, both directions.
+  glm::dmat4 cvCameraFromWorld(glm::dvec4(0, 0, -1, 0), glm::dvec4(0, 1, 0, 0),
+                               glm::dvec4(1, 0, 0, 0), glm::dvec4(1, 2, 3, 1));
   for (AxisConvention c : {AxisConvention::OpenCV, AxisConvention::OpenGL, AxisConvention::Blender})
-    for (bool c2w : {false, true}) {
-      const glm::dmat4 back = worldToCameraOpenCV(poseInConvention(w2c, c, c2w), c, c2w, "t");
+    for (bool poseIsWorldFromCamera : {false, true}) {
+      const glm::dmat4 back =
+          cvCameraFromWorldOf(poseInConvention(cvCameraFromWorld, c, poseIsWorldFromCamera), c,
+                              poseIsWorldFromCamera, "t");
       for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) EXPECT_NEAR(back[i][j], w2c[i][j], 1e-15);
+        for (int j = 0; j < 4; ++j) EXPECT_NEAR(back[i][j], cvCameraFromWorld[i][j], 1e-15);
     }
 }
 
@@ -786,9 +789,9 @@ TEST(CameraFileConventions, SidecarJson) {
       640, 480, Lens(LensModelId::OpenCV, {500, 501, 320, 240, -0.1, 0.01, 0.001, 0.002}),
       PixelCentre::HalfInteger};
   // Camera at world (1, 2, 3) (OpenCV axes = world axes): t = −C.
-  glm::dmat4 w2c(1.0);
-  w2c[3] = glm::dvec4(-1, -2, -3, 1);
-  const json j = json::parse(cameraSidecarJson(sensor, w2c));
+  glm::dmat4 cvCameraFromWorld(1.0);
+  cvCameraFromWorld[3] = glm::dvec4(-1, -2, -3, 1);
+  const json j = json::parse(cameraSidecarJson(sensor, cvCameraFromWorld));
   EXPECT_EQ(j["width"], 640);
   EXPECT_EQ(j["model"], "OPENCV");
   EXPECT_EQ(j["pixel_centre"], "half-integer");

@@ -340,7 +340,7 @@ TEST(Exr, HeaderMetadataRoundTrip) {
   cam.width = 6;
   cam.height = 4;
   cam.spp = 17;
-  cam.cameraFromWorld = testMatrix(0.3);
+  cam.exrCameraFromWorld = testMatrix(0.3);
   cam.ndcFromWorld = testMatrix(-1.7);
   cam.pixelAspectRatio = 0.8125;  // exact in float, like the screen window below
   cam.screenWindowCenter = {0.25, -0.375};
@@ -363,7 +363,7 @@ TEST(Exr, HeaderMetadataRoundTrip) {
   EXPECT_EQ(back.camera.width, 6);
   EXPECT_EQ(back.camera.height, 4);
   EXPECT_EQ(back.camera.spp, 17);
-  EXPECT_EQ(back.camera.cameraFromWorld, cam.cameraFromWorld);
+  EXPECT_EQ(back.camera.exrCameraFromWorld, cam.exrCameraFromWorld);
   EXPECT_EQ(back.camera.ndcFromWorld, cam.ndcFromWorld);
   EXPECT_EQ(back.camera.pixelAspectRatio, cam.pixelAspectRatio);
   EXPECT_EQ(back.camera.screenWindowCenter, cam.screenWindowCenter);
@@ -386,7 +386,7 @@ TEST(Exr, HeaderMetadataRoundTrip) {
   ASSERT_TRUE(Imf::hasWorldToNDC(h));
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j) {
-      EXPECT_EQ(Imf::worldToCamera(h)[i][j], float(cam.cameraFromWorld[i][j]));
+      EXPECT_EQ(Imf::worldToCamera(h)[i][j], float(cam.exrCameraFromWorld[i][j]));
       EXPECT_EQ(Imf::worldToNDC(h)[i][j], float((*cam.ndcFromWorld)[i][j]));
     }
   EXPECT_EQ(h.pixelAspectRatio(), 0.8125f);
@@ -473,7 +473,7 @@ struct HandCamera {
     c.vh = vh;
     c.width = width;
     c.height = height;
-    c.cameraFromWorld = standardCameraFromWorld(eye, u, v, w);  // z = depth along −W
+    c.exrCameraFromWorld = exrCameraFromFrame(eye, u, v, w);  // z = depth along −W
     // Camera space (x, y, z) -> homogeneous (d x / vw + 0.5 z, -d y / vh + 0.5 z, 1, z).
     glm::dmat4 projection(0.0);
     projection[0][0] = d / vw;
@@ -482,7 +482,7 @@ struct HandCamera {
     projection[2][1] = 0.5;
     projection[3][2] = 1.0;
     projection[2][3] = 1.0;
-    c.ndcFromWorld = projection * c.cameraFromWorld;
+    c.ndcFromWorld = projection * c.exrCameraFromWorld;
     return c;
   }
 
