@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "core/exr/exr.h"
-#include "tests/apps/unwritable_dir.h"
+#include "tests/unwritable_dir.h"
 #include "tests/support.h"
 
 using namespace aperture;

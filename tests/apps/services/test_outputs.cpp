@@ -13,7 +13,7 @@
 #include "core/exr/exr.h"
 #include "core/io/image.h"
 #include "core/util/error.h"
-#include "tests/apps/unwritable_dir.h"
+#include "tests/unwritable_dir.h"
 #include "tests/support.h"
 
 using namespace aperture;
