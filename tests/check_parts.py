@@ -5,10 +5,11 @@ A part may include its own headers, the headers of the parts the table lists for
 those parts may include; a library header (APERTURE_PART_LIBRARIES) only from the part that
 owns it and the parts that may include that one. Every .cpp and .h under core/, cameras/,
 apps/, bench/measure/ and python/src/ belongs to a part, and a part's folder holds at most 20 of them.
+docs/architecture.md lists the same arrows.
 
     check_parts.py [ROOT]          check the tree (exit 1 on any violation, each one listed)
-    check_parts.py --self-test     show that a wrong-way include, a stray file and an
-                                   overfull folder are each reported
+    check_parts.py --self-test     show that a wrong-way include, a stray file, an overfull
+                                   folder and a docs arrow unlike the table are each reported
 """
 import os
 import re
@@ -97,6 +98,23 @@ def violations(files, parts, libraries):
     return found
 
 
+def documented_arrows(root):
+    """The arrows docs/architecture.md lists ("A → B C" lines of its code block)."""
+    text = open(os.path.join(root, "docs", "architecture.md"), encoding="utf-8").read()
+    return {m.group(1): m.group(2).split() for m in re.finditer(r"^(\S+) → (.+)$", text, re.M)}
+
+
+def arrow_differences(parts, documented):
+    """Messages for each part whose arrows docs/architecture.md gives otherwise."""
+    found = []
+    for part in sorted(set(parts) | set(documented)):
+        if parts.get(part, []) != documented.get(part, []) and (parts.get(part) or part in documented):
+            found.append("docs/architecture.md: %s → %s, the table says %s" % (
+                part, " ".join(documented.get(part, [])) or "(nothing)",
+                " ".join(parts.get(part, [])) or "(nothing)"))
+    return found
+
+
 def read_tree(root):
     return {p: open(os.path.join(root, p), encoding="utf-8").read() for p in source_files(root)}
 
@@ -127,8 +145,13 @@ def self_test(root):
         full["core/util/extra_%d.h" % k] = ""
     got = violations(full, parts, libraries)
     assert len(got) == 1 and got[0].startswith("core/util holds"), got
-    print("check_parts self-test: a wrong-way include, a library header, a stray file and an "
-          "overfull folder are each reported")
+    documented = documented_arrows(root)
+    assert not arrow_differences(parts, documented)
+    documented["core/mesh"] = ["core/util"]
+    got = arrow_differences(parts, documented)
+    assert got == ["docs/architecture.md: core/mesh → core/util, the table says core/aov"], got
+    print("check_parts self-test: a wrong-way include, a library header, a stray file, an "
+          "overfull folder and an arrow the docs give otherwise are each reported")
 
 
 def main():
@@ -140,6 +163,7 @@ def main():
     root = args[0] if args else here
     parts, libraries = read_table(root)
     found = violations(read_tree(root), parts, libraries)
+    found += arrow_differences(parts, documented_arrows(root))
     for message in found:
         print(message)
     print("check_parts: %d parts, %d violations" % (len(parts), len(found)))

@@ -1,11 +1,12 @@
 #pragma once
 // The camera flags of render, bench, camera and tradeoff, generated from the camera parameter
-// schema (cameras/schema/param_schema.h), and the command-line camera's resolution against a scene.
+// schema (cameras/schema/param_schema.h); the camera they give is resolved against a scene by
+// apps/services/command_camera.h.
 #include <CLI/CLI.hpp>
 #include <deque>
 #include <string>
 
-#include "apps/services/scene_setup.h"
+#include "apps/services/command_camera.h"
 #include "cameras/schema/param_schema.h"
 
 namespace aperture::app {
@@ -34,18 +35,5 @@ class CameraFlags {
   std::string cameraFile_;
   std::vector<std::string> images_;
 };
-
-/// The camera of a command: `given` over `defaults`, checked by the schema. With no --eye it
-/// frames the world box [lo, hi] (looks at the centre from above and in front, far enough
-/// for the bounding sphere to fill 80% of the vertical field of view); with --eye but neither
-/// --at nor --dir it looks at the box's centre. Throws Error naming the flags.
-CameraParams resolveCommandCamera(const ParamSet& given, const CameraParams& defaults,
-                                  const glm::dvec3& lo, const glm::dvec3& hi);
-
-/// A command's scene and camera: loads the meshes, frames the command-line camera on their
-/// bounds (resolveCommandCamera) and builds the BVH (culled for that camera with --cull).
-LoadedScene loadSceneForCamera(const Device& device, const SceneOptions& scene,
-                               const ParamSet& given, const CameraParams& defaults, bool quiet,
-                               CameraParams& camera);
 
 }  // namespace aperture::app

@@ -21,13 +21,14 @@
 #include "apps/cli/render_flags.h"
 #include "apps/jobs/job.h"
 #include "apps/jobs/job_outputs.h"
-#include "apps/services/camera_files.h"
+#include "apps/services/camera_file_params.h"
 #include "apps/services/limits.h"
 #include "apps/services/render_options.h"
 #include "apps/services/scene_setup.h"
 #include "apps/services/view.h"
 #include "cameras/files/camera_file.h"
 #include "cameras/models/calibrated.h"
+#include "cameras/registry/registry.h"
 #include "core/io/image_codec.h"
 #include "core/util/error.h"
 
@@ -299,8 +300,8 @@ int printDryRun(const BatchPlan& plan) {
 /// Renders the scene's images not skipped, handing each to the writer threads (drained before
 /// returning, so the scene can be released), as many as writersOf gives for the batch's
 /// `threads`; returns the render seconds.
-double renderImages(BatchPlan& plan, const SceneImages& images, const LoadedScene& scene,
-                    const BatchArgs& a, int threads, Progress& progress) {
+double renderBatchImages(BatchPlan& plan, const SceneImages& images, const LoadedScene& scene,
+                         const BatchArgs& a, int threads, Progress& progress) {
   const Job& job = plan.jobs.scenes[images.scene];
   const PreviewOptions preview = batchPreviewOptions(job, scene.worldLo, scene.worldHi);
   double renderSeconds = 0;
@@ -465,7 +466,7 @@ void renderScenes(BatchPlan& plan, const BatchArgs& a, const Device& device, Bat
       return;
     }
     recordLoadedScene(report, *s.loaded);
-    run.renderSeconds += renderImages(plan, images, *s.loaded, a, run.threads, progress);
+    run.renderSeconds += renderBatchImages(plan, images, *s.loaded, a, run.threads, progress);
   };
   pipelineScenes(pending.size(), load, render);
   run.elapsedSeconds = start ? secondsSince(*start) : 0;

@@ -12,7 +12,7 @@
 
 #include "apps/cli/commands.h"
 #include "apps/cli/scene_flags.h"
-#include "apps/services/camera_files.h"
+#include "apps/services/camera_file_params.h"
 #include "apps/services/outputs.h"
 #include "apps/services/render_options.h"
 #include "apps/services/scene_setup.h"

@@ -16,7 +16,7 @@
 #include "apps/jobs/job_camera.h"
 #include "apps/jobs/job_json.h"
 #include "apps/jobs/job_outputs.h"
-#include "apps/services/camera_files.h"
+#include "apps/services/camera_file_params.h"
 #include "apps/services/presets.h"
 #include "cameras/models/calibrated.h"
 #include "cameras/registry/registry.h"

@@ -45,9 +45,10 @@ void addBlenderParams(const Object& c, ParamSet& given) {
                   "shift_y", "clip_start", "clip_end"});
   auto put = [&](const char* name, ParamValue v, const char* keyA, const char* keyB) {
     const char* key = b.has(keyA) || !*keyB ? keyA : keyB;
+    const ParamSpec& spec = *findCameraParamSpec(name);
     if (given.has(name))
-      b.fail(b.keyPath(key), cat("sets ", name, ", which ", given.label(name), " sets as well"));
-    given.set(*findCameraParamSpec(name), std::move(v), b.keyPath(key));
+      b.fail(b.keyPath(key), cat("sets ", name, ", which ", given.label(spec), " sets as well"));
+    given.set(spec, std::move(v), b.keyPath(key));
   };
   const glm::dvec2 sensor(b.number("sensor_width", 36.0), b.number("sensor_height", 24.0));
   SensorFit fit = SensorFit::Auto;

@@ -220,6 +220,21 @@ void buildLoadedScene(const Device& device, LoadedScene& s, const SceneSpec& spe
   if (!quiet) logBuild(spec, s);
 }
 
+LoadedScene loadedSceneOfMesh(Mesh mesh, const LoadOptions& options) {
+  finishMesh(mesh, options);
+  LoadedScene s;
+  s.meshes.push_back(std::move(mesh));
+  const Mesh& m = s.meshes.back();
+  s.objects.push_back({&m, glm::dmat4(1.0)});
+  s.names.push_back(m.name);
+  s.renderOrigin = m.anchor;
+  glm::vec3 lo, hi;
+  m.bounds(lo, hi);
+  s.worldLo = m.anchor + glm::dvec3(lo);
+  s.worldHi = m.anchor + glm::dvec3(hi);
+  return s;
+}
+
 LoadedScene loadScene(const Device& device, const SceneSpec& spec, bool quiet) {
   LoadedScene s = loadSceneMeshes(spec, quiet);
   buildLoadedScene(device, s, spec, quiet);

@@ -96,6 +96,10 @@ void buildLoadedScene(const Device& device, LoadedScene& s, const SceneSpec& spe
                       const std::vector<CameraParams>& cameras = {});
 /// loadSceneMeshes then buildLoadedScene without culling.
 LoadedScene loadScene(const Device& device, const SceneSpec& spec, bool quiet);
+/// The scene of one mesh made from arrays (Python's Scene(positions, indices)), finished as a
+/// loaded file is (finishMesh with `options`) and placed as loadSceneMeshes places a file used
+/// once: its anchor is the render origin. Builds no BVH.
+LoadedScene loadedSceneOfMesh(Mesh mesh, const LoadOptions& options);
 
 /// Re-expresses the mesh's positions relative to `anchor` (offset added in double, rounded to
 /// float once), so meshes loaded apart share one render space.

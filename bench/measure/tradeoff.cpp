@@ -323,8 +323,8 @@ std::vector<TradeoffSetting> tradeoffSettings(const TradeoffConfig& c) {
 }
 
 std::vector<TradeoffRow> runTradeoff(const TradeoffConfig& config) {
-  if (config.referenceSpp < 1 || config.referenceSpp > 65536)
-    throw Error(cat("--reference-spp ", config.referenceSpp, " must be in [1, 65536]"));
+  // The reference image's spp is a camera's spp: the spp spec's range.
+  checkParamValue(*findCameraParamSpec("spp"), config.referenceSpp, "--reference-spp");
   if (config.frames < 1) throw Error(cat("--frames ", config.frames, " must be >= 1"));
   if (config.warmup < 0) throw Error(cat("--warmup ", config.warmup, " must be >= 0"));
   if (config.tempDir.empty()) throw Error("tradeoff: no temporary directory for the EXR knobs");

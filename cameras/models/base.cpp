@@ -1,9 +1,8 @@
 #include "cameras/models/base.h"
 
 #include <cmath>
+#include <optional>
 
-#include "cameras/models/calibrated.h"
-#include "cameras/models/models.h"
 #include "cameras/schema/conventions.h"
 #include "core/util/error.h"
 #include "core/util/sampling.h"
@@ -11,14 +10,13 @@
 
 namespace aperture {
 
-namespace {
-double radians(double deg) { return deg * kPi / 180.0; }
-}  // namespace
+// The parameters CameraBase reads: the ones every model shares and those that place a planar
+// image window. Each is declared once, here; its default and range are read from the
+// declaration wherever they are applied (resolveImagePlane below, the command line's framing).
 
 namespace {
 
 using K = ParamKind;
-const ParamRange kPositive{0.0, std::nullopt, true, false};
 
 ParamAccess sizeAccess() {
   return {[](const CameraParams& p) -> std::optional<ParamValue> {
@@ -31,69 +29,123 @@ ParamAccess sizeAccess() {
           }};
 }
 
-const ParamSpec kType{"type",    K::Choice,
-                      "",        "Camera model",
-                      nullptr,   {},
-                      {},        {},
-                      {},        fieldAccess<&CameraParams::type>(),
-                      "--camera"};
-const ParamSpec kSize{
-    "size",  K::Size,        "pixels", "Image size W,H (or WxH), at most 2^28 pixels",
-    nullptr, {1.0, 65536.0}, {},       {},
-    {},      sizeAccess()};
-const ParamSpec kSpp{"spp",   K::Integer,
-                     "",      "Samples per pixel (stratified; 1 = pixel centres)",
-                     nullptr, {1.0, 65536.0},
-                     {},      {},
-                     {},      fieldAccess<&CameraParams::spp>()};
-const ParamSpec kEye{"eye",
-                     K::Vec3,
-                     "scene units",
-                     "Eye position e",
-                     "render, bench: frames the scene; job files: required unless a path "
-                     "(orbit, keyframes) sets it",
-                     {},
-                     {},
-                     {},
-                     {},
-                     fieldAccess<&CameraParams::eye>()};
-const ParamSpec kAt{"at",
-                    K::Vec3,
-                    "scene units",
-                    "Look-at point",
-                    "the scene's centre (render, bench; the origin for `camera`)",
-                    {},
-                    {},
-                    {"dir"},
-                    {},
-                    fieldAccess<&CameraParams::at>()};
-const ParamSpec kDir{"dir", K::Vec3, "", "View direction (any length)",    nullptr, {},
-                     {},    {"at"},  {}, fieldAccess<&CameraParams::dir>()};
-const ParamSpec kUp{"up",    K::Vec3,
-                    "",      "Up vector (any length, not parallel to the view)",
-                    nullptr, {},
-                    {},      {},
-                    {},      fieldAccess<&CameraParams::up>()};
-const ParamSpec kD{"d",
-                   K::Number,
-                   "scene units",
-                   "Image-plane distance d (with viewport)",
-                   "1 when viewport is given",
-                   kPositive,
-                   {},
-                   {},
-                   {"viewport"},
-                   fieldAccess<&CameraParams::d>()};
-const ParamSpec kViewport{"viewport",
-                          K::Vec2,
-                          "scene units",
-                          "Viewport VW,VH on the image plane",
-                          "none (perspective: from fov; parallel cameras need it)",
-                          kPositive,
-                          {},
-                          {"fov", "focal_length"},
-                          {},
-                          fieldAccess<&CameraParams::viewport>()};
+ParamAccess fovAxisAccess() {
+  return {[](const CameraParams& p) -> std::optional<ParamValue> {
+            return ParamValue(std::string(p.fovAxis == FovAxis::X   ? "x"
+                                          : p.fovAxis == FovAxis::Y ? "y"
+                                                                    : "diagonal"));
+          },
+          [](CameraParams& p, const ParamValue& v) {
+            const std::string& a = std::get<std::string>(v);
+            p.fovAxis = a == "x" ? FovAxis::X : a == "y" ? FovAxis::Y : FovAxis::Diagonal;
+          }};
+}
+
+ParamAccess sensorFitAccess() {
+  return {[](const CameraParams& p) -> std::optional<ParamValue> {
+            return ParamValue(std::string(p.sensorFit == SensorFit::Auto         ? "auto"
+                                          : p.sensorFit == SensorFit::Horizontal ? "horizontal"
+                                                                                 : "vertical"));
+          },
+          [](CameraParams& p, const ParamValue& v) {
+            const std::string& f = std::get<std::string>(v);
+            p.sensorFit = f == "auto"         ? SensorFit::Auto
+                          : f == "horizontal" ? SensorFit::Horizontal
+                                              : SensorFit::Vertical;
+          }};
+}
+
+const ParamSpec kType = ParamSpec("type", K::Choice, fieldAccess<&CameraParams::type>())
+                            .withHelp("Camera model")
+                            .withFlag("--camera");
+const ParamSpec kSize = ParamSpec("size", K::Size, sizeAccess())
+                            .withUnit("pixels")
+                            .withHelp("Image size W,H (or WxH), at most 2^28 pixels")
+                            .withRange(ParamRange::closed(1.0, 65536.0))
+                            .withMaxPixels(double(1 << 28));
+const ParamSpec kSpp = ParamSpec("spp", K::Integer, fieldAccess<&CameraParams::spp>())
+                           .withHelp("Samples per pixel (stratified; 1 = pixel centres)")
+                           .withRange(ParamRange::closed(1.0, 65536.0));
+const ParamSpec kEye =
+    ParamSpec("eye", K::Vec3, fieldAccess<&CameraParams::eye>())
+        .withUnit("scene units")
+        .withHelp("Eye position e")
+        .withDefaultRule(
+            "render, bench: frames the scene; job files: required unless a path (orbit, "
+            "keyframes) sets it");
+const ParamSpec kAt =
+    ParamSpec("at", K::Vec3, fieldAccess<&CameraParams::at>())
+        .withUnit("scene units")
+        .withHelp("Look-at point")
+        .withDefaultRule("the scene's centre (render, bench; the origin for `camera`)")
+        .withConflicts({"dir"});
+const ParamSpec kDir = ParamSpec("dir", K::Vec3, fieldAccess<&CameraParams::dir>())
+                           .withHelp("View direction (any length)")
+                           .withConflicts({"at"});
+const ParamSpec kUp = ParamSpec("up", K::Vec3, fieldAccess<&CameraParams::up>())
+                          .withHelp("Up vector (any length, not parallel to the view)");
+
+const ParamSpec kD = ParamSpec("d", K::Number, fieldAccess<&CameraParams::d>())
+                         .withUnit("scene units")
+                         .withHelp("Image-plane distance d (with viewport)")
+                         .withDefault(1.0, "{} when viewport is given")
+                         .withRange(ParamRange::above(0.0))
+                         .withNeeds({"viewport"});
+const ParamSpec kViewport =
+    ParamSpec("viewport", K::Vec2, fieldAccess<&CameraParams::viewport>())
+        .withUnit("scene units")
+        .withHelp("Viewport VW,VH on the image plane")
+        .withDefaultRule("none (perspective: from fov; parallel cameras need it)")
+        .withRange(ParamRange::above(0.0))
+        .withConflicts({"fov", "focal_length"});
+
+const ParamSpec kFov = ParamSpec("fov", K::Number, fieldAccess<&CameraParams::fovDeg>())
+                           .withUnit("degrees")
+                           .withHelp("Field of view")
+                           .withDefault(45.0,
+                                        "{} vertical, when neither viewport nor focal_length "
+                                        "is given")
+                           .withRange(kPlanarFovRangeDeg)
+                           .withConflicts({"focal_length", "viewport"});
+const ParamSpec kFovAxis = ParamSpec("fov_axis", K::Choice, fovAxisAccess())
+                               .withHelp("The extent fov spans")
+                               .withChoices({"x", "y", "diagonal"});
+const ParamSpec kFocalLength =
+    ParamSpec("focal_length", K::Number, fieldAccess<&CameraParams::focalLengthMm>())
+        .withUnit("mm")
+        .withHelp("35 mm-style focal length")
+        .withRange(ParamRange::above(0.0))
+        .withConflicts({"fov", "viewport"});
+const ParamSpec kSensor =
+    ParamSpec("sensor", K::Vec2, fieldAccess<&CameraParams::sensorMm>())
+        .withUnit("mm")
+        .withHelp("Sensor W,H for focal_length (sensor_fit says which image side it spans)")
+        .withRange(ParamRange::above(0.0))
+        .withNeeds({"focal_length"});
+const ParamSpec kSensorFit =
+    ParamSpec("sensor_fit", K::Choice, sensorFitAccess())
+        .withHelp(
+            "Image side the sensor spans, as Blender: auto = sensor width on the larger side, "
+            "horizontal = width on the width, vertical = height on the height")
+        .withChoices({"auto", "horizontal", "vertical"})
+        .withNeeds({"focal_length"});
+const ParamSpec kShift = ParamSpec("shift", K::Vec2, fieldAccess<&CameraParams::shift>())
+                             .withUnit("viewports")
+                             .withHelp("Lens shift SX,SY (0.5 = half a viewport)")
+                             .withConflicts({"blender_shift"});
+const ParamSpec kBlenderShift =
+    ParamSpec("blender_shift", K::Vec2, fieldAccess<&CameraParams::blenderShift>())
+        .withUnit("fitted sides")
+        .withHelp(
+            "Blender's lens shift shift_x,shift_y: fractions of the image side the sensor fit "
+            "spans (the larger one for auto)")
+        .withDefaultRule("none")
+        .withConflicts({"shift"});
+const ParamSpec kArchitectural =
+    ParamSpec("architectural", K::Flag, fieldAccess<&CameraParams::architectural>())
+        .withHelp(
+            "Keep the image plane parallel to up (verticals stay parallel; the tilt becomes a "
+            "shift)");
 
 }  // namespace
 
@@ -103,6 +155,14 @@ const std::vector<const ParamSpec*>& commonParamSpecs() {
 }
 const ParamSpec& distanceParamSpec() { return kD; }
 const ParamSpec& viewportParamSpec() { return kViewport; }
+const ParamSpec& fovParamSpec() { return kFov; }
+
+const std::vector<const ParamSpec*>& perspectiveWindowParamSpecs() {
+  static const std::vector<const ParamSpec*> v = {&kFov,          &kFovAxis,      &kFocalLength,
+                                                  &kSensor,       &kSensorFit,    &kShift,
+                                                  &kBlenderShift, &kArchitectural};
+  return v;
+}
 
 std::vector<const ParamSpec*> joinParamSpecs(
     std::initializer_list<std::vector<const ParamSpec*>> groups) {
@@ -111,13 +171,12 @@ std::vector<const ParamSpec*> joinParamSpecs(
   return all;
 }
 
-double focusDistanceOf(const CameraParams& p) {
-  if (p.focusDistance) return *p.focusDistance;
-  return p.at ? glm::length(*p.at - p.eye) : 1.0;
-}
+namespace {
+double radians(double deg) { return deg * kPi / 180.0; }
+}  // namespace
 
 void resolveImagePlane(const CameraParams& p, double& d, double& vw, double& vh) {
-  d = p.d.value_or(1.0);
+  d = p.d.value_or(distanceParamSpec().defaultAs<double>());
   if (p.viewport) {
     vw = p.viewport->x;
     vh = p.viewport->y;
@@ -127,8 +186,8 @@ void resolveImagePlane(const CameraParams& p, double& d, double& vw, double& vh)
     vw = v.x;
     vh = v.y;
   } else {
-    const glm::dvec2 v =
-        viewportOfFov(p.fovDeg.value_or(kDefaultFovDeg), p.fovAxis, p.width, p.height, d);
+    const glm::dvec2 v = viewportOfFov(p.fovDeg.value_or(fovParamSpec().defaultAs<double>()),
+                                       p.fovAxis, p.width, p.height, d);
     vw = v.x;
     vh = v.y;
   }
@@ -139,7 +198,6 @@ void resolveImagePlane(const CameraParams& p, double& d, double& vw, double& vh)
 }
 
 CameraFrame frameFromParams(const CameraParams& p) {
-  if (p.worldToCamera || p.cameraToWorld) return frameOfWorldToCamera(calibratedWorldToCamera(p));
   if (p.at && p.dir)
     throw Error("camera: give either a look-at point or a view direction, not both");
   if (p.at) return CameraFrame::fromLookAt(p.eye, *p.at, p.up);
@@ -148,9 +206,12 @@ CameraFrame frameFromParams(const CameraParams& p) {
 }
 
 CameraBase::CameraBase(const CameraParams& p, const glm::dvec3& renderOrigin, const char* typeName)
-    : params_(p), renderOrigin_(renderOrigin), type_(typeName) {
+    : CameraBase(p, frameFromParams(p), renderOrigin, typeName) {}
+
+CameraBase::CameraBase(const CameraParams& p, const CameraFrame& frame,
+                       const glm::dvec3& renderOrigin, const char* typeName)
+    : params_(p), frame_(frame), renderOrigin_(renderOrigin), type_(typeName) {
   requireFinite(renderOrigin, "render origin");
-  frame_ = frameFromParams(p);
   resolveImagePlane(p, d_, vw_, vh_);
   width_ = p.width;
   height_ = p.height;

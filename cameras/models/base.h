@@ -2,6 +2,7 @@
 // Shared state of the frame-based cameras: frame, image plane, render origin, pixel mapping,
 // and the packet loop every model uses (PacketCamera).
 #include <cstring>
+#include <initializer_list>
 #include <limits>
 #include <optional>
 #include <string>
@@ -10,27 +11,50 @@
 #include "cameras/models/frame.h"
 #include "cameras/models/view_volume.h"
 #include "cameras/schema/image_window.h"
+#include "cameras/schema/param_schema.h"
 #include "cameras/schema/params.h"
 #include "core/engine/camera.h"
 #include "core/util/vector_kernel.h"
 
 namespace aperture {
 
+/// The parameters CameraBase reads, declared in base.cpp: type, size, spp, eye, at,
+/// dir, up (every model reads them).
+const std::vector<const ParamSpec*>& commonParamSpecs();
+/// The image-plane window of the planar models: d and viewport.
+const ParamSpec& distanceParamSpec();
+const ParamSpec& viewportParamSpec();
+/// The window of the perspective models: fov, fov_axis, focal_length, sensor, sensor_fit,
+/// shift, blender_shift, architectural.
+const std::vector<const ParamSpec*>& perspectiveWindowParamSpecs();
+/// `fov`, whose default (defaultAs<double>()) applies when no viewport and no focal length is
+/// given.
+const ParamSpec& fovParamSpec();
+/// The concatenation of spec lists (a model's parameters from shared groups).
+std::vector<const ParamSpec*> joinParamSpecs(
+    std::initializer_list<std::vector<const ParamSpec*>> groups);
+
 /// Image-plane distance and viewport from whichever convention the parameters use:
-/// explicit d + viewport, else focal length + sensor, else fov on fovAxis at d (default d = 1,
-/// default fov 45° vertical). Focal length + sensor: the sensor spans the image dimension
+/// explicit d + viewport, else focal length + sensor, else fov on fovAxis at d (d and fov not
+/// given: their specs' defaults). Focal length + sensor: the sensor spans the image dimension
 /// sensorFit chooses, as Blender's sensor_fit (viewportOfSensor, cameras/schema/conventions.h).
-/// Throws Error for d <= 0, viewport <= 0, non-finite values or fov outside (0°, 180°).
+/// Throws Error for viewport <= 0 and non-finite values; the ranges of d and fov are the
+/// specs' (checked by makeCamera).
 void resolveImagePlane(const CameraParams& p, double& d, double& vw, double& vh);
 
-/// Builds the frame from eye + at / dir + up (errors as CameraFrame).
+/// Builds the frame from eye + at / dir + up (errors as CameraFrame). A model posed otherwise
+/// (the calibrated camera's matrices) passes its own frame to CameraBase.
 CameraFrame frameFromParams(const CameraParams& p);
 
 /// Base for cameras defined by a frame and an image plane. Precomputes the render-space eye,
 /// the axes and the effective shift (user shift plus the architectural tilt shift).
 class CameraBase : public Camera {
  public:
+  /// The frame from eye / at / dir / up (frameFromParams).
   CameraBase(const CameraParams& p, const glm::dvec3& renderOrigin, const char* typeName);
+  /// The frame given (a model with a pose of its own).
+  CameraBase(const CameraParams& p, const CameraFrame& frame, const glm::dvec3& renderOrigin,
+             const char* typeName);
 
   glm::vec3 renderEye() const override { return renderEye_; }
   glm::vec3 viewAxis() const override { return viewAxis_; }

@@ -117,6 +117,16 @@ glm::dmat4 calibratedWorldToCamera(const CameraParams& p) {
   return openCvCameraFromFrame(f.u, f.v, f.w, f.e);
 }
 
+namespace {
+
+/// The frame of the pose matrix when one is given, else of eye / at / dir / up.
+CameraFrame poseFrame(const CameraParams& p) {
+  if (p.worldToCamera || p.cameraToWorld) return frameOfWorldToCamera(calibratedWorldToCamera(p));
+  return frameFromParams(p);
+}
+
+}  // namespace
+
 CameraParams calibratedCameraParams(const CalibratedSensor& sensor,
                                     const glm::dmat4& worldToCameraCv) {
   CameraParams p;
@@ -169,13 +179,6 @@ uint64_t directionTableBytes(const std::vector<CameraParams>& cameras) {
     if (readsDirectionTable(sensor.lens)) sensors.push_back(std::move(sensor));
   }
   return uint64_t(DirectionTable::peakBytes(sensors));
-}
-
-std::optional<CalibratedView> calibratedViewOf(const CameraParams& p) {
-  if (p.type == "calibrated")
-    return CalibratedView{calibratedSensorOf(p), calibratedWorldToCamera(p)};
-  if (p.type != "perspective") return std::nullopt;
-  return calibratedViewOf(makeCameraModel(p)->describe());
 }
 
 namespace {
@@ -273,7 +276,7 @@ APERTURE_VECTOR_KERNEL void pinholeCentres(const CalibratedFrame& f, const Pinho
 class CalibratedCamera final : public CameraBase {
  public:
   CalibratedCamera(const CameraParams& p, const glm::dvec3& renderOrigin)
-      : CameraBase(p, renderOrigin, "calibrated"), sensor_(calibratedSensorOf(p)) {
+      : CameraBase(p, poseFrame(p), renderOrigin, "calibrated"), sensor_(calibratedSensorOf(p)) {
     rejectShift();
     // The pinhole part of the lens as the lecture's image plane at d = 1: u = (x − px) / fx,
     // v = (py − y) / fy for raster (x, y) and the principal point (px, py) in raster terms.
@@ -466,91 +469,54 @@ std::vector<const char*> lensModelNames() {
   return v;
 }
 
-const ParamSpec kIntrinsics{"intrinsics",
-                            K::Numbers,
-                            "pixels",
-                            "Focal lengths and principal point fx,fy,cx,cy (pixel convention: "
-                            "pixel_centre); selects the calibrated camera",
-                            "none (required)",
-                            {},
-                            {},
-                            {},
-                            {},
-                            fieldAccess<&CameraParams::intrinsics>(),
-                            nullptr,
-                            4,
-                            "calibrated"};
-const ParamSpec kLensModel{"lens_model",
-                           K::Choice,
-                           "",
-                           "COLMAP camera model of the lens (src/colmap/sensor/models.h)",
-                           nullptr,
-                           {},
-                           lensModelNames(),
-                           {},
-                           {},
-                           fieldAccess<&CameraParams::lensModel>()};
-const ParamSpec kDistortion{"distortion",
-                            K::Numbers,
-                            "",
-                            "The lens model's distortion coefficients in COLMAP's order (OPENCV: "
-                            "k1,k2,p1,p2; OPENCV_FISHEYE: k1,k2,k3,k4; ...)",
-                            "all zero",
-                            {},
-                            {},
-                            {},
-                            {"lens_model"},
-                            fieldAccess<&CameraParams::distortion>()};
-const ParamSpec kPixelCentre{"pixel_centre",
-                             K::Choice,
-                             "",
-                             "Where the intrinsics put pixel (i, j)'s centre: half-integer = "
-                             "(j + 0.5, i + 0.5) as COLMAP and nerfstudio, integer = (j, i) as "
-                             "OpenCV",
-                             nullptr,
-                             {},
-                             {"half-integer", "integer"},
-                             {},
-                             {},
-                             fieldAccess<&CameraParams::pixelCentre>()};
-const ParamSpec kWorldToCamera{"world_to_camera",
-                               K::Numbers,
-                               "",
-                               "4x4 world-to-camera matrix, row-major, in `convention` axes",
-                               "none (eye, at / dir and up pose the camera)",
-                               {},
-                               {},
-                               {"camera_to_world", "eye", "at", "dir", "up"},
-                               {},
-                               fieldAccess<&CameraParams::worldToCamera>(),
-                               nullptr,
-                               16,
-                               "calibrated"};
-const ParamSpec kCameraToWorld{"camera_to_world",
-                               K::Numbers,
-                               "",
-                               "4x4 camera-to-world matrix, row-major, in `convention` axes "
-                               "(nerfstudio's transform_matrix, Blender's matrix_world)",
-                               "none (eye, at / dir and up pose the camera)",
-                               {},
-                               {},
-                               {"world_to_camera", "eye", "at", "dir", "up"},
-                               {},
-                               fieldAccess<&CameraParams::cameraToWorld>(),
-                               nullptr,
-                               16,
-                               "calibrated"};
-const ParamSpec kConvention{"convention",
-                            K::Choice,
-                            "",
-                            "Camera axes of the pose matrix: opencv = x right, y down, z forward "
-                            "(COLMAP); opengl, blender = x right, y up, z backwards",
-                            nullptr,
-                            {},
-                            {"opencv", "opengl", "blender"},
-                            {},
-                            {},
-                            fieldAccess<&CameraParams::convention>()};
+const ParamSpec kIntrinsics =
+    ParamSpec("intrinsics", K::Numbers, fieldAccess<&CameraParams::intrinsics>())
+        .withUnit("pixels")
+        .withHelp(
+            "Focal lengths and principal point fx,fy,cx,cy (pixel convention: pixel_centre); "
+            "selects the calibrated camera")
+        .withDefaultRule("none (required)")
+        .withCount(4)
+        .withSelectsModel("calibrated");
+const ParamSpec kLensModel =
+    ParamSpec("lens_model", K::Choice, fieldAccess<&CameraParams::lensModel>())
+        .withHelp("COLMAP camera model of the lens (src/colmap/sensor/models.h)")
+        .withChoices(lensModelNames());
+const ParamSpec kDistortion =
+    ParamSpec("distortion", K::Numbers, fieldAccess<&CameraParams::distortion>())
+        .withHelp(
+            "The lens model's distortion coefficients in COLMAP's order (OPENCV: k1,k2,p1,p2; "
+            "OPENCV_FISHEYE: k1,k2,k3,k4; ...)")
+        .withDefaultRule("all zero")
+        .withNeeds({"lens_model"});
+const ParamSpec kPixelCentre =
+    ParamSpec("pixel_centre", K::Choice, fieldAccess<&CameraParams::pixelCentre>())
+        .withHelp(
+            "Where the intrinsics put pixel (i, j)'s centre: half-integer = (j + 0.5, i + 0.5) "
+            "as COLMAP and nerfstudio, integer = (j, i) as OpenCV")
+        .withChoices({"half-integer", "integer"});
+const ParamSpec kWorldToCamera =
+    ParamSpec("world_to_camera", K::Numbers, fieldAccess<&CameraParams::worldToCamera>())
+        .withHelp("4x4 world-to-camera matrix, row-major, in `convention` axes")
+        .withDefaultRule("none (eye, at / dir and up pose the camera)")
+        .withConflicts({"camera_to_world", "eye", "at", "dir", "up"})
+        .withCount(16)
+        .withSelectsModel("calibrated");
+const ParamSpec kCameraToWorld =
+    ParamSpec("camera_to_world", K::Numbers, fieldAccess<&CameraParams::cameraToWorld>())
+        .withHelp(
+            "4x4 camera-to-world matrix, row-major, in `convention` axes (nerfstudio's "
+            "transform_matrix, Blender's matrix_world)")
+        .withDefaultRule("none (eye, at / dir and up pose the camera)")
+        .withConflicts({"world_to_camera", "eye", "at", "dir", "up"})
+        .withCount(16)
+        .withSelectsModel("calibrated");
+const ParamSpec kConvention =
+    ParamSpec("convention", K::Choice, fieldAccess<&CameraParams::convention>())
+        .withHelp(
+            "Camera axes of the pose matrix: opencv = x right, y down, z forward (COLMAP); "
+            "opengl, blender = x right, y up, z backwards")
+        .withChoices({"opencv", "opengl", "blender"});
 
 }  // namespace
 

@@ -53,8 +53,7 @@ struct CalibratedView {
 /// principal point of its image window (COLMAP's pixel convention). Nothing for the models no
 /// calibrated camera expresses (parallel projections, panoramas, a thin lens).
 std::optional<CalibratedView> calibratedViewOf(const CameraDescription& c);
-/// The same for camera parameters (a calibrated camera is read without building its table).
-std::optional<CalibratedView> calibratedViewOf(const CameraParams& p);
+/// (For camera parameters, see calibratedViewOf in cameras/registry/registry.h.)
 
 /// Row-major 16 numbers of a matrix, and back (GLM is column-major).
 std::vector<double> rowMajor(const glm::dmat4& m);

@@ -59,12 +59,14 @@ class EquirectCamera final : public PacketCamera<EquirectCamera> {
       : PacketCamera(p, renderOrigin, "equirect") {
     rejectShift();
     const glm::dvec2 lon = p.longitudeRangeDeg, lat = p.latitudeRangeDeg;
-    if (!(std::isfinite(lon.x) && std::isfinite(lon.y) && lon.x < lon.y && lon.y - lon.x <= 360))
+    // Each end lies in its spec's range (checked by makeCamera); the order and the span of a
+    // range are not ranges of its ends.
+    if (!(lon.x < lon.y && lon.y - lon.x <= 360))
       throw Error(cat("camera: longitude range [", lon.x, ", ", lon.y,
                       "] degrees must be increasing and span at most 360"));
-    if (!(lat.x >= -90 && lat.x < lat.y && lat.y <= 90))
-      throw Error(cat("camera: latitude range [", lat.x, ", ", lat.y,
-                      "] degrees must be increasing within [-90, 90]"));
+    if (!(lat.x < lat.y))
+      throw Error(
+          cat("camera: latitude range [", lat.x, ", ", lat.y, "] degrees must be increasing"));
     lon0_ = lon.x * kRadPerDeg;
     lonPerPixel_ = (lon.y - lon.x) * kRadPerDeg / width_;
     lat1_ = lat.y * kRadPerDeg;
@@ -146,16 +148,16 @@ class EquirectCamera final : public PacketCamera<EquirectCamera> {
   std::vector<double> sinLon_, cosLon_, sinLat_, cosLat_;
 };
 
-const ParamSpec kLon{"lon",     ParamKind::Vec2,
-                     "degrees", "Longitude range MIN,MAX (columns)",
-                     nullptr,   {-360.0, 360.0},
-                     {},        {},
-                     {},        fieldAccess<&CameraParams::longitudeRangeDeg>()};
-const ParamSpec kLat{"lat",     ParamKind::Vec2,
-                     "degrees", "Latitude range MIN,MAX (rows)",
-                     nullptr,   {-90.0, 90.0},
-                     {},        {},
-                     {},        fieldAccess<&CameraParams::latitudeRangeDeg>()};
+const ParamSpec kLon =
+    ParamSpec("lon", ParamKind::Vec2, fieldAccess<&CameraParams::longitudeRangeDeg>())
+        .withUnit("degrees")
+        .withHelp("Longitude range MIN,MAX (columns)")
+        .withRange(ParamRange::closed(-360.0, 360.0));
+const ParamSpec kLat =
+    ParamSpec("lat", ParamKind::Vec2, fieldAccess<&CameraParams::latitudeRangeDeg>())
+        .withUnit("degrees")
+        .withHelp("Latitude range MIN,MAX (rows)")
+        .withRange(ParamRange::closed(-90.0, 90.0));
 
 std::unique_ptr<CameraBase> makeEquirectCamera(const CameraParams& p,
                                                const glm::dvec3& renderOrigin) {

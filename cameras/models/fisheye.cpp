@@ -208,16 +208,11 @@ class FisheyeCamera final : public PacketCamera<FisheyeCamera> {
   FisheyeQuadrant quadrant_;
 };
 
-const ParamSpec kFisheyeFov{"fisheye_fov",
-                            ParamKind::Number,
-                            "degrees",
-                            "Full field of view of the image circle",
-                            nullptr,
-                            {0.0, 360.0, true, false},
-                            {},
-                            {},
-                            {},
-                            fieldAccess<&CameraParams::fisheyeFovDeg>()};
+const ParamSpec kFisheyeFov =
+    ParamSpec("fisheye_fov", ParamKind::Number, fieldAccess<&CameraParams::fisheyeFovDeg>())
+        .withUnit("degrees")
+        .withHelp("Full field of view of the image circle")
+        .withRange(ParamRange::openClosed(0.0, 360.0));
 
 std::unique_ptr<CameraBase> makeFisheyeCamera(const CameraParams& p,
                                               const glm::dvec3& renderOrigin) {

@@ -1,12 +1,10 @@
 #pragma once
-// The camera models (one module each) and the parameter declarations they share; the
-// registry (registry.cpp) lists the models.
-#include <initializer_list>
-#include <memory>
+// The camera models (one module each), each declared as a CameraModel; the registry
+// (registry.cpp) lists them. The parameters CameraBase reads are declared in base.h.
 #include <vector>
 
 #include "cameras/models/base.h"
-#include "cameras/registry/registry.h"
+#include "cameras/models/camera_model.h"
 #include "cameras/schema/param_schema.h"
 
 namespace aperture {
@@ -19,18 +17,10 @@ const CameraModel& equirectModel();
 const CameraModel& fisheyeModel();
 const CameraModel& calibratedModel();
 
-/// type, size, spp, eye, at, dir, up: read by every model (declared in base.cpp).
-const std::vector<const ParamSpec*>& commonParamSpecs();
-/// The image-plane window of the planar models: d and viewport (declared in base.cpp).
-const ParamSpec& distanceParamSpec();
-const ParamSpec& viewportParamSpec();
-/// fov, fov_axis, focal_length, sensor, sensor_fit, shift, blender_shift, architectural, clip
-/// (declared in perspective.cpp).
+/// The perspective window (perspectiveWindowParamSpecs) and clip: what the perspective and
+/// thin-lens models read beside d and viewport (declared in base.cpp and
+/// perspective.cpp).
 const std::vector<const ParamSpec*>& perspectiveParamSpecs();
-
-/// The concatenation of spec lists (a model's parameters from shared groups).
-std::vector<const ParamSpec*> joinParamSpecs(
-    std::initializer_list<std::vector<const ParamSpec*>> groups);
 
 /// The common unit direction of an oblique camera (errors for a missing, zero, backwards or
 /// too-steep direction: 89° or more from −W).

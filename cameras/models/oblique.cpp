@@ -36,26 +36,18 @@ glm::dvec3 obliqueDirection(const CameraParams& p, const CameraFrame& frame) {
 
 namespace {
 
-const ParamSpec kObliqueDir{"oblique_dir",
-                            ParamKind::Vec3,
-                            "",
-                            "Common ray direction X,Y,Z (world space, any length)",
-                            "none: give oblique_dir or oblique_angles",
-                            {},
-                            {},
-                            {"oblique_angles"},
-                            {},
-                            fieldAccess<&CameraParams::obliqueDir>()};
-const ParamSpec kObliqueAngles{"oblique_angles",
-                               ParamKind::Vec2,
-                               "degrees",
-                               "Shear angles AX,AY of the rays towards +U and +V",
-                               "none: give oblique_dir or oblique_angles",
-                               {-89.0, 89.0, true, true},
-                               {},
-                               {"oblique_dir"},
-                               {},
-                               fieldAccess<&CameraParams::obliqueAnglesDeg>()};
+const ParamSpec kObliqueDir =
+    ParamSpec("oblique_dir", ParamKind::Vec3, fieldAccess<&CameraParams::obliqueDir>())
+        .withHelp("Common ray direction X,Y,Z (world space, any length)")
+        .withDefaultRule("none: give oblique_dir or oblique_angles")
+        .withConflicts({"oblique_angles"});
+const ParamSpec kObliqueAngles =
+    ParamSpec("oblique_angles", ParamKind::Vec2, fieldAccess<&CameraParams::obliqueAnglesDeg>())
+        .withUnit("degrees")
+        .withHelp("Shear angles AX,AY of the rays towards +U and +V")
+        .withDefaultRule("none: give oblique_dir or oblique_angles")
+        .withRange(ParamRange::open(-89.0, 89.0))
+        .withConflicts({"oblique_dir"});
 
 std::unique_ptr<CameraBase> makeObliqueCamera(const CameraParams& p,
                                               const glm::dvec3& renderOrigin) {

@@ -23,9 +23,11 @@ PerspectiveCamera::PerspectiveCamera(const CameraParams& p, const glm::dvec3& re
   pinholeCentres_ = spp_ == 1 && lensRadius_ == 0;
   centres_ = PixelCentreTable(window());
   pinhole_ = {frame_.u, frame_.v, d_ * frame_.w, renderEyeD_, width_, height_};
-  if (clip_ && !(clip_->x >= 0 && clip_->x < clip_->y && std::isfinite(clip_->y)))
+  // The range of each end (finite, >= 0) is the clip spec's, checked by makeCamera; their
+  // order is not a range.
+  if (clip_ && !(clip_->x < clip_->y))
     throw Error(cat("camera: clip ", clip_->x, ",", clip_->y,
-                    ": needs 0 <= near < far, both finite (planar depths, scene units)"));
+                    ": near must be less than far (planar depths, scene units)"));
 }
 
 namespace {
@@ -166,118 +168,14 @@ void PerspectiveCamera::describeExtra(CameraDescription& c) const {
 
 namespace {
 
-using K = ParamKind;
-const ParamRange kPositive{0.0, std::nullopt, true, false};
-
-ParamAccess fovAxisAccess() {
-  return {[](const CameraParams& p) -> std::optional<ParamValue> {
-            return ParamValue(std::string(p.fovAxis == FovAxis::X   ? "x"
-                                          : p.fovAxis == FovAxis::Y ? "y"
-                                                                    : "diagonal"));
-          },
-          [](CameraParams& p, const ParamValue& v) {
-            const std::string& a = std::get<std::string>(v);
-            p.fovAxis = a == "x" ? FovAxis::X : a == "y" ? FovAxis::Y : FovAxis::Diagonal;
-          }};
-}
-
-const ParamSpec kFov{"fov",
-                     K::Number,
-                     "degrees",
-                     "Field of view",
-                     "45 vertical, when neither viewport nor focal_length is given",
-                     {0.0, 180.0, true, true},
-                     {},
-                     {"focal_length", "viewport"},
-                     {},
-                     fieldAccess<&CameraParams::fovDeg>()};
-const ParamSpec kFovAxis{
-    "fov_axis", K::Choice,      "", "The extent fov spans", nullptr, {}, {"x", "y", "diagonal"}, {},
-    {},         fovAxisAccess()};
-ParamAccess sensorFitAccess() {
-  return {[](const CameraParams& p) -> std::optional<ParamValue> {
-            return ParamValue(std::string(p.sensorFit == SensorFit::Auto         ? "auto"
-                                          : p.sensorFit == SensorFit::Horizontal ? "horizontal"
-                                                                                 : "vertical"));
-          },
-          [](CameraParams& p, const ParamValue& v) {
-            const std::string& f = std::get<std::string>(v);
-            p.sensorFit = f == "auto"         ? SensorFit::Auto
-                          : f == "horizontal" ? SensorFit::Horizontal
-                                              : SensorFit::Vertical;
-          }};
-}
-
-const ParamSpec kFocalLength{"focal_length",
-                             K::Number,
-                             "mm",
-                             "35 mm-style focal length",
-                             nullptr,
-                             kPositive,
-                             {},
-                             {"fov", "viewport"},
-                             {},
-                             fieldAccess<&CameraParams::focalLengthMm>()};
-const ParamSpec kSensor{"sensor",
-                        K::Vec2,
-                        "mm",
-                        "Sensor W,H for focal_length (sensor_fit says which image side it spans)",
-                        nullptr,
-                        kPositive,
-                        {},
-                        {},
-                        {"focal_length"},
-                        fieldAccess<&CameraParams::sensorMm>()};
-const ParamSpec kSensorFit{"sensor_fit",
-                           K::Choice,
-                           "",
-                           "Image side the sensor spans, as Blender: auto = sensor width on the "
-                           "larger side, horizontal = width on the width, vertical = height on "
-                           "the height",
-                           nullptr,
-                           {},
-                           {"auto", "horizontal", "vertical"},
-                           {},
-                           {"focal_length"},
-                           sensorFitAccess()};
-const ParamSpec kShift{"shift",     K::Vec2,
-                       "viewports", "Lens shift SX,SY (0.5 = half a viewport)",
-                       nullptr,     {},
-                       {},          {"blender_shift"},
-                       {},          fieldAccess<&CameraParams::shift>()};
-const ParamSpec kBlenderShift{"blender_shift",
-                              K::Vec2,
-                              "fitted sides",
-                              "Blender's lens shift shift_x,shift_y: fractions of the image side "
-                              "the sensor fit spans (the larger one for auto)",
-                              "none",
-                              {},
-                              {},
-                              {"shift"},
-                              {},
-                              fieldAccess<&CameraParams::blenderShift>()};
-const ParamSpec kClip{"clip",
-                      K::Vec2,
-                      "scene units",
-                      "Near,far clipping: planar depths along the view axis (Blender's "
-                      "clip_start, clip_end); near < far",
-                      "none (no clipping)",
-                      {0.0, std::nullopt},
-                      {},
-                      {},
-                      {},
-                      fieldAccess<&CameraParams::clip>()};
-const ParamSpec kArchitectural{
-    "architectural",
-    K::Flag,
-    "",
-    "Keep the image plane parallel to up (verticals stay parallel; the tilt becomes a shift)",
-    nullptr,
-    {},
-    {},
-    {},
-    {},
-    fieldAccess<&CameraParams::architectural>()};
+const ParamSpec kClip =
+    ParamSpec("clip", ParamKind::Vec2, fieldAccess<&CameraParams::clip>())
+        .withUnit("scene units")
+        .withHelp(
+            "Near,far clipping: planar depths along the view axis (Blender's clip_start, "
+            "clip_end); near < far")
+        .withDefaultRule("none (no clipping)")
+        .withRange(ParamRange::atLeast(0.0));
 
 std::unique_ptr<CameraBase> makePerspectiveCamera(const CameraParams& p,
                                                   const glm::dvec3& renderOrigin) {
@@ -289,9 +187,8 @@ std::unique_ptr<CameraBase> makePerspectiveCamera(const CameraParams& p,
 }  // namespace
 
 const std::vector<const ParamSpec*>& perspectiveParamSpecs() {
-  static const std::vector<const ParamSpec*> v = {&kFov,          &kFovAxis,       &kFocalLength,
-                                                  &kSensor,       &kSensorFit,     &kShift,
-                                                  &kBlenderShift, &kArchitectural, &kClip};
+  static const std::vector<const ParamSpec*> v =
+      joinParamSpecs({perspectiveWindowParamSpecs(), {&kClip}});
   return v;
 }
 

@@ -37,26 +37,17 @@ APERTURE_VECTOR_KERNEL void thinLensCentres(const ThinLensCentres& c, int x0, in
   writeBlockInImage<kBW, kBH>(x0, y0, c.width, c.height, valid);
 }
 
-const ParamSpec kAperture{"aperture",
-                          ParamKind::Number,
-                          "scene units",
-                          "Lens radius (0: pinhole)",
-                          nullptr,
-                          {0.0, std::nullopt},
-                          {},
-                          {},
-                          {},
-                          fieldAccess<&CameraParams::apertureRadius>()};
-const ParamSpec kFocus{"focus",
-                       ParamKind::Number,
-                       "scene units",
-                       "Distance of the in-focus plane along the view axis",
-                       "|at - eye| with a look-at point, else 1",
-                       {0.0, std::nullopt, true, false},
-                       {},
-                       {},
-                       {},
-                       fieldAccess<&CameraParams::focusDistance>()};
+const ParamSpec kAperture =
+    ParamSpec("aperture", ParamKind::Number, fieldAccess<&CameraParams::apertureRadius>())
+        .withUnit("scene units")
+        .withHelp("Lens radius (0: pinhole)")
+        .withRange(ParamRange::atLeast(0.0));
+const ParamSpec kFocus =
+    ParamSpec("focus", ParamKind::Number, fieldAccess<&CameraParams::focusDistance>())
+        .withUnit("scene units")
+        .withHelp("Distance of the in-focus plane along the view axis")
+        .withDefault(1.0, "|at - eye| with a look-at point, else {}")
+        .withRange(ParamRange::above(0.0));
 
 std::unique_ptr<CameraBase> makeThinLensCamera(const CameraParams& p,
                                                const glm::dvec3& renderOrigin) {
@@ -65,6 +56,11 @@ std::unique_ptr<CameraBase> makeThinLensCamera(const CameraParams& p,
 }
 
 }  // namespace
+
+double focusDistanceOf(const CameraParams& p) {
+  if (p.focusDistance) return *p.focusDistance;
+  return p.at ? glm::length(*p.at - p.eye) : kFocus.defaultAs<double>();
+}
 
 bool generateThinLensCentres(const ThinLensCentres& c, const PacketRequest& req, RayLanes& out,
                              int* valid) {

@@ -5,9 +5,14 @@
 #include <glm/glm.hpp>
 
 #include "cameras/schema/image_window.h"
+#include "cameras/schema/params.h"
 #include "core/engine/camera.h"
 
 namespace aperture {
+
+/// The thin lens's focus distance: given, else |at − eye| with a look-at point, else the focus
+/// spec's default.
+double focusDistanceOf(const CameraParams& p);
 
 /// Concentric (Shirley–Chiu) map of the unit square onto the unit disk: the square
 /// [-1, 1]² is cut into four triangles by its diagonals, and each concentric square ring of

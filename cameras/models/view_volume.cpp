@@ -3,8 +3,6 @@
 #include <cmath>
 #include <limits>
 
-#include "cameras/models/base.h"
-#include "cameras/registry/registry.h"
 #include "core/util/error.h"
 
 namespace aperture {
@@ -127,10 +125,6 @@ std::string ViewVolume::kindName() const {
       return "all space";
   }
   return "?";
-}
-
-ViewVolume viewVolumeFor(const CameraParams& params, double nearDist, double farDist) {
-  return makeCameraModel(params)->viewVolume(nearDist, farDist);
 }
 
 }  // namespace aperture

@@ -8,8 +8,6 @@
 
 namespace aperture {
 
-struct CameraParams;
-
 /// A world-space plane; the inside is dot(normal, p) <= offset. normal is unit length.
 struct Plane {
   glm::dvec3 normal{0.0, 0.0, 1.0};
@@ -68,8 +66,5 @@ struct ViewVolume {
   static ViewVolume allSpace(const glm::dvec3& eye, const glm::dvec3& u, const glm::dvec3& v,
                              const glm::dvec3& w, double nearDist, double farDist);
 };
-
-/// The view volume of the camera the parameters describe (builds it; errors as makeCamera).
-ViewVolume viewVolumeFor(const CameraParams& params, double nearDist, double farDist);
 
 }  // namespace aperture

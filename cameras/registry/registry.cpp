@@ -1,17 +1,11 @@
 #include "cameras/registry/registry.h"
 
-#include <algorithm>
-
+#include "cameras/models/calibrated.h"
 #include "cameras/models/models.h"
 #include "core/util/error.h"
 #include "core/util/spelling.h"
 
 namespace aperture {
-
-bool CameraModel::accepts(const std::string& paramName) const {
-  return std::any_of(params.begin(), params.end(),
-                     [&](const ParamSpec* s) { return paramName == s->name; });
-}
 
 const std::vector<const CameraModel*>& cameraModels() {
   // Explicit registration: every model is listed here.
@@ -44,6 +38,17 @@ std::unique_ptr<CameraBase> makeCameraModel(const CameraParams& params,
   const CameraModel& model = findCameraModel(params.type);
   checkCameraParamRanges(params);
   return model.make(params, renderOrigin);
+}
+
+ViewVolume viewVolumeFor(const CameraParams& params, double nearDist, double farDist) {
+  return makeCameraModel(params)->viewVolume(nearDist, farDist);
+}
+
+std::optional<CalibratedView> calibratedViewOf(const CameraParams& p) {
+  if (p.type == "calibrated")
+    return CalibratedView{calibratedSensorOf(p), calibratedWorldToCamera(p)};
+  if (p.type != "perspective") return std::nullopt;
+  return calibratedViewOf(makeCameraModel(p)->describe());
 }
 
 }  // namespace aperture

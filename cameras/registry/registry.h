@@ -1,27 +1,21 @@
 #pragma once
 // The camera models by name (explicit registration; see STYLE.md §4), each with the
-// parameters it reads.
+// parameters it reads, and what needs a model by name: making a camera from parameters and
+// resolving a user's parameters (cameras/registry/resolve.h).
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "cameras/schema/param_schema.h"
+#include "cameras/models/camera_model.h"
+#include "cameras/models/view_volume.h"
+#include "cameras/registry/resolve.h"
 #include "cameras/schema/params.h"
 #include "core/engine/camera.h"
 
 namespace aperture {
 
-class CameraBase;
-
-/// One registered model: its name, a one-line summary, its factory and every parameter it
-/// reads (common ones included), as declared by its module.
-struct CameraModel {
-  const char* name;
-  const char* summary;
-  std::unique_ptr<CameraBase> (*make)(const CameraParams&, const glm::dvec3& renderOrigin);
-  std::vector<const ParamSpec*> params;
-  bool accepts(const std::string& paramName) const;
-};
+struct CalibratedView;
 
 /// Every model, in registration order.
 const std::vector<const CameraModel*>& cameraModels();
@@ -40,5 +34,13 @@ std::unique_ptr<Camera> makeCamera(const CameraParams& params,
 /// The same, with the model's full interface (scalar ray(), project(), viewVolume()).
 std::unique_ptr<CameraBase> makeCameraModel(const CameraParams& params,
                                             const glm::dvec3& renderOrigin = glm::dvec3(0.0));
+
+/// The view volume of the camera the parameters describe (builds it; errors as makeCamera).
+ViewVolume viewVolumeFor(const CameraParams& params, double nearDist, double farDist);
+
+/// calibratedViewOf (cameras/models/calibrated.h) for camera parameters: a calibrated camera's own
+/// sensor and pose, read without building its table; a pinhole perspective camera's from its
+/// description; nothing for the other models.
+std::optional<CalibratedView> calibratedViewOf(const CameraParams& p);
 
 }  // namespace aperture

@@ -19,8 +19,9 @@ void checkImage(int width, int height, double d) {
 }
 
 void checkFov(double fovDeg) {
-  if (!(fovDeg > 0 && fovDeg < 180))
-    throw Error(cat("conventions: fov ", fovDeg, " degrees must be in (0, 180)"));
+  if (!kPlanarFovRangeDeg.contains(fovDeg))
+    throw Error(
+        cat("conventions: fov ", fovDeg, " degrees must be in ", kPlanarFovRangeDeg.text()));
 }
 
 double fullAngleDeg(double extent, double d) {

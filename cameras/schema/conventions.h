@@ -5,9 +5,15 @@
 #include <glm/glm.hpp>
 #include <string>
 
+#include "cameras/schema/param_schema.h"
 #include "cameras/schema/params.h"
 
 namespace aperture {
+
+/// The full angles, in degrees, a planar image can span: (0, 180), where tan(fov / 2) is
+/// finite and positive. The range of aperture's fov (declared with it in
+/// cameras/models/base.cpp) and of the pbrt-v4 and Mitsuba 3 fov the converters below take.
+inline constexpr ParamRange kPlanarFovRangeDeg = ParamRange::open(0.0, 180.0);
 
 /// aperture's image plane: distance d and viewport vw x vh (scene units), shift in viewport
 /// units.

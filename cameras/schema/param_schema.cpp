@@ -4,7 +4,6 @@
 #include <cmath>
 #include <sstream>
 
-#include "cameras/registry/registry.h"
 #include "core/util/error.h"
 #include "core/util/number_text.h"
 #include "core/util/spelling.h"
@@ -102,77 +101,6 @@ std::vector<std::string> names(const std::vector<const char*>& list) {
   return {list.begin(), list.end()};
 }
 
-std::string flagOf(const std::string& name) {
-  const ParamSpec* s = findCameraParamSpec(name);
-  return s ? s->flag() : "--" + name;
-}
-
-/// The names of the models that read parameter `name`, in registration order.
-std::vector<std::string> modelsReading(const std::string& name) {
-  std::vector<std::string> users;
-  for (const CameraModel* m : cameraModels())
-    if (m->accepts(name)) users.emplace_back(m->name);
-  return users;
-}
-
-/// The model a given parameter selects (ParamSpec::selectsModel) when no type is given.
-const char* modelSelectedBy(const ParamSet& given) {
-  for (const ParamSet::Entry& e : given.entries())
-    if (e.spec->selectsModel) return e.spec->selectsModel;
-  return nullptr;
-}
-
-void checkApplies(const ParamSet& given, const CameraModel& model) {
-  for (const ParamSet::Entry& e : given.entries()) {
-    if (model.accepts(e.spec->name)) continue;
-    throw Error(cat(e.source, ": does not apply to a '", model.name,
-                    "' camera (it applies to: ", join(modelsReading(e.spec->name), ", "), ")"));
-  }
-}
-
-void checkConflictsAndCompanions(const ParamSet& given) {
-  for (const ParamSet::Entry& e : given.entries()) {
-    for (const char* other : e.spec->conflicts) {
-      const ParamSet::Entry* o = given.find(other);
-      if (!o) continue;
-      std::string group = e.spec->name;
-      for (const char* c : e.spec->conflicts) group += cat(", ", c);
-      throw Error(cat(e.source, " and ", o->source, " conflict: give at most one of ", group));
-    }
-    for (const char* needed : e.spec->needs)
-      if (!given.has(needed))
-        throw Error(cat(e.source, " needs ", given.label(needed), " as well"));
-  }
-}
-
-void checkRange(const ParamSpec& spec, const ParamValue& value, const std::string& label) {
-  const std::vector<double> parts = components(value);
-  for (double x : parts) {
-    if (!std::isfinite(x)) throw Error(cat(label, ": ", formatParamValue(value), " is not finite"));
-    if (!spec.range.contains(x))
-      throw Error(cat(label, ": ", formatParamValue(value), ": ",
-                      parts.size() > 1 ? "each component must be " : "must be ",
-                      spec.range.min && spec.range.max ? "in " : "", spec.range.text(),
-                      *spec.unit ? cat(" ", spec.unit) : std::string()));
-  }
-  if (spec.kind == ParamKind::Choice) {
-    const std::string& word = std::get<std::string>(value);
-    if (spec.choices.empty()) return;  // `type`: checked by the registry
-    if (std::find(spec.choices.begin(), spec.choices.end(), word) == spec.choices.end()) {
-      const std::string list = join(spec.choices, ", ");
-      throw Error(
-          cat(label, ": '", word, "' is not one of ", list, didYouMean(word, names(spec.choices))));
-    }
-  }
-  if (spec.kind == ParamKind::Size) {
-    const glm::ivec2 s = std::get<glm::ivec2>(value);
-    constexpr double kMaxPixels = double(1 << 28);
-    if (double(s.x) * double(s.y) > kMaxPixels)
-      throw Error(
-          cat(label, ": ", formatParamValue(value), " has more than ", kMaxPixels, " pixels"));
-  }
-}
-
 }  // namespace
 
 bool ParamRange::contains(double x) const {
@@ -197,29 +125,42 @@ std::string ParamSpec::flag() const {
 }
 
 std::string ParamSpec::defaultText(const CameraParams& defaults) const {
-  if (defaultRule) return defaultRule;
+  if (defaultRule) {
+    std::string text = defaultRule;
+    const size_t slot = text.find("{}");
+    if (defaultValue && slot != std::string::npos)
+      text.replace(slot, 2, formatParamValue(*defaultValue));
+    return text;
+  }
   const std::optional<ParamValue> v = access.get(defaults);
   return v ? formatParamValue(*v) : "none";
 }
 
-std::string ParamSpec::describeText(const CameraParams& defaults) const {
-  std::string s = help;
-  std::string facts;
-  auto add = [&](const std::string& f) { facts += (facts.empty() ? "" : "; ") + f; };
-  if (*unit) add(unit);
-  if (kind == ParamKind::Choice) {
-    // No fixed list: the registered camera models (the `type` parameter).
-    std::vector<std::string> words(choices.begin(), choices.end());
-    if (words.empty()) words = cameraTypeNames();
-    add(join(words, "|"));
+void checkParamValue(const ParamSpec& spec, const ParamValue& value, const std::string& label) {
+  const std::vector<double> parts = components(value);
+  for (double x : parts) {
+    if (!std::isfinite(x)) throw Error(cat(label, ": ", formatParamValue(value), " is not finite"));
+    if (!spec.range.contains(x))
+      throw Error(cat(label, ": ", formatParamValue(value), ": ",
+                      parts.size() > 1 ? "each component must be " : "must be ",
+                      spec.range.min && spec.range.max ? "in " : "", spec.range.text(),
+                      *spec.unit ? cat(" ", spec.unit) : std::string()));
   }
-  if (!range.text().empty()) add("range " + range.text());
-  if (kind != ParamKind::Flag) add("default " + defaultText(defaults));
-  if (!conflicts.empty()) {
-    add("not with " + join(conflicts, ", ", [](const char* c) { return flagOf(c); }));
+  if (spec.kind == ParamKind::Choice) {
+    const std::string& word = std::get<std::string>(value);
+    if (spec.choices.empty()) return;  // `type`: checked by the registry
+    if (std::find(spec.choices.begin(), spec.choices.end(), word) == spec.choices.end()) {
+      const std::string list = join(spec.choices, ", ");
+      throw Error(
+          cat(label, ": '", word, "' is not one of ", list, didYouMean(word, names(spec.choices))));
+    }
   }
-  for (const char* r : needs) add("needs " + flagOf(r));
-  return facts.empty() ? s : s + " (" + facts + ")";
+  if (spec.kind == ParamKind::Size && spec.maxPixels > 0) {
+    const glm::ivec2 s = std::get<glm::ivec2>(value);
+    if (double(s.x) * double(s.y) > spec.maxPixels)
+      throw Error(
+          cat(label, ": ", formatParamValue(value), " has more than ", spec.maxPixels, " pixels"));
+  }
 }
 
 std::string formatParamValue(const ParamValue& v) {
@@ -258,83 +199,9 @@ void ParamSet::erase(const std::string& name) {
                  entries_.end());
 }
 
-std::string ParamSet::label(const std::string& name) const {
-  const Entry* e = find(name);
-  return e ? e->source : flagOf(name);
-}
-
-ParamSet paramSetOf(const CameraParams& p, const std::string& source) {
-  const CameraParams defaults;
-  ParamSet set;
-  for (const ParamSpec* s : findCameraModel(p.type).params) {
-    const std::optional<ParamValue> v = s->access.get(p);
-    if (v && v != s->access.get(defaults)) set.set(*s, *v, source);
-  }
-  return set;
-}
-
-const std::vector<const ParamSpec*>& allCameraParamSpecs() {
-  static const std::vector<const ParamSpec*> all = [] {
-    std::vector<const ParamSpec*> v;
-    for (const CameraModel* m : cameraModels())
-      for (const ParamSpec* s : m->params)
-        if (std::find(v.begin(), v.end(), s) == v.end()) v.push_back(s);
-    return v;
-  }();
-  return all;
-}
-
-const ParamSpec* findCameraParamSpec(const std::string& name) {
-  for (const ParamSpec* s : allCameraParamSpecs())
-    if (name == s->name) return s;
-  return nullptr;
-}
-
-CameraParams resolveCameraParams(const ParamSet& given, CameraParams base) {
-  if (const ParamSet::Entry* t = given.find("type")) {
-    const std::string& type = std::get<std::string>(t->value);
-    try {
-      findCameraModel(type);
-    } catch (const Error& e) {
-      throw Error(cat(t->source, ": ", e.what()));
-    }
-  }
-  CameraParams p = std::move(base);
-  if (const ParamSet::Entry* t = given.find("type"))
-    p.type = std::get<std::string>(t->value);
-  else if (const char* selected = modelSelectedBy(given))
-    p.type = selected;
-  checkApplies(given, findCameraModel(p.type));
-  for (const ParamSet::Entry& e : given.entries()) checkRange(*e.spec, e.value, e.source);
-  checkConflictsAndCompanions(given);
-  for (const ParamSet::Entry& e : given.entries()) e.spec->access.set(p, e.value);
-  return p;
-}
-
-void checkCameraParamRanges(const CameraParams& p, const ParamSet* labels) {
-  for (const ParamSpec* s : findCameraModel(p.type).params) {
-    const std::optional<ParamValue> v = s->access.get(p);
-    if (v) checkRange(*s, *v, labels ? labels->label(s->name) : s->flag());
-  }
-}
-
-std::string cameraParamsMarkdown() {
-  std::ostringstream s;
-  s << "| parameter (job key, Python) | flag | cameras | unit | default | range | conflicts / "
-       "needs | meaning |\n|---|---|---|---|---|---|---|---|\n";
-  for (const ParamSpec* p : allCameraParamSpecs()) {
-    const std::vector<std::string> readers = modelsReading(p->name);
-    const std::string users = readers.size() == cameraModels().size() ? "all" : join(readers, ", ");
-    std::string rel;
-    for (const char* c : p->conflicts) rel += std::string(rel.empty() ? "not " : ", not ") + c;
-    for (const char* r : p->needs) rel += std::string(rel.empty() ? "needs " : ", needs ") + r;
-    std::string range = p->range.text();
-    for (const char* c : p->choices) range += std::string(range.empty() ? "" : " \\| ") + c;
-    s << "| `" << p->name << "` | `" << p->flag() << "` | " << users << " | " << p->unit << " | "
-      << (p->kind == ParamKind::Flag ? "off" : p->defaultText()) << " | " << range << " | " << rel
-      << " | " << p->help << " |\n";
-  }
-  return s.str();
+std::string ParamSet::label(const ParamSpec& spec) const {
+  const Entry* e = find(spec.name);
+  return e ? e->source : spec.flag();
 }
 
 }  // namespace aperture

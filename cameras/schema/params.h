@@ -20,9 +20,6 @@ enum class FovAxis { X, Y, Diagonal };
 /// viewportOfSensor() (cameras/schema/conventions.h).
 enum class SensorFit { Auto, Horizontal, Vertical };
 
-/// Field of view when none of fov, viewport and focal length is given: 45 degrees vertical.
-inline constexpr double kDefaultFovDeg = 45.0;
-
 struct CameraParams {
   std::string type = "perspective";  ///< a registered model: see cameraTypeNames()
   int width = 960, height = 540;     ///< image size, pixels
@@ -35,11 +32,12 @@ struct CameraParams {
   std::optional<glm::dvec3> dir;  ///< view direction (any length > 0)
   glm::dvec3 up{0.0, 1.0, 0.0};
 
-  // Image plane. At most one of: viewport (with d, default 1), focal length (with sensor and
-  // sensorFit), fov (on fovAxis); with none, kDefaultFovDeg vertical.
-  std::optional<double> d;                ///< image-plane distance, scene units (> 0)
-  std::optional<glm::dvec2> viewport;     ///< vw, vh on the image plane, scene units (> 0)
-  std::optional<double> fovDeg;           ///< field of view, degrees, in (0, 180)
+  // Image plane. At most one of: viewport (with d), focal length (with sensor and sensorFit),
+  // fov (on fovAxis); with none, fov's default. The defaults and ranges of d and fov are their
+  // specs' (cameras/models/base.cpp).
+  std::optional<double> d;                ///< image-plane distance, scene units
+  std::optional<glm::dvec2> viewport;     ///< vw, vh on the image plane, scene units
+  std::optional<double> fovDeg;           ///< field of view, degrees
   FovAxis fovAxis = FovAxis::Y;           ///< which extent fovDeg spans
   std::optional<double> focalLengthMm;    ///< 35 mm style focal length, millimetres
   glm::dvec2 sensorMm{36.0, 24.0};        ///< sensor width, height, millimetres
@@ -63,14 +61,14 @@ struct CameraParams {
 
   // Thin lens.
   double apertureRadius = 0.0;  ///< lens radius, scene units (0 = pinhole)
-  /// Distance of the in-focus plane along −W, scene units; not given: |at − eye| with a
-  /// look-at point, else 1 (see focusDistanceOf()).
+  /// Distance of the in-focus plane along −W, scene units; not given: see focusDistanceOf()
+  /// (cameras/models/thinlens.h).
   std::optional<double> focusDistance;
 
   // Panoramas.
   glm::dvec2 longitudeRangeDeg{-180.0, 180.0};  ///< equirect horizontal extent, degrees
   glm::dvec2 latitudeRangeDeg{-90.0, 90.0};     ///< equirect vertical extent, degrees
-  double fisheyeFovDeg = 180.0;                 ///< fisheye full field of view, (0, 360]
+  double fisheyeFovDeg = 180.0;                 ///< fisheye full field of view
 
   // Calibrated (cameras/models/calibrated.cpp): a lens in a source's conventions and, instead of
   // eye / at / up, optionally a pose matrix (16 numbers, row-major).
@@ -82,8 +80,5 @@ struct CameraParams {
   std::optional<std::vector<double>> cameraToWorld;
   std::string convention = "opencv";  ///< axes of the pose matrix: opencv, opengl, blender
 };
-
-/// The thin lens's focus distance: given, else |at − eye| with a look-at point, else 1.
-double focusDistanceOf(const CameraParams& p);
 
 }  // namespace aperture

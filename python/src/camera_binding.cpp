@@ -11,7 +11,7 @@
 
 #include "apps/jobs/job_camera.h"
 #include "apps/jobs/job_json.h"
-#include "apps/services/camera_files.h"
+#include "apps/services/camera_file_params.h"
 #include "bindings.h"
 #include "cameras/files/camera_file.h"
 #include "cameras/registry/describe.h"

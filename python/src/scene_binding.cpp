@@ -103,16 +103,7 @@ class PyScene {
   PyScene(Mesh mesh, const app::SceneOptions& o) : device_(std::make_unique<Device>()) {
     spec_ = o.spec();
     spec_.meshes = {{mesh.name, std::nullopt}};
-    finishMesh(mesh, o.loadOptions());
-    loaded_.meshes.push_back(std::move(mesh));
-    const Mesh& m = loaded_.meshes.back();
-    loaded_.objects.push_back({&m, glm::dmat4(1.0)});
-    loaded_.names.push_back(m.name);
-    loaded_.renderOrigin = m.anchor;
-    glm::vec3 lo, hi;
-    m.bounds(lo, hi);
-    loaded_.worldLo = m.anchor + glm::dvec3(lo);
-    loaded_.worldHi = m.anchor + glm::dvec3(hi);
+    loaded_ = app::loadedSceneOfMesh(std::move(mesh), o.loadOptions());
     app::buildLoadedScene(*device_, loaded_, spec_, true);
   }
 

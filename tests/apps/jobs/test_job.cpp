@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "apps/jobs/job.h"
+#include "cameras/models/thinlens.h"
 #include "core/exr/exr.h"
 #include "core/util/error.h"
 #include "tests/job_support.h"

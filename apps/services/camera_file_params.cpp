@@ -1,8 +1,9 @@
-#include "apps/services/camera_files.h"
+#include "apps/services/camera_file_params.h"
 
 #include <filesystem>
 
 #include "cameras/models/calibrated.h"
+#include "cameras/registry/resolve.h"
 #include "core/util/error.h"
 #include "core/util/spelling.h"
 
