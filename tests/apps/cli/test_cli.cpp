@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "core/exr/exr.h"
-#include "tests/unwritable_dir.h"
 #include "tests/support.h"
+#include "tests/unwritable_dir.h"
 
 using namespace aperture;
 using aperture::test::apertureBinary;
