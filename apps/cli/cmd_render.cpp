@@ -137,9 +137,10 @@ Command addRenderCommand(CLI::App& app) {
                   "warning counts them); 1000 = millimetres per metre, 5000 for TUM")
       ->capture_default_str();
   sub->add_option("--preview", args->preview,
-                  "Also write an opaque 8-bit preview (.png .jpg .jpeg .tif .tiff .bmp .tga "
-                  ".ppm) of color, else depth, normal, primid or geomid, for looking at (--out "
-                  "x.png is the 16-bit depth data); written before the EXR");
+                  cat("Also write an opaque 8-bit preview (", join(previewExtensions(), " "),
+                      ") of ", previewableAovText(),
+                      ", for looking at (--out x.png is the 16-bit depth data); written before "
+                      "the EXR"));
   sub->add_option("--preview-range", args->previewRange,
                   "NEAR,FAR: a depth preview maps depth NEAR to white and FAR to black, clamped "
                   "(default: the image's own nearest and farthest depth)");

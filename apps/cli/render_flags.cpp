@@ -1,5 +1,8 @@
 #include "apps/cli/render_flags.h"
 
+#include "core/aov/aov_table.h"
+#include "core/util/error.h"
+
 namespace aperture::app {
 
 const char* const kLayersHelp =
@@ -22,8 +25,8 @@ void addDeepOption(CLI::App& app, bool& deep, const std::string& group) {
 
 void addRenderOptions(CLI::App& app, RenderOptions& o) {
   app.add_option("--aov", o.aovs,
-                 "AOVs to compute: color, depth, distance, normal, position, primid, geomid, all, "
-                 "shading-normal, face.NAME, vertex.NAME (integer PLY properties)")
+                 cat("AOVs to compute: ", aovNameList(),
+                     ", face.NAME, vertex.NAME (integer PLY properties)"))
       ->capture_default_str();
   app.add_option("--normal-frame", o.normalFrame,
                  "Frame of normal and shading-normal: world, opencv (x right, y down, z "

@@ -12,6 +12,7 @@
 #include <optional>
 #include <string_view>
 
+#include "core/aov/aov_table.h"
 #include "core/mesh/mesh.h"
 #include "core/mesh/ply.h"
 #include "core/util/error.h"
@@ -262,18 +263,12 @@ MeshSizeEstimate estimateMeshSize(const std::string& spec) {
 }
 
 uint64_t framebufferBytesPerPixel(const AovSet& set) {
-  const AovMask aovs = set.mask;
   uint64_t b = 0;
-  if (aovs & kAovColor) b += 16;
-  if (aovs & kAovDepth) b += 4;
-  if (aovs & kAovDistance) b += 4;
-  if (aovs & kAovNormal) b += 12;
-  if (aovs & kAovPosition) b += 12;
-  if (aovs & kAovPrimId) b += 4;
-  if (aovs & kAovGeomId) b += 4;
-  if (aovs & kAovShadingNormal) b += 12;
+  for (const AovRow& row : aovTable())
+    if (set.mask & row.bit) b += 4 * uint64_t(row.channels());  // float32 or uint32 values
   b += 4 * set.properties.size();
-  b += 16 * uint64_t(set.layers);
+  for (const AovRow& row : aovTable())
+    if (row.layered()) b += 4 * uint64_t(set.layers);  // one float32 or uint32 per layer
   return b;
 }
 

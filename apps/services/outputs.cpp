@@ -55,14 +55,12 @@ void extendDepthRange(const WorldView& c, const glm::dvec3& boxLo, const glm::dv
 
 const std::vector<std::string>& supportedExtensions(OutputKind kind) {
   static const std::vector<std::string> exr = {".exr"};
-  static const std::vector<std::string> preview = {".png",  ".jpg", ".jpeg", ".tif",
-                                                   ".tiff", ".bmp", ".tga",  ".ppm"};
   static const std::vector<std::string> visibility = {".npz", ".ply"};
   switch (kind) {
     case OutputKind::Exr:
       return exr;
     case OutputKind::Preview:
-      return preview;
+      return previewExtensions();
     case OutputKind::Visibility:
       return visibility;
     case OutputKind::Dataset:
@@ -141,7 +139,7 @@ void checkPreviewable(const std::string& name, const std::string& path, AovMask 
   if (previewableAovs(aovs)) return;
   throw Error(prefix(name, path) +
               cat("none of the AOVs ", aovListString(aovs),
-                  " can be previewed (previewable: ", aovListString(kPreviewableAovs), ")"));
+                  " can be previewed (previewable: ", aovListString(previewableAovMask()), ")"));
 }
 
 void checkPreviewRange(const glm::dvec2& range) {

@@ -24,9 +24,9 @@ enum class OutputKind {
 };
 
 /// The extensions (lower case, with the dot) a kind of output may end in; checks ignore case.
-/// Exr: .exr. Preview: the 8-bit RGB formats OpenImageIO writes here: .png .jpg .jpeg .tif
-/// .tiff .bmp .tga .ppm. Dataset: datasetExtensions() of core/io/dataset_image.h (.png is a
-/// 16-bit depth file there, an 8-bit picture as a preview). Visibility: .npz .ply.
+/// Exr: .exr. Preview: previewExtensions() of core/io/image.h (8-bit RGB). Dataset:
+/// datasetExtensions() of core/io/dataset_image.h (.png is a 16-bit depth file there, an 8-bit
+/// picture as a preview). Visibility: .npz .ply.
 const std::vector<std::string>& supportedExtensions(OutputKind kind);
 
 /// Checks the name of the output file `path`, given as `name` (a flag such as "--out" or a job

@@ -15,6 +15,7 @@
 #include "apps/services/command_camera.h"
 #include "bench/measure/baseline.h"
 #include "cameras/registry/registry.h"
+#include "core/aov/aov_table.h"
 #include "core/engine/layers.h"
 #include "core/io/atomic_file.h"
 #include "core/util/error.h"
@@ -170,8 +171,13 @@ double fillFramebufferSeconds(Framebuffer& fb) {
       channels.emplace_back(reinterpret_cast<char*>(v.data()),
                             v.size() * sizeof(v[0]) / size_t(fb.height));
   };
-  add(fb.rgba), add(fb.depth), add(fb.distance), add(fb.normal), add(fb.position);
-  add(fb.primId), add(fb.geomId), add(fb.shadingNormal);
+  for (const AovRow& row : aovTable()) {
+    if (!fb.has(Aov(row.bit))) continue;
+    if (row.isFloat())
+      add(floatPixels(fb, row));
+    else
+      add(uintPixels(fb, row));
+  }
   const auto start = std::chrono::steady_clock::now();
   parallelFor(size_t(fb.height), 8, [&](size_t first, size_t last) {
     for (const auto& [data, rowBytes] : channels)
@@ -346,11 +352,9 @@ std::vector<std::vector<double>> timeAovSetsInterleaved(
 
 /// Depth alone .. all AOVs, each relative to depth alone.
 nlohmann::json sweepAovs(const Bench& b) {
-  const std::vector<std::pair<std::string, AovMask>> sets = {{"depth", kAovDepth},
-                                                             {"primid", kAovPrimId},
-                                                             {"color", kAovColor},
-                                                             {"color,depth", kAovColor | kAovDepth},
-                                                             {"all", parseAovList("all")}};
+  std::vector<std::pair<std::string, AovMask>> sets;
+  for (const char* list : {"depth", "primid", "color", "color,depth", "all"})
+    sets.emplace_back(list, parseAovList(list));
   const std::vector<std::vector<double>> mrays = timeAovSetsInterleaved(b, sets);
   nlohmann::json rows = nlohmann::json::object();
   const double depthOnly = summarize(mrays[0]).median;

@@ -4,29 +4,19 @@
 #include <limits>
 #include <sstream>
 
+#include "core/aov/aov_table.h"
 #include "core/util/error.h"
 #include "core/util/spelling.h"
 
 namespace aperture {
 
 namespace {
-struct AovName {
-  const char* name;
-  Aov bit;
-  bool inAll;  ///< part of "all" (shading-normal is asked for by name)
-};
-constexpr AovName kAovNames[] = {
-    {"color", kAovColor, true},       {"depth", kAovDepth, true},
-    {"distance", kAovDistance, true}, {"normal", kAovNormal, true},
-    {"position", kAovPosition, true}, {"primid", kAovPrimId, true},
-    {"geomid", kAovGeomId, true},     {"shading-normal", kAovShadingNormal, false},
-};
 constexpr const char* kFacePrefix = "face.";
 constexpr const char* kVertexPrefix = "vertex.";
 
 std::vector<std::string> knownAovNames() {
   std::vector<std::string> names;
-  for (const auto& a : kAovNames) names.emplace_back(a.name);
+  for (const AovRow& row : aovTable()) names.push_back(row.name);
   names.emplace_back("all");
   return names;
 }
@@ -50,12 +40,11 @@ bool parsePropertyAov(const std::string& item, PropertyAov& out) {
 AovMask fixedAov(const std::string& item) {
   if (item == "all") {
     AovMask mask = 0;
-    for (const auto& a : kAovNames)
-      if (a.inAll) mask |= a.bit;
+    for (const AovRow& row : aovTable())
+      if (row.inAll) mask |= row.bit;
     return mask;
   }
-  for (const auto& a : kAovNames)
-    if (item == a.name) return a.bit;
+  if (const AovRow* row = findAovRow(item)) return row->bit;
   const std::vector<std::string> known = knownAovNames();
   throw Error(cat("unknown AOV '", item, "'", didYouMean(item, known),
                   " (known: ", join(known, ", "), ", face.NAME, vertex.NAME)"));
@@ -95,8 +84,8 @@ AovMask parseAovList(const std::string& list) {
 
 std::string aovListString(const AovSet& set) {
   std::string s;
-  for (const auto& a : kAovNames)
-    if (set.mask & a.bit) s += std::string(s.empty() ? "" : ",") + a.name;
+  for (const AovRow& row : aovTable())
+    if (set.mask & row.bit) s += std::string(s.empty() ? "" : ",") + row.name;
   for (const PropertyAov& p : set.properties) s += std::string(s.empty() ? "" : ",") + p.aovName();
   return s;
 }
@@ -104,25 +93,23 @@ std::string aovListString(const AovSet& set) {
 Framebuffer::Framebuffer(int w, int h, const AovSet& set)
     : width(w), height(h), aovs(set.mask), layers(set.layers) {
   const size_t n = pixelCount();
-  const float inf = std::numeric_limits<float>::infinity();
-  const AovMask mask = set.mask;
-  if (mask & kAovColor) rgba.assign(4 * n, 0.0f);
-  if (mask & kAovDepth) depth.assign(n, inf);
-  if (mask & kAovDistance) distance.assign(n, inf);
-  if (mask & kAovNormal) normal.assign(3 * n, 0.0f);
-  if (mask & kAovPosition) position.assign(3 * n, 0.0f);
-  if (mask & kAovPrimId) primId.assign(n, kInvalidId);
-  if (mask & kAovGeomId) geomId.assign(n, kInvalidId);
-  if (mask & kAovShadingNormal) shadingNormal.assign(3 * n, 0.0f);
+  for (const AovRow& row : aovTable()) {
+    if ((set.mask & row.bit) == 0) continue;
+    if (!row.f32 && !row.u32) registered.push_back({row.bit, {}, {}});
+    const size_t values = size_t(row.channels()) * n;
+    if (row.isFloat())
+      floatPixels(*this, row).assign(values, float(row.miss));
+    else
+      uintPixels(*this, row).assign(values, uint32_t(row.miss));
+  }
   for (const PropertyAov& p : set.properties)
     properties.push_back({p, std::vector<uint32_t>(n, kInvalidId)});
-  if (layers > 0) {
-    const size_t ln = size_t(layers) * n;
-    layerDepth.assign(ln, inf);
-    layerDistance.assign(ln, inf);
-    layerPrimId.assign(ln, kInvalidId);
-    layerGeomId.assign(ln, kInvalidId);
-  }
+  if (layers > 0)
+    for (const AovRow& row : aovTable()) {
+      const size_t ln = size_t(layers) * n;
+      if (row.layerF32) (this->*row.layerF32).assign(ln, float(row.miss));
+      if (row.layerU32) (this->*row.layerU32).assign(ln, uint32_t(row.miss));
+    }
 }
 
 AovSet Framebuffer::aovSet() const {
@@ -133,66 +120,39 @@ AovSet Framebuffer::aovSet() const {
 }
 
 namespace {
-ImageView floatView(const Framebuffer& fb, const std::vector<float>& v, int channels) {
-  return {fb.width, fb.height, channels, v.data(), nullptr};
+ImageView viewOf(const Framebuffer& fb, const AovRow& row) {
+  ImageView v{fb.width, fb.height, row.channels(), nullptr, nullptr};
+  if (row.isFloat())
+    v.f32 = floatPixels(fb, row).data();
+  else
+    v.u32 = uintPixels(fb, row).data();
+  return v;
 }
 ImageView uintView(const Framebuffer& fb, const std::vector<uint32_t>& v) {
   return {fb.width, fb.height, 1, nullptr, v.data()};
 }
 
-/// The layered-hit views by name ("layers.depth", ...), in the order aovNames lists them.
-constexpr const char* kLayerViewNames[] = {"layers.depth", "layers.distance", "layers.primid",
-                                           "layers.geomid"};
-
-ImageView layerView(const Framebuffer& fb, int which) {
+/// The view of a layered row's hits ("layers.depth", ...).
+ImageView layerView(const Framebuffer& fb, const AovRow& row) {
   ImageView v{fb.width, fb.height, 1, nullptr, nullptr, fb.layers};
-  switch (which) {
-    case 0:
-      v.f32 = fb.layerDepth.data();
-      break;
-    case 1:
-      v.f32 = fb.layerDistance.data();
-      break;
-    case 2:
-      v.u32 = fb.layerPrimId.data();
-      break;
-    default:
-      v.u32 = fb.layerGeomId.data();
-  }
+  if (row.layerF32)
+    v.f32 = layerFloatPixels(fb, row).data();
+  else
+    v.u32 = layerUintPixels(fb, row).data();
   return v;
 }
 }  // namespace
 
 ImageView aovView(const Framebuffer& fb, const std::string& aovName) {
   if (fb.layers > 0)
-    for (int k = 0; k < 4; ++k)
-      if (aovName == kLayerViewNames[k]) return layerView(fb, k);
+    for (const AovRow& row : aovTable())
+      if (row.layered() && aovName == layerAovName(row)) return layerView(fb, row);
   PropertyAov property;
   if (parsePropertyAov(aovName, property)) {
     for (const PropertyChannel& c : fb.properties)
       if (c.property == property) return uintView(fb, c.values);
-  } else {
-    for (const auto& a : kAovNames) {
-      if (aovName != a.name || !fb.has(a.bit)) continue;
-      switch (a.bit) {
-        case kAovColor:
-          return floatView(fb, fb.rgba, 4);
-        case kAovDepth:
-          return floatView(fb, fb.depth, 1);
-        case kAovDistance:
-          return floatView(fb, fb.distance, 1);
-        case kAovNormal:
-          return floatView(fb, fb.normal, 3);
-        case kAovPosition:
-          return floatView(fb, fb.position, 3);
-        case kAovPrimId:
-          return uintView(fb, fb.primId);
-        case kAovGeomId:
-          return uintView(fb, fb.geomId);
-        case kAovShadingNormal:
-          return floatView(fb, fb.shadingNormal, 3);
-      }
-    }
+  } else if (const AovRow* row = findAovRow(aovName); row && fb.has(Aov(row->bit))) {
+    return viewOf(fb, *row);
   }
   throw Error(
       cat("AOV '", aovName, "' was not rendered (this frame has: ", join(aovNames(fb), ", "), ")"));
@@ -200,11 +160,12 @@ ImageView aovView(const Framebuffer& fb, const std::string& aovName) {
 
 std::vector<std::string> aovNames(const Framebuffer& fb) {
   std::vector<std::string> names;
-  for (const auto& a : kAovNames)
-    if (fb.has(a.bit)) names.emplace_back(a.name);
+  for (const AovRow& row : aovTable())
+    if (fb.has(Aov(row.bit))) names.push_back(row.name);
   for (const PropertyChannel& c : fb.properties) names.push_back(c.property.aovName());
   if (fb.layers > 0)
-    names.insert(names.end(), std::begin(kLayerViewNames), std::end(kLayerViewNames));
+    for (const AovRow& row : aovTable())
+      if (row.layered()) names.push_back(layerAovName(row));
   return names;
 }
 

@@ -67,7 +67,8 @@ struct PropertyChannel {
 };
 
 /// Per-pixel storage for the requested AOVs, row-major, row 0 at the top. Vectors of AOVs not
-/// requested stay empty. Multi-channel AOVs are interleaved (rgba: 4 floats a pixel).
+/// requested stay empty. Multi-channel AOVs are interleaved (rgba: 4 floats a pixel). Each
+/// fixed AOV's vector is named by its row of the AOV table (core/aov/aov_table.h).
 struct Framebuffer {
   int width = 0, height = 0;
   AovMask aovs = 0;
@@ -85,6 +86,14 @@ struct Framebuffer {
   int layers = 0;
   std::vector<float> layerDepth, layerDistance;
   std::vector<uint32_t> layerPrimId, layerGeomId;
+  /// The pixels of the AOVs registered in the table at run time (AovRegistration,
+  /// core/aov/aov_table.h), which have no member of their own: f32 or u32 by the row's type.
+  struct RegisteredPixels {
+    AovMask bit = 0;
+    std::vector<float> f32;
+    std::vector<uint32_t> u32;
+  };
+  std::vector<RegisteredPixels> registered;
 
   Framebuffer() = default;
   /// Allocates the requested AOVs, filled with their miss values.

@@ -17,10 +17,13 @@
 #include <OpenEXR/ImfThreading.h>
 #include <OpenEXR/ImfVecAttribute.h>
 
+#include <algorithm>
 #include <cstddef>
+#include <deque>
 #include <exception>
 #include <limits>
 
+#include "core/aov/aov_table.h"
 #include "core/engine/layers.h"
 #include "core/exr/exr_header.h"
 #include "core/io/atomic_file.h"
@@ -79,11 +82,6 @@ glm::dvec3 toGlm(const Imath::V3d& v) { return glm::dvec3(v.x, v.y, v.z); }
 /// distance from the centre (FisheyeProjection).
 const char* const kFisheyeMapping = "equidistant";
 
-const char* const kColorNames[4] = {"R", "G", "B", "A"};
-const char* const kNormalNames[3] = {"N.X", "N.Y", "N.Z"};
-const char* const kPositionNames[3] = {"P.X", "P.Y", "P.Z"};
-const char* const kShadingNormalNames[3] = {"Ns.X", "Ns.Y", "Ns.Z"};
-
 /// The property AOVs among an EXR's channels: UINT channels named "face.NAME" / "vertex.NAME",
 /// in the file's (name-sorted) channel order.
 std::vector<PropertyAov> propertyChannelsOf(const Imf::ChannelList& channels) {
@@ -96,15 +94,6 @@ std::vector<PropertyAov> propertyChannelsOf(const Imf::ChannelList& channels) {
     if (set.properties.size() == 1) found.push_back(set.properties.front());
   }
   return found;
-}
-
-/// Layered hits (core/engine/layers.h): layer k (0-based, nearest first) is the OpenEXR layer
-/// "hit<k>" holding the channels below, e.g. hit0.Z hit0.T hit0.primID hit0.geomID hit1.Z ...
-/// Z and T float (+inf past the last surface), primID and geomID UINT (0xFFFFFFFF there).
-enum LayerChannel { kLayerZ, kLayerT, kLayerPrimId, kLayerGeomId };
-const char* const kLayerChannelNames[4] = {"Z", "T", "primID", "geomID"};
-std::string layerChannelName(int layer, LayerChannel channel) {
-  return cat("hit", layer, ".", kLayerChannelNames[channel]);
 }
 
 /// Adds a channel and a slice over interleaved data (`components` values a pixel).
@@ -337,54 +326,31 @@ void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata&
   header.compression() = toImf(options.compression);
 
   Imf::FrameBuffer frame;
-  std::vector<half> halfColor;
+  std::deque<std::vector<half>> halves;  // the half copies of the rows written as half
   const int w = fb.width;
-  if (fb.has(kAovColor)) {
-    checkSize("color", fb.rgba.size(), 4);
-    if (options.halfColor) {
-      halfColor.assign(fb.rgba.begin(), fb.rgba.end());
-      for (int c = 0; c < 4; ++c)
-        addChannel(header, frame, kColorNames[c], Imf::HALF, halfColor.data() + c, sizeof(half), 4,
-                   w);
+  for (const AovRow& row : aovTable()) {
+    if (!fb.has(Aov(row.bit))) continue;
+    const int channels = row.channels();
+    checkSize(row.name.c_str(), valueCount(fb, row), size_t(channels));
+    const char* data = nullptr;
+    Imf::PixelType type = Imf::FLOAT;
+    size_t valueSize = sizeof(float);
+    if (!row.isFloat()) {
+      data = reinterpret_cast<const char*>(uintPixels(fb, row).data());
+      type = Imf::UINT;
+      valueSize = sizeof(uint32_t);
+    } else if (row.halfInExr && options.halfColor) {
+      const std::vector<float>& values = floatPixels(fb, row);
+      data =
+          reinterpret_cast<const char*>(halves.emplace_back(values.begin(), values.end()).data());
+      type = Imf::HALF;
+      valueSize = sizeof(half);
     } else {
-      for (int c = 0; c < 4; ++c)
-        addChannel(header, frame, kColorNames[c], Imf::FLOAT, fb.rgba.data() + c, sizeof(float), 4,
-                   w);
+      data = reinterpret_cast<const char*>(floatPixels(fb, row).data());
     }
-  }
-  if (fb.has(kAovDepth)) {
-    checkSize("depth", fb.depth.size(), 1);
-    addChannel(header, frame, "Z", Imf::FLOAT, fb.depth.data(), sizeof(float), 1, w);
-  }
-  if (fb.has(kAovDistance)) {
-    checkSize("distance", fb.distance.size(), 1);
-    addChannel(header, frame, "T", Imf::FLOAT, fb.distance.data(), sizeof(float), 1, w);
-  }
-  if (fb.has(kAovNormal)) {
-    checkSize("normal", fb.normal.size(), 3);
-    for (int c = 0; c < 3; ++c)
-      addChannel(header, frame, kNormalNames[c], Imf::FLOAT, fb.normal.data() + c, sizeof(float), 3,
-                 w);
-  }
-  if (fb.has(kAovPosition)) {
-    checkSize("position", fb.position.size(), 3);
-    for (int c = 0; c < 3; ++c)
-      addChannel(header, frame, kPositionNames[c], Imf::FLOAT, fb.position.data() + c,
-                 sizeof(float), 3, w);
-  }
-  if (fb.has(kAovPrimId)) {
-    checkSize("primid", fb.primId.size(), 1);
-    addChannel(header, frame, "primID", Imf::UINT, fb.primId.data(), sizeof(uint32_t), 1, w);
-  }
-  if (fb.has(kAovGeomId)) {
-    checkSize("geomid", fb.geomId.size(), 1);
-    addChannel(header, frame, "geomID", Imf::UINT, fb.geomId.data(), sizeof(uint32_t), 1, w);
-  }
-  if (fb.has(kAovShadingNormal)) {
-    checkSize("shading-normal", fb.shadingNormal.size(), 3);
-    for (int c = 0; c < 3; ++c)
-      addChannel(header, frame, kShadingNormalNames[c], Imf::FLOAT, fb.shadingNormal.data() + c,
-                 sizeof(float), 3, w);
+    for (int c = 0; c < channels; ++c)
+      addChannel(header, frame, row.exrChannels[size_t(c)].c_str(), type,
+                 data + size_t(c) * valueSize, valueSize, channels, w);
   }
   std::vector<std::string> propertyNames;  // the properties' channel names
   for (const PropertyChannel& p : fb.properties) propertyNames.push_back(p.property.aovName());
@@ -393,18 +359,26 @@ void writeExr(const std::string& path, const Framebuffer& fb, const ExrMetadata&
     addChannel(header, frame, propertyNames[j].c_str(), Imf::UINT, fb.properties[j].values.data(),
                sizeof(uint32_t), 1, w);
   }
-  checkSize("layers", fb.layerDepth.size(), size_t(fb.layers));
+  // Layered hits (core/engine/layers.h): layer k (0-based, nearest first) is the OpenEXR layer
+  // "hit<k>" with a channel per layered row of the AOV table: hit0.Z hit0.T hit0.primID
+  // hit0.geomID hit1.Z ..., each of its row's type, its miss value past the last surface.
   const int flatLayers = options.layersInDeepFile ? 0 : fb.layers;
+  for (const AovRow& row : aovTable()) {
+    if (!row.layered()) continue;
+    const bool f = row.layerF32 != nullptr;
+    checkSize("layers", f ? layerFloatPixels(fb, row).size() : layerUintPixels(fb, row).size(),
+              size_t(fb.layers));
+  }
   for (int k = 0; k < flatLayers; ++k) {
     const size_t at = size_t(k) * n;
-    addChannel(header, frame, layerChannelName(k, kLayerZ).c_str(), Imf::FLOAT,
-               fb.layerDepth.data() + at, sizeof(float), 1, w);
-    addChannel(header, frame, layerChannelName(k, kLayerT).c_str(), Imf::FLOAT,
-               fb.layerDistance.data() + at, sizeof(float), 1, w);
-    addChannel(header, frame, layerChannelName(k, kLayerPrimId).c_str(), Imf::UINT,
-               fb.layerPrimId.data() + at, sizeof(uint32_t), 1, w);
-    addChannel(header, frame, layerChannelName(k, kLayerGeomId).c_str(), Imf::UINT,
-               fb.layerGeomId.data() + at, sizeof(uint32_t), 1, w);
+    for (const AovRow& row : aovTable()) {
+      if (row.layerF32)
+        addChannel(header, frame, layerChannelName(k, row).c_str(), Imf::FLOAT,
+                   layerFloatPixels(fb, row).data() + at, sizeof(float), 1, w);
+      else if (row.layerU32)
+        addChannel(header, frame, layerChannelName(k, row).c_str(), Imf::UINT,
+                   layerUintPixels(fb, row).data() + at, sizeof(uint32_t), 1, w);
+    }
   }
   if (header.channels().begin() == header.channels().end())
     throw Error(cat("cannot write '", path, "': the framebuffer holds no AOV"));
@@ -427,28 +401,20 @@ Framebuffer readExr(const std::string& path, ExrMetadata* meta) {
 
     const Imf::ChannelList& channels = header.channels();
     auto present = [&](const char* name) { return channels.findChannel(name) != nullptr; };
-    auto anyPresent = [&](const char* const* names, int count) {
-      for (int i = 0; i < count; ++i)
-        if (present(names[i])) return true;
-      return false;
-    };
     AovMask mask = 0;
-    if (anyPresent(kColorNames, 4)) mask |= kAovColor;
-    if (present("Z")) mask |= kAovDepth;
-    if (present("T")) mask |= kAovDistance;
-    if (anyPresent(kNormalNames, 3)) mask |= kAovNormal;
-    if (anyPresent(kPositionNames, 3)) mask |= kAovPosition;
-    if (present("primID")) mask |= kAovPrimId;
-    if (present("geomID")) mask |= kAovGeomId;
-    if (anyPresent(kShadingNormalNames, 3)) mask |= kAovShadingNormal;
+    for (const AovRow& row : aovTable())
+      for (const std::string& name : row.exrChannels)
+        if (present(name.c_str())) mask |= row.bit;
     AovSet set(mask);
     set.properties = propertyChannelsOf(channels);
-    while (set.layers < kMaxLayers && present(layerChannelName(set.layers, kLayerZ).c_str()))
+    // Layer k is there when the first layered row's channel of it is (hit<k>.Z).
+    const AovRow& firstLayered = *std::find_if(aovTable().begin(), aovTable().end(),
+                                               [](const AovRow& r) { return r.layered(); });
+    while (set.layers < kMaxLayers && present(layerChannelName(set.layers, firstLayered).c_str()))
       ++set.layers;
     if (set.empty())
       throw Error(
-          "no aperture channels (R G B A, Z, T, N.*, P.*, primID, geomID, Ns.*, face.*, "
-          "vertex.*, hit0.Z ...)");
+          cat("no aperture channels (", exrChannelSummary(), ", face.*, vertex.*, hit0.Z ...)"));
 
     Framebuffer fb(width, height, set);
     Imf::FrameBuffer frame;
@@ -458,42 +424,34 @@ Framebuffer readExr(const std::string& path, ExrMetadata* meta) {
       frame.insert(
           name, Imf::Slice::Make(type, data, window, xStride, xStride * size_t(width), 1, 1, fill));
     };
-    if (mask & kAovColor)
-      for (int c = 0; c < 4; ++c)
-        insert(kColorNames[c], Imf::FLOAT, fb.rgba.data() + c, sizeof(float), 4,
-               c == 3 ? 1.0 : 0.0);
-    if (mask & kAovDepth) insert("Z", Imf::FLOAT, fb.depth.data(), sizeof(float), 1, 0.0);
-    if (mask & kAovDistance) insert("T", Imf::FLOAT, fb.distance.data(), sizeof(float), 1, 0.0);
-    if (mask & kAovNormal)
-      for (int c = 0; c < 3; ++c)
-        insert(kNormalNames[c], Imf::FLOAT, fb.normal.data() + c, sizeof(float), 3, 0.0);
-    if (mask & kAovPosition)
-      for (int c = 0; c < 3; ++c)
-        insert(kPositionNames[c], Imf::FLOAT, fb.position.data() + c, sizeof(float), 3, 0.0);
-    if (mask & kAovPrimId)
-      insert("primID", Imf::UINT, fb.primId.data(), sizeof(uint32_t), 1, double(kInvalidId));
-    if (mask & kAovGeomId)
-      insert("geomID", Imf::UINT, fb.geomId.data(), sizeof(uint32_t), 1, double(kInvalidId));
-    if (mask & kAovShadingNormal)
-      for (int c = 0; c < 3; ++c)
-        insert(kShadingNormalNames[c], Imf::FLOAT, fb.shadingNormal.data() + c, sizeof(float), 3,
-               0.0);
+    for (const AovRow& row : aovTable()) {
+      if ((mask & row.bit) == 0) continue;
+      const int components = row.channels();
+      for (int c = 0; c < components; ++c) {
+        const char* name = row.exrChannels[size_t(c)].c_str();
+        if (row.isFloat())
+          insert(name, Imf::FLOAT, floatPixels(fb, row).data() + c, sizeof(float), components,
+                 row.fillOfAbsent(c));
+        else
+          insert(name, Imf::UINT, uintPixels(fb, row).data() + c, sizeof(uint32_t), components,
+                 row.fillOfAbsent(c));
+      }
+    }
     std::vector<std::string> propertyNames;  // the properties' channel names
     for (const PropertyChannel& p : fb.properties) propertyNames.push_back(p.property.aovName());
     for (size_t j = 0; j < fb.properties.size(); ++j)
       insert(propertyNames[j].c_str(), Imf::UINT, fb.properties[j].values.data(), sizeof(uint32_t),
              1, double(kInvalidId));
-    const double inf = std::numeric_limits<double>::infinity();
     for (int k = 0; k < set.layers; ++k) {
       const size_t at = size_t(k) * fb.pixelCount();
-      insert(layerChannelName(k, kLayerZ).c_str(), Imf::FLOAT, fb.layerDepth.data() + at,
-             sizeof(float), 1, inf);
-      insert(layerChannelName(k, kLayerT).c_str(), Imf::FLOAT, fb.layerDistance.data() + at,
-             sizeof(float), 1, inf);
-      insert(layerChannelName(k, kLayerPrimId).c_str(), Imf::UINT, fb.layerPrimId.data() + at,
-             sizeof(uint32_t), 1, double(kInvalidId));
-      insert(layerChannelName(k, kLayerGeomId).c_str(), Imf::UINT, fb.layerGeomId.data() + at,
-             sizeof(uint32_t), 1, double(kInvalidId));
+      for (const AovRow& row : aovTable()) {
+        if (row.layerF32)
+          insert(layerChannelName(k, row).c_str(), Imf::FLOAT, (fb.*row.layerF32).data() + at,
+                 sizeof(float), 1, row.miss);
+        else if (row.layerU32)
+          insert(layerChannelName(k, row).c_str(), Imf::UINT, (fb.*row.layerU32).data() + at,
+                 sizeof(uint32_t), 1, row.miss);
+      }
     }
     file.setFrameBuffer(frame);
     file.readPixels(window.min.y, window.max.y);
@@ -536,20 +494,13 @@ bool isCompleteExr(const std::string& path) {
 std::vector<std::string> exrChannelNames(const AovSet& set, const ExrOptions& options) {
   const AovMask aovs = set.mask;
   std::vector<std::string> names;
-  if (aovs & kAovColor) names.insert(names.end(), kColorNames, kColorNames + 4);
-  if (aovs & kAovDepth) names.push_back("Z");
-  if (aovs & kAovDistance) names.push_back("T");
-  if (aovs & kAovNormal) names.insert(names.end(), kNormalNames, kNormalNames + 3);
-  if (aovs & kAovPosition) names.insert(names.end(), kPositionNames, kPositionNames + 3);
-  if (aovs & kAovPrimId) names.push_back("primID");
-  if (aovs & kAovGeomId) names.push_back("geomID");
-  if (aovs & kAovShadingNormal)
-    names.insert(names.end(), kShadingNormalNames, kShadingNormalNames + 3);
+  for (const AovRow& row : aovTable())
+    if (aovs & row.bit) names.insert(names.end(), row.exrChannels.begin(), row.exrChannels.end());
   for (const PropertyAov& p : set.properties) names.push_back(p.aovName());
   const int flatLayers = options.layersInDeepFile ? 0 : set.layers;
   for (int k = 0; k < flatLayers; ++k)
-    for (LayerChannel c : {kLayerZ, kLayerT, kLayerPrimId, kLayerGeomId})
-      names.push_back(layerChannelName(k, c));
+    for (const AovRow& row : aovTable())
+      if (row.layered()) names.push_back(layerChannelName(k, row));
   return names;
 }
 

@@ -9,6 +9,7 @@
 #include <iterator>
 #include <limits>
 
+#include "core/aov/aov_table.h"
 #include "core/io/atomic_file.h"
 #include "core/io/image_codec.h"
 #include "core/io/npy.h"
@@ -24,21 +25,22 @@ struct FormatEntry {
   DatasetFormat format;
   const char* name;
   const char* takes;  ///< what the format holds, for refusals
+  bool listAovs;      ///< follow `takes` with the AOVs of the table it holds ("depth, distance")
   std::vector<std::string> extensions;
   bool imageCodec;  ///< encoded by the image codec (encodedByImageCodec)
 };
 
 const std::vector<FormatEntry>& formatTable() {
   static const std::vector<FormatEntry> table = {
-      {DatasetFormat::Png16, "16-bit PNG", "one float channel: depth, distance", {".png"}, true},
-      {DatasetFormat::Pfm,
-       "PFM",
-       "float AOVs of 1 or 3 channels: depth, distance, normal, "
-       "position, shading-normal",
-       {".pfm"},
-       false},
-      {DatasetFormat::Npy, "NumPy .npy", "every AOV (float32 or uint32)", {".npy"}, false},
-      {DatasetFormat::Tiff, "float TIFF", "every AOV (float32 or uint32)", {".tif", ".tiff"}, true},
+      {DatasetFormat::Png16, "16-bit PNG", "one float channel: ", true, {".png"}, true},
+      {DatasetFormat::Pfm, "PFM", "float AOVs of 1 or 3 channels: ", true, {".pfm"}, false},
+      {DatasetFormat::Npy, "NumPy .npy", "every AOV (float32 or uint32)", false, {".npy"}, false},
+      {DatasetFormat::Tiff,
+       "float TIFF",
+       "every AOV (float32 or uint32)",
+       false,
+       {".tif", ".tiff"},
+       true},
   };
   return table;
 }
@@ -280,8 +282,10 @@ const std::vector<std::string>& datasetExtensions() {
 void checkDatasetAov(DatasetFormat format, const std::string& aovName, int channels, bool isFloat) {
   if (formatHolds(format, channels, isFloat)) return;
   const FormatEntry& e = entryOf(format);
+  const std::string aovs =
+      e.listAovs ? aovNamesWhere([&](int c, bool f) { return formatHolds(format, c, f); }) : "";
   throw Error(cat("AOV '", aovName, "' (", layoutText(channels, isFloat), ") cannot be written as ",
-                  e.name, ", which takes ", e.takes, "; write it as .npy, .tif or .exr"));
+                  e.name, ", which takes ", e.takes, aovs, "; write it as .npy, .tif or .exr"));
 }
 
 void checkDatasetAov(DatasetFormat format, const std::string& aovName) {

@@ -7,8 +7,10 @@
 #include <limits>
 #include <vector>
 
+#include "core/aov/aov_table.h"
 #include "core/io/atomic_file.h"
 #include "core/io/image_codec.h"
+#include "core/mesh/mesh.h"
 #include "core/util/error.h"
 #include "core/util/sampling.h"
 
@@ -46,26 +48,26 @@ std::vector<uint8_t> backgroundPixels(size_t n) {
   return rgb;
 }
 
-PreviewImage colorPreview(const Framebuffer& fb) {
+PreviewImage colorPreview(const Framebuffer& fb, const std::vector<float>& rgba) {
   const size_t n = fb.pixelCount();
   PreviewImage out{std::vector<uint8_t>(3 * n), "color over the background"};
   double background[3];
   for (int c = 0; c < 3; ++c) background[c] = srgbDecode(kPreviewBackground[size_t(c)] / 255.0);
   for (size_t i = 0; i < n; ++i) {
-    const double uncovered = 1.0 - std::clamp(double(fb.rgba[4 * i + 3]), 0.0, 1.0);
+    const double uncovered = 1.0 - std::clamp(double(rgba[4 * i + 3]), 0.0, 1.0);
     for (int c = 0; c < 3; ++c)
       out.rgb[3 * i + size_t(c)] =
-          toByte(srgbEncode(fb.rgba[4 * i + size_t(c)] + uncovered * background[c]));
+          toByte(srgbEncode(rgba[4 * i + size_t(c)] + uncovered * background[c]));
   }
   return out;
 }
 
 /// options.depthRange, else the nearest and farthest finite depth of the image (NaN, NaN when
 /// it has none).
-glm::dvec2 depthRangeOf(const Framebuffer& fb, const PreviewOptions& options) {
+glm::dvec2 depthRangeOf(const std::vector<float>& depth, const PreviewOptions& options) {
   if (options.depthRange) return *options.depthRange;
   float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-  for (float z : fb.depth)
+  for (float z : depth)
     if (std::isfinite(z)) lo = std::min(lo, z), hi = std::max(hi, z);
   if (lo > hi) return glm::dvec2(std::numeric_limits<double>::quiet_NaN());
   return {lo, hi};
@@ -78,16 +80,19 @@ std::string shortNumber(double x) {
   return text;
 }
 
-PreviewImage depthPreview(const Framebuffer& fb, const PreviewOptions& options) {
-  const glm::dvec2 range = depthRangeOf(fb, options);
+/// A grey preview of one float channel ("depth (Z): ..."), misses (non-finite) the background.
+PreviewImage greyPreview(const AovRow& row, const std::vector<float>& depth,
+                         const PreviewOptions& options) {
+  const glm::dvec2 range = depthRangeOf(depth, options);
   const double nearZ = range.x, farZ = range.y;
-  PreviewImage out{backgroundPixels(fb.pixelCount()),
+  const std::string what = cat(row.name, " (", row.exrChannels.front(), "): ");
+  PreviewImage out{backgroundPixels(depth.size()),
                    std::isnan(nearZ)
-                       ? std::string("depth (Z): no finite depth")
-                       : cat("depth (Z): ", shortNumber(nearZ), " white to ", shortNumber(farZ),
-                             " black (", options.depthRange ? "fixed" : "this image's", " range)")};
-  for (size_t i = 0; i < fb.pixelCount(); ++i) {
-    const double z = fb.depth[i];
+                       ? cat(what, "no finite ", row.name)
+                       : cat(what, shortNumber(nearZ), " white to ", shortNumber(farZ), " black (",
+                             options.depthRange ? "fixed" : "this image's", " range)")};
+  for (size_t i = 0; i < depth.size(); ++i) {
+    const double z = depth[i];
     if (!std::isfinite(z)) continue;
     // Near is bright, far dark, as a display value (not sRGB-encoded); constant depth is white.
     const uint8_t g = toByte(farZ > nearZ ? (farZ - z) / (farZ - nearZ) : 1.0);
@@ -96,10 +101,10 @@ PreviewImage depthPreview(const Framebuffer& fb, const PreviewOptions& options) 
   return out;
 }
 
-PreviewImage normalPreview(const Framebuffer& fb) {
-  PreviewImage out{backgroundPixels(fb.pixelCount()), "normal (N * 0.5 + 0.5)"};
-  for (size_t i = 0; i < fb.pixelCount(); ++i) {
-    const float* n = &fb.normal[3 * i];
+PreviewImage normalPreview(const AovRow& row, const std::vector<float>& normal) {
+  PreviewImage out{backgroundPixels(normal.size() / 3), cat(row.name, " (N * 0.5 + 0.5)")};
+  for (size_t i = 0; i < normal.size() / 3; ++i) {
+    const float* n = &normal[3 * i];
     if (n[0] == 0.0f && n[1] == 0.0f && n[2] == 0.0f) continue;  // a miss
     setPixel(out.rgb, i,
              {toByte(n[0] * 0.5 + 0.5), toByte(n[1] * 0.5 + 0.5), toByte(n[2] * 0.5 + 0.5)});
@@ -127,26 +132,26 @@ PreviewImage idPreview(const std::vector<uint32_t>& ids, const char* name) {
 PreviewImage previewPixels(const Framebuffer& fb, const PreviewOptions& options,
                            const std::string& path) {
   const size_t n = fb.pixelCount();
-  switch (previewAov(fb.aovs)) {
-    case kAovColor:
-      if (fb.rgba.size() == 4 * n) return colorPreview(fb);
-      break;
-    case kAovDepth:
-      if (fb.depth.size() == n) return depthPreview(fb, options);
-      break;
-    case kAovNormal:
-      if (fb.normal.size() == 3 * n) return normalPreview(fb);
-      break;
-    case kAovPrimId:
-      if (fb.primId.size() == n) return idPreview(fb.primId, "primID");
-      break;
-    case kAovGeomId:
-      if (fb.geomId.size() == n) return idPreview(fb.geomId, "geomID");
-      break;
-    default:
-      throw Error(cat("cannot write preview '", path, "': none of the AOVs ",
-                      aovListString(fb.aovs), " can be previewed (",
-                      aovListString(kPreviewableAovs), " can)"));
+  const AovMask shown = previewAov(fb.aovs);
+  const AovRow* row = nullptr;
+  for (const AovRow& r : aovTable())
+    if (r.bit == shown && shown != 0) row = &r;
+  if (!row)
+    throw Error(cat("cannot write preview '", path, "': none of the AOVs ", aovListString(fb.aovs),
+                    " can be previewed (", aovListString(previewableAovMask()), " can)"));
+  if (valueCount(fb, *row) == size_t(row->channels()) * n) {
+    switch (row->preview) {
+      case PreviewRule::Color:
+        return colorPreview(fb, floatPixels(fb, *row));
+      case PreviewRule::Grey:
+        return greyPreview(*row, floatPixels(fb, *row), options);
+      case PreviewRule::Normal:
+        return normalPreview(*row, floatPixels(fb, *row));
+      case PreviewRule::HashedId:
+        return idPreview(uintPixels(fb, *row), row->exrChannels.front().c_str());
+      case PreviewRule::None:
+        break;
+    }
   }
   throw Error(cat("cannot write preview '", path, "': the framebuffer's buffers are incomplete"));
 }
@@ -165,14 +170,53 @@ std::vector<unsigned char> encodeRgb8(const std::string& path, int width, int he
 
 }  // namespace
 
+AovMask previewableAovMask() {
+  AovMask mask = 0;
+  for (const AovRow& row : aovTable())
+    if (row.preview != PreviewRule::None) mask |= row.bit;
+  return mask;
+}
+
 Aov previewAov(AovMask aovs) {
-  static constexpr Aov kOrder[] = {kAovColor, kAovDepth, kAovNormal, kAovPrimId, kAovGeomId};
-  for (const Aov a : kOrder)
-    if ((aovs & AovMask(a)) != 0) return a;
+  for (const AovRow& row : aovTable())
+    if (row.preview != PreviewRule::None && (aovs & row.bit) != 0) return Aov(row.bit);
   return Aov(0);
 }
 
+std::string previewableAovText() {
+  std::vector<std::string> names;
+  for (const AovRow& row : aovTable())
+    if (row.preview != PreviewRule::None) names.push_back(row.name);
+  std::string text = names.empty() ? "" : names.front();
+  for (size_t k = 1; k < names.size(); ++k)
+    text += (k == 1 ? ", else " : k + 1 == names.size() ? " or " : ", ") + names[k];
+  return text;
+}
+
+const std::vector<PreviewFormat>& previewFormats() {
+  static const std::vector<PreviewFormat> formats = {
+      {"PNG", {".png"}}, {"JPEG", {".jpg", ".jpeg"}}, {"TIFF", {".tif", ".tiff"}},
+      {"BMP", {".bmp"}}, {"Targa", {".tga"}},         {"PPM", {".ppm"}},
+  };
+  return formats;
+}
+
+const std::vector<std::string>& previewExtensions() {
+  static const std::vector<std::string> extensions = [] {
+    std::vector<std::string> all;
+    for (const PreviewFormat& f : previewFormats())
+      all.insert(all.end(), f.extensions.begin(), f.extensions.end());
+    return all;
+  }();
+  return extensions;
+}
+
 void writePreview(const std::string& path, const Framebuffer& fb, const PreviewOptions& options) {
+  const std::string extension = lowerExtension(path);
+  const std::vector<std::string>& known = previewExtensions();
+  if (std::find(known.begin(), known.end(), extension) == known.end())
+    throw Error(cat("cannot write preview '", path, "': unknown preview extension '", extension,
+                    "' (supported: ", join(known, " "), ")"));
   if (fb.width <= 0 || fb.height <= 0)
     throw Error(cat("cannot write preview '", path, "': empty framebuffer"));
   const PreviewImage image = previewPixels(fb, options, path);

@@ -5,6 +5,7 @@
 #include <glm/glm.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/aov/framebuffer.h"
 
@@ -22,20 +23,34 @@ struct PreviewOptions {
 /// composited over): a dark slate blue, as sRGB bytes. No ID colour and no grey equals it.
 inline constexpr std::array<uint8_t, 3> kPreviewBackground = {38, 50, 72};
 
-/// The AOVs a preview can show, in order of preference: color, depth, normal, primID, geomID.
-inline constexpr AovMask kPreviewableAovs =
-    kAovColor | kAovDepth | kAovNormal | kAovPrimId | kAovGeomId;
+/// The AOVs a preview can show: the rows of the AOV table with a PreviewRule
+/// (core/aov/aov_table.h), in order of preference: color, depth, normal, primID, geomID.
+AovMask previewableAovMask();
 
-/// The requested AOVs a preview could show (`aovs & kPreviewableAovs`); 0 means a preview of
-/// such a framebuffer cannot be written, which callers check before rendering.
-inline AovMask previewableAovs(AovMask aovs) { return aovs & kPreviewableAovs; }
+/// The requested AOVs a preview could show (`aovs & previewableAovMask()`); 0 means a preview
+/// of such a framebuffer cannot be written, which callers check before rendering.
+inline AovMask previewableAovs(AovMask aovs) { return aovs & previewableAovMask(); }
 
-/// The one AOV a preview of a framebuffer with `aovs` shows: the first previewable AOV in the
-/// order of kPreviewableAovs, or 0 when there is none.
+/// The one AOV a preview of a framebuffer with `aovs` shows: the first previewable AOV in table
+/// order, or 0 when there is none.
 Aov previewAov(AovMask aovs);
 
-/// Writes an opaque 8-bit RGB preview of `fb` to `path` (PNG or any 8-bit format OpenImageIO
-/// writes, chosen by the extension), atomically. Throws Error naming `path`. It shows
+/// "color, else depth, normal, primid or geomid": the previewable AOVs in order, for help texts.
+std::string previewableAovText();
+
+/// A format a preview is written in (by OpenImageIO), picked by the path's extension.
+struct PreviewFormat {
+  const char* name;                     ///< "PNG", "JPEG", ...
+  std::vector<std::string> extensions;  ///< lower case, with the dot
+};
+/// The preview formats: PNG, JPEG, TIFF, BMP, Targa, PPM. The one list the output checks
+/// (apps/outputs.h), writePreview, the help texts and the README's list come from.
+const std::vector<PreviewFormat>& previewFormats();
+/// Every extension of previewFormats(), in order: .png .jpg .jpeg .tif .tiff .bmp .tga .ppm.
+const std::vector<std::string>& previewExtensions();
+
+/// Writes an opaque 8-bit RGB preview of `fb` to `path` (the format of previewFormats() its
+/// extension names), atomically. Throws Error naming `path`. It shows
 /// previewAov(fb.aovs):
 ///  - color: R G B composited over kPreviewBackground by coverage A (the color AOV is
 ///    premultiplied: c + (1 − A)·background, in linear light), clamped, sRGB-encoded;

@@ -19,9 +19,10 @@ struct PyCamera {
   std::string name;
 };
 
-void bindErrors(nb::module_& m);   ///< aperture::Error -> ValueError, file errors -> OSError
-void bindCamera(nb::module_& m);   ///< Camera, load_cameras
-void bindScene(nb::module_& m);    ///< Scene, Scene.render
-void bindImageIo(nb::module_& m);  ///< read_exr, write, read
+void bindErrors(nb::module_& m);    ///< aperture::Error -> ValueError, file errors -> OSError
+void bindCamera(nb::module_& m);    ///< Camera, load_cameras
+void bindScene(nb::module_& m);     ///< Scene, Scene.render
+void bindImageIo(nb::module_& m);   ///< read_exr, write, read
+void bindAovTable(nb::module_& m);  ///< _aov_table, _AovRegistration (for the tests)
 
 }  // namespace aperture::python

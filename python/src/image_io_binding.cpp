@@ -9,6 +9,7 @@
 
 #include "aov_arrays.h"
 #include "bindings.h"
+#include "core/aov/aov_table.h"
 #include "core/exr/exr.h"
 #include "core/io/dataset_image.h"
 #include "core/util/error.h"
@@ -20,10 +21,12 @@ namespace {
 
 using AnyArray = nb::ndarray<nb::c_contig, nb::device::cpu>;
 
-/// The AOV an array most likely holds, for messages and format checks, by its layout.
+/// The AOV an array most likely holds, for messages and format checks, by its layout: the
+/// first row of the AOV table with it (depth, normal, color, primid), else "depth".
 std::string aovNameOfLayout(int channels, bool isFloat) {
-  if (!isFloat) return "primid";
-  return channels == 4 ? "color" : channels == 3 ? "normal" : "depth";
+  for (const AovRow& row : aovTable())
+    if (row.channels() == channels && row.isFloat() == isFloat) return row.name;
+  return isFloat ? "depth" : "primid";
 }
 
 size_t writeArray(const std::string& path, const AnyArray& array, double depthScale,

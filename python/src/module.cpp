@@ -10,4 +10,5 @@ NB_MODULE(_aperture, m) {
   aperture::python::bindCamera(m);
   aperture::python::bindScene(m);
   aperture::python::bindImageIo(m);
+  aperture::python::bindAovTable(m);
 }

@@ -6,6 +6,7 @@ COLMAP track summary, the GIL, and bad inputs leave no output."""
 from __future__ import annotations
 
 import re
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -148,6 +149,12 @@ def test_the_command_line_writes_what_python_returns(cli: Path, full_bunny: Path
     done = run_cli(cli, "visibility", "--mesh", str(full_bunny), "--cameras", str(model),
                    "--out", str(out), "--out", str(tmp_path / "vis.ply"), "--quiet")
     assert done.returncode == 0, done.stderr
+    # The zip (core/npz.cpp): every member stored, as np.savez writes them, and its
+    # CRC-32 right by Python's zipfile.
+    with zipfile.ZipFile(out) as z:
+        assert z.testzip() is None
+        assert {(i.filename, i.compress_type) for i in z.infolist()} == {
+            (f"{name}.npy", zipfile.ZIP_STORED) for name in np.load(out).files}
     archive = np.load(out)
     vis = aperture.Scene(full_bunny).face_visibility(aperture.load_cameras(model))
     assert set(archive.files) == set(vis) | {"camera_names"}

@@ -256,6 +256,32 @@ TEST(Preview, ErrorsNameThePath) {
   EXPECT_EQ(fileCount(dir), 0u);
 }
 
+// The one list of preview formats: the writer refuses what it lacks, and the README's and the
+// batch docs' lists are it.
+TEST(Preview, FormatsAreOneList) {
+  const std::vector<std::string>& extensions = previewExtensions();
+  EXPECT_EQ(extensions, (std::vector<std::string>{".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp",
+                                                  ".tga", ".ppm"}));
+  std::string list;
+  for (const std::string& e : extensions) list += (list.empty() ? "" : " ") + e;
+  for (const char* file : {"/../README.md", "/../docs/batch.md"}) {
+    const std::string docs = test::readFile(std::string(APERTURE_TESTS_DIR) + file);
+    EXPECT_NE(docs.find("`" + list + "`"), std::string::npos) << file << " lacks `" << list << "`";
+  }
+  const std::string batch = test::readFile(std::string(APERTURE_TESTS_DIR) + "/../docs/batch.md");
+  EXPECT_NE(batch.find("showing " + previewableAovText()), std::string::npos)
+      << "docs/batch.md lacks 'showing " << previewableAovText() << "'";
+  EXPECT_EQ(previewableAovText(), "color, else depth, normal, primid or geomid");
+  const std::string dir = test::scratchDir();
+  for (const char* bad : {"/p.gif", "/p.exr", "/p"}) {
+    const std::string error =
+        test::errorOf([&] { writePreview(dir + bad, Framebuffer(2, 2, kAovColor)); });
+    EXPECT_NE(error.find("unknown preview extension"), std::string::npos) << bad << ": " << error;
+    EXPECT_NE(error.find(list), std::string::npos) << error;
+  }
+  EXPECT_EQ(fileCount(dir), 0u);
+}
+
 Framebuffer colorRamp(int w, int h) {
   Framebuffer fb(w, h, kAovColor | kAovPrimId | kAovDepth);
   for (size_t i = 0; i < fb.pixelCount(); ++i) {

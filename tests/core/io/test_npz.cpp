@@ -2,9 +2,11 @@
 // here independently of core/io/npz.cpp from the zip format (PKWARE's APPNOTE): signatures,
 // sizes, offsets, the zip64 fields, and a CRC-32 computed bit by bit (the reflected
 // polynomial 0xEDB88320, no table, no zlib). When a Python with NumPy is found (the project's
-// .venv, or APERTURE_TEST_PYTHON), np.load reads the archives too.
+// .venv, or APERTURE_TEST_PYTHON), np.load reads the archives too, and readNpz reads what
+// np.savez writes, zip64 records included, and refuses np.savez_compressed's by name.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -65,6 +67,7 @@ struct ParsedMember {
 struct ParsedArchive {
   std::vector<ParsedMember> members;
   bool zip64End = false;
+  uint64_t entries = 0;  ///< as the end records give it
 };
 
 /// Reads a zip64 extra field (id 1) of `extra` into the fields that hold 0xFFFFFFFF.
@@ -108,16 +111,21 @@ ParsedArchive parseArchive(const std::string& zip) {
     EXPECT_EQ(record, end - 20 - 56);
     EXPECT_EQ(le(zip, record, 4), 0x06064b50u);
     EXPECT_EQ(le(zip, record + 4, 8), 44u) << "zip64 end record size";
-    EXPECT_EQ(entries, 0xffffu);
-    EXPECT_EQ(cdSize, 0xffffffffu);
-    EXPECT_EQ(cdOffset, 0xffffffffu);
-    entries = le(zip, record + 32, 8);
-    EXPECT_EQ(le(zip, record + 24, 8), entries);
-    cdSize = le(zip, record + 40, 8);
-    cdOffset = le(zip, record + 48, 8);
+    // A 16- or 32-bit field of the end record holds its value or, where that does not fit,
+    // the marker 0xFFFF(FFFF); the zip64 end record holds them all.
+    const uint64_t entries64 = le(zip, record + 32, 8), cdSize64 = le(zip, record + 40, 8),
+                   cdOffset64 = le(zip, record + 48, 8);
+    EXPECT_EQ(le(zip, record + 24, 8), entries64);
+    EXPECT_TRUE(entries == entries64 || entries == 0xffffu) << entries;
+    EXPECT_TRUE(cdSize == cdSize64 || cdSize == 0xffffffffu) << cdSize;
+    EXPECT_TRUE(cdOffset == cdOffset64 || cdOffset == 0xffffffffu) << cdOffset;
+    entries = entries64;
+    cdSize = cdSize64;
+    cdOffset = cdOffset64;
     cdEnd = size_t(record);
   }
   EXPECT_EQ(cdOffset + cdSize, cdEnd) << "the central directory ends where the end records start";
+  out.entries = entries;
 
   size_t local = 0, central = size_t(cdOffset);
   for (uint64_t k = 0; k < entries; ++k) {
@@ -126,6 +134,9 @@ ParsedArchive parseArchive(const std::string& zip) {
     EXPECT_EQ(le(zip, central, 4), 0x02014b50u);
     const uint64_t flags = le(zip, central + 8, 2);
     EXPECT_EQ(le(zip, central + 10, 2), 0u) << "stored";
+    const uint64_t timeAndDate = le(zip, central + 12, 4);
+    EXPECT_EQ(timeAndDate & 0xffffu, 0u) << "DOS time 00:00:00";
+    EXPECT_EQ(timeAndDate >> 16, (1u << 5) | 1u) << "DOS date 1980-01-01";
     m.crc = uint32_t(le(zip, central + 16, 4));
     uint64_t compressed = le(zip, central + 20, 4), size = le(zip, central + 24, 4);
     const size_t nameLen = le(zip, central + 28, 2), extraLen = le(zip, central + 30, 2),
@@ -145,6 +156,7 @@ ParsedArchive parseArchive(const std::string& zip) {
     EXPECT_EQ(le(zip, local, 4), 0x04034b50u);
     EXPECT_EQ(le(zip, local + 6, 2), flags);
     EXPECT_EQ(le(zip, local + 8, 2), 0u);
+    EXPECT_EQ(le(zip, local + 10, 4), timeAndDate);
     EXPECT_EQ(le(zip, local + 14, 4), m.crc);
     uint64_t localCompressed = le(zip, local + 18, 4), localSize = le(zip, local + 22, 4);
     const size_t localName = le(zip, local + 26, 2), localExtra = le(zip, local + 28, 2);
@@ -336,6 +348,56 @@ TEST(NpzArchive, Zip64Forced) {
   expectRoundTrip(path, f);
 }
 
+/// 65536 one-element uint32 arrays "a00000", ... holding their index: one member more than the
+/// end record's 16-bit count holds, so the archive needs the zip64 end record and its locator
+/// without being forced to.
+struct ManyMembers {
+  static constexpr uint32_t kCount = 65536;
+  std::vector<uint32_t> values;
+  std::vector<NpzArray> arrays;
+
+  ManyMembers() : values(kCount) {
+    char name[16];
+    for (uint32_t k = 0; k < kCount; ++k) {
+      values[k] = k;
+      std::snprintf(name, sizeof name, "a%05u", k);
+      arrays.push_back({name, "<u4", {1}, &values[k], 4});
+    }
+  }
+};
+
+TEST(NpzArchive, Zip64EndRecordPastTheMemberCount) {
+  const ManyMembers many;
+  const std::string path = test::scratchDir() + "/many.npz";
+  writeNpz(path, many.arrays);
+  const std::string bytes = test::readFile(path);
+  const ParsedArchive zip = parseArchive(bytes);
+  EXPECT_TRUE(zip.zip64End);
+  EXPECT_EQ(zip.entries, uint64_t(ManyMembers::kCount));
+  EXPECT_EQ(le(bytes, bytes.size() - 22 + 10, 2), 0xffffu) << "the end record's count: the marker";
+  ASSERT_EQ(zip.members.size(), size_t(ManyMembers::kCount));
+  for (uint32_t k : {0u, 1u, 65534u, 65535u}) {
+    EXPECT_EQ(zip.members[k].name, many.arrays[k].name + ".npy");
+    EXPECT_EQ(le(zip.members[k].data, zip.members[k].data.size() - 4, 4), k);
+  }
+  const auto back = readNpz(path);
+  ASSERT_EQ(back.size(), size_t(ManyMembers::kCount));
+  for (uint32_t k = 0; k < ManyMembers::kCount; ++k) {
+    ASSERT_EQ(back[k].first, many.arrays[k].name);
+    ASSERT_EQ(back[k].second.data.size(), 4u);
+    uint32_t v = 0;
+    std::memcpy(&v, back[k].second.data.data(), 4);
+    ASSERT_EQ(v, k);
+  }
+}
+
+TEST(NpzArchive, NoArraysIsTheEndRecordAlone) {
+  const std::string path = test::scratchDir() + "/none.npz";
+  writeNpz(path, {});
+  EXPECT_EQ(test::readFile(path), std::string("PK\x05\x06", 4) + std::string(18, '\0'));
+  EXPECT_TRUE(readNpz(path).empty());
+}
+
 TEST(NpzArchive, SameArraysSameBytes) {
   const Fixture f;
   const std::string dir = test::scratchDir();
@@ -375,7 +437,7 @@ TEST(NpzArchive, RefusalsLeaveNoFile) {
   EXPECT_TRUE(emptyDir(dir));
 }
 
-TEST(NpzArchive, ReadRefusesCorruptAndCompressed) {
+TEST(NpzArchive, ReadRefusesCorruptMembers) {
   const Fixture f;
   const std::string dir = test::scratchDir();
   writeNpz(dir + "/ok.npz", f.arrays);
@@ -392,13 +454,24 @@ TEST(NpzArchive, ReadRefusesCorruptAndCompressed) {
   EXPECT_NE(message.find("face_view_count.npy"), std::string::npos) << message;
   EXPECT_NE(message.find("CRC"), std::string::npos) << message;
 
-  // Method 8 (deflate) in the first central header.
+  // The first central header says deflate (method 8), the second one an unknown method.
   std::string deflated = good;
   const size_t central = size_t(le(good, good.size() - 22 + 16, 4));
   deflated[central + 10] = 8;
   test::writeFile(dir + "/deflate.npz", deflated);
   message = errorOf([&] { readNpz(dir + "/deflate.npz"); });
+  EXPECT_NE(message.find(dir + "/deflate.npz"), std::string::npos) << message;
+  EXPECT_NE(message.find("face_view_count.npy"), std::string::npos) << message;
   EXPECT_NE(message.find("compression method 8"), std::string::npos) << message;
+  std::string unknown = good;
+  const size_t second = central + 46 + zip.members[0].name.size();
+  ASSERT_EQ(le(good, second, 4), 0x02014b50u);
+  unknown[second + 10] = 77;
+  test::writeFile(dir + "/unknown.npz", unknown);
+  message = errorOf([&] { readNpz(dir + "/unknown.npz"); });
+  EXPECT_NE(message.find(dir + "/unknown.npz"), std::string::npos) << message;
+  EXPECT_NE(message.find("matrix.npy"), std::string::npos) << message;
+  EXPECT_NE(message.find("compression method 77"), std::string::npos) << message;
 
   test::writeFile(dir + "/short.npz", good.substr(0, good.size() - 30));
   EXPECT_NE(errorOf([&] { readNpz(dir + "/short.npz"); }).find(dir + "/short.npz"),
@@ -415,42 +488,100 @@ std::string numpyPython() {
   return test::runCommand(test::quote(python) + " -c 'import numpy'") == 0 ? python : "";
 }
 
+/// Runs `script` (written to the scratch directory) with `args`; its exit code, output in `out`.
+int runPython(const std::string& python, const std::string& dir, const std::string& script,
+              const std::vector<std::string>& args, std::string* out) {
+  test::writeFile(dir + "/check.py", script);
+  std::string command = test::quote(python) + " " + test::quote(dir + "/check.py");
+  for (const std::string& a : args) command += " " + test::quote(a);
+  return test::runCommand(command, out);
+}
+
 TEST(NpzNumpy, NpLoadReadsEveryArray) {
   const std::string python = numpyPython();
   if (python.empty())
     GTEST_SKIP() << "no Python with NumPy (.venv beside the project or APERTURE_TEST_PYTHON); "
                     "the byte-level tests above check the layout alone";
   const Fixture f;
+  const ManyMembers many;
   const std::string dir = test::scratchDir();
   writeNpz(dir + "/plain.npz", f.arrays);
   writeNpz(dir + "/zip64.npz", f.arrays, NpzOptions{true});
+  writeNpz(dir + "/many.npz", many.arrays);
   // The expected values are written into the script from the test's own arrays.
-  const std::string script = dir + "/check.py";
-  test::writeFile(script,
-                  "import sys, numpy as np\n"
-                  "for path in sys.argv[1:]:\n"
-                  "    d = np.load(path)\n"
-                  "    assert list(d.keys()) == ['face_view_count', 'matrix', 'empty', "
-                  "'camera_names'], list(d.keys())\n"
-                  "    a = d['face_view_count']\n"
-                  "    assert a.dtype == np.uint32 and a.tolist() == [7, 0, 4000000000], a\n"
-                  "    m = d['matrix']\n"
-                  "    assert m.dtype == np.float64 and m.shape == (2, 2)\n"
-                  "    assert m.tolist() == [[1.5, -2.25], [1e300, -0.0]], m\n"
-                  "    assert np.signbit(m[1, 1])\n"
-                  "    e = d['empty']\n"
-                  "    assert e.dtype == np.int32 and e.shape == (0,)\n"
-                  "    n = d['camera_names']\n"
-                  "    assert n.dtype == np.dtype('<U11'), n.dtype\n"
-                  "    assert n.tolist() == ['cam0', '\\u03a9mega/1.png'], n.tolist()\n"
-                  "print('ok')\n");
   std::string output;
-  const int code =
-      test::runCommand(test::quote(python) + " " + test::quote(script) + " " +
-                           test::quote(dir + "/plain.npz") + " " + test::quote(dir + "/zip64.npz"),
-                       &output);
+  const int code = runPython(
+      python, dir,
+      "import sys, zipfile, numpy as np\n"
+      "for path in sys.argv[1:3]:\n"
+      "    d = np.load(path)\n"
+      "    assert list(d.keys()) == ['face_view_count', 'matrix', 'empty', 'camera_names'], "
+      "list(d.keys())\n"
+      "    a = d['face_view_count']\n"
+      "    assert a.dtype == np.uint32 and a.tolist() == [7, 0, 4000000000], a\n"
+      "    m = d['matrix']\n"
+      "    assert m.dtype == np.float64 and m.shape == (2, 2)\n"
+      "    assert m.tolist() == [[1.5, -2.25], [1e300, -0.0]], m\n"
+      "    assert np.signbit(m[1, 1])\n"
+      "    e = d['empty']\n"
+      "    assert e.dtype == np.int32 and e.shape == (0,)\n"
+      "    n = d['camera_names']\n"
+      "    assert n.dtype == np.dtype('<U11'), n.dtype\n"
+      "    assert n.tolist() == ['cam0', '\\u03a9mega/1.png'], n.tolist()\n"
+      "    assert zipfile.ZipFile(path).testzip() is None\n"
+      "d = np.load(sys.argv[3])\n"
+      "assert len(d.files) == 65536 and d.files[-1] == 'a65535', d.files[-1]\n"
+      "for k in (0, 1, 65534, 65535):\n"
+      "    assert d[f'a{k:05d}'].tolist() == [k], k\n"
+      "assert zipfile.ZipFile(sys.argv[3]).testzip() is None\n"
+      "print('ok')\n",
+      {dir + "/plain.npz", dir + "/zip64.npz", dir + "/many.npz"}, &output);
   EXPECT_EQ(code, 0) << output;
   EXPECT_NE(output.find("ok"), std::string::npos) << output;
+}
+
+/// The bytes of `path` hold the zip64 end of central directory record's signature.
+bool hasZip64EndRecord(const std::string& path) {
+  return test::readFile(path).find(std::string("PK\x06\x06", 4)) != std::string::npos;
+}
+
+TEST(NpzNumpy, ReadsWhatNumpyWrites) {
+  const std::string python = numpyPython();
+  if (python.empty()) GTEST_SKIP() << "no Python with NumPy (.venv or APERTURE_TEST_PYTHON)";
+  const Fixture f;
+  const std::string dir = test::scratchDir();
+  // The fixture's arrays as np.savez (stored members; NumPy gives every local header zip64
+  // sizes), np.savez_compressed (deflated: refused), and np.savez with zipfile's zip64 threshold
+  // lowered to 1 byte: the zip64 extra fields and end records NumPy writes for a member
+  // past 4 GiB, on a small file.
+  std::string output;
+  const int code =
+      runPython(python, dir,
+                "import sys, zipfile, numpy as np\n"
+                "arrays = dict(face_view_count=np.array([7, 0, 4000000000], np.uint32),\n"
+                "              matrix=np.array([[1.5, -2.25], [1e300, -0.0]]),\n"
+                "              empty=np.zeros(0, np.int32),\n"
+                "              camera_names=np.array(['cam0', '\\u03a9mega/1.png']))\n"
+                "np.savez(sys.argv[1], **arrays)\n"
+                "np.savez_compressed(sys.argv[2], **arrays)\n"
+                "zipfile.ZIP64_LIMIT = 1\n"
+                "np.savez(sys.argv[3], **arrays)\n"
+                "z = zipfile.ZipFile(sys.argv[2])\n"
+                "assert all(i.compress_type == zipfile.ZIP_DEFLATED for i in z.infolist())\n"
+                "print('ok')\n",
+                {dir + "/savez.npz", dir + "/compressed.npz", dir + "/zip64.npz"}, &output);
+  ASSERT_EQ(code, 0) << output;
+  EXPECT_FALSE(hasZip64EndRecord(dir + "/savez.npz"));
+  EXPECT_TRUE(hasZip64EndRecord(dir + "/zip64.npz"));
+  for (const char* name : {"savez.npz", "zip64.npz"}) {
+    SCOPED_TRACE(name);
+    expectRoundTrip(dir + "/" + name, f);
+  }
+  // Deflated members are refused, naming the file, the member and the method.
+  const std::string message = errorOf([&] { readNpz(dir + "/compressed.npz"); });
+  EXPECT_NE(message.find(dir + "/compressed.npz"), std::string::npos) << message;
+  EXPECT_NE(message.find("face_view_count.npy"), std::string::npos) << message;
+  EXPECT_NE(message.find("compression method 8"), std::string::npos) << message;
 }
 
 }  // namespace
