@@ -15,7 +15,8 @@ set(APERTURE_PARTS
   "cameras/schema: core/util"                        # camera parameters, their specs, conventions
   "cameras/lenses: core/util"                        # calibrated lens models and their inverse
   "cameras/files: cameras/lenses core/io"            # COLMAP, NeRF, OpenCV camera files; points
-  "cameras/models: cameras/schema cameras/lenses core/engine"  # the camera models
+  "cameras/geometry: core/engine"                    # the camera frame, view volumes
+  "cameras/models: cameras/schema cameras/lenses cameras/geometry"  # the camera models
   "cameras/registry: cameras/models"                 # the list of models; describe, culling
   "apps/services: cameras/registry cameras/files core/exr core/queries"  # scene set-up, one view, outputs
   "apps/jobs: apps/services"                         # job files

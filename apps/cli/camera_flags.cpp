@@ -29,7 +29,8 @@ std::string valueShape(const ParamSpec& spec) {
     case ParamKind::Choice:
       break;
   }
-  return spec.choices.empty() ? "NAME" : aperture::join(spec.choices, "|");
+  const std::vector<const char*> choices = spec.choiceList();
+  return choices.empty() ? "NAME" : aperture::join(choices, "|");
 }
 }  // namespace
 

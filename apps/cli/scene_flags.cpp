@@ -8,9 +8,10 @@ void addSceneOptions(CLI::App& app, SceneOptions& o) {
       "Mesh file (.ply, .obj) or procedural:NAME?k=v (e.g. procedural:spheres?tris=2000000);"
       " repeatable. Default: the procedural default scene");
   app.add_option("--bvh-quality", o.quality,
-                 "Embree BVH build quality: low, medium, high (high adds spatial splits, which "
-                 "Embree leaves out of robust builds: with --robust, the default, high builds "
-                 "what medium does)")
+                 "Embree BVH build quality: low, medium, high (high lets Embree use spatial "
+                 "splits: a slower build for tracing as fast or faster; what Embree builds "
+                 "depends on its release and the CPU: Embree 3.13 on a Xeon built robust high, "
+                 "the default, as medium, bench/RESULTS.md)")
       ->capture_default_str();
   // One option under two names, so an explicit --no-robust counts as given (--robust) and
   // wins over a preset.

@@ -27,9 +27,9 @@ bool plainPinhole(const CameraDescription& d) {
 
 /// The 16 rays of the 4x4 block at (x0, y0): direction normalize(corner + j·du + i·dv) in
 /// float, origin the eye; lanes outside the image are masked off.
-APERTURE_VECTOR_KERNEL void pinholeBlock(const glm::vec3& eye, const glm::vec3& corner,
-                                         const glm::vec3& du, const glm::vec3& dv, int x0, int y0,
-                                         int width, int height, RTCRay16& r, int* valid) {
+void pinholeBlock(const glm::vec3& eye, const glm::vec3& corner, const glm::vec3& du,
+                  const glm::vec3& dv, int x0, int y0, int width, int height, RTCRay16& r,
+                  int* valid) {
   APERTURE_LANE_LOOP
   for (int k = 0; k < 16; ++k) {
     const LanePixel px = lanePixel(x0, y0, 4, k);
@@ -40,9 +40,12 @@ APERTURE_VECTOR_KERNEL void pinholeBlock(const glm::vec3& eye, const glm::vec3& 
     const float inv = 1.0f / std::sqrt(x * x + y * y + z * z);
     r.org_x[k] = eye.x, r.org_y[k] = eye.y, r.org_z[k] = eye.z;
     r.dir_x[k] = x * inv, r.dir_y[k] = y * inv, r.dir_z[k] = z * inv;
-    r.tnear[k] = 0.0f, r.tfar[k] = INFINITY, r.time[k] = 0.0f;
+    // Lanes outside the image get the empty segment [1, 0] too (sealLanes, core/engine/packet.h):
+    // without a native 16-wide kernel Embree traces the packet as a stream, mask ignored.
+    const bool in = px.inImage(width, height);
+    r.tnear[k] = in ? 0.0f : 1.0f, r.tfar[k] = in ? INFINITY : 0.0f, r.time[k] = 0.0f;
     r.mask[k] = 0xFFFFFFFFu, r.id[k] = unsigned(k), r.flags[k] = 0;
-    valid[k] = px.inImage(width, height) ? -1 : 0;
+    valid[k] = in ? -1 : 0;
   }
 }
 
@@ -112,6 +115,10 @@ BaselineTracer::BaselineTracer(const Camera& camera, int width, int height, int 
           if (inImage && valid.lanes[k] == 0) --rays_;
           if (!inImage) valid.lanes[k] = 0;
         }
+        // Traced as stored: lanes without a ray, outside the image or that Embree cannot
+        // take are sealed once here (a traceable lane outside the image stays uncounted).
+        const auto before = std::count_if(valid.lanes, valid.lanes + 16, [](int v) { return v; });
+        rays_ -= uint64_t(before - sealLanes<16>(valid.lanes, lanes));
         rays16_.push_back(packet.ray);
         valid_.push_back(valid);
       }
@@ -123,7 +130,7 @@ std::string BaselineTracer::rayGeneration() const {
 }
 
 void BaselineTracer::pinholeRays(int x0, int y0, RTCRay16& rays, int* valid) const {
-  pinholeBlock(p_.eye, p_.corner, p_.du, p_.dv, x0, y0, width_, height_, rays, valid);
+  runKernel<&pinholeBlock>(p_.eye, p_.corner, p_.du, p_.dv, x0, y0, width_, height_, rays, valid);
 }
 
 void BaselineTracer::traceTilePinhole(const Scene& scene, const Tile& t, RTCIntersectContext& ctx,
@@ -134,6 +141,7 @@ void BaselineTracer::traceTilePinhole(const Scene& scene, const Tile& t, RTCInte
     for (int bx = t.x0; bx < t.x1; bx += 4) {
       pinholeRays(bx, by, packet.ray, valid);
       clearHits<16>(packet);
+      observePacket(16, valid, rayLanes<16>(packet));
       rtcIntersect16(valid, scene.handle(), &ctx, &packet);
       if (hits) *hits += packetHits(packet, valid);
     }
@@ -146,6 +154,7 @@ void BaselineTracer::traceTileStored(const Scene& scene, const Tile& t, RTCInter
   for (size_t p = t.firstPacket; p < t.firstPacket + packets; ++p) {
     packet.ray = rays16_[p];
     clearHits<16>(packet);
+    observePacket(16, valid_[p].lanes, rayLanes<16>(packet));
     rtcIntersect16(valid_[p].lanes, scene.handle(), &ctx, &packet);
     if (hits) *hits += packetHits(packet, valid_[p].lanes);
   }

@@ -21,6 +21,7 @@
 #include "core/util/error.h"
 #include "core/util/parallel.h"
 #include "core/util/stats.h"
+#include "core/util/vector_kernel.h"
 
 namespace aperture::app {
 
@@ -98,6 +99,7 @@ void reportConfig(const Bench& b, nlohmann::json& j) {
                  {"threads", b.threads.threads()},
                  {"hardware_threads", std::thread::hardware_concurrency()},
                  {"isa", b.device.isaName()},
+                 {"kernel_isa", kernelIsaName(activeKernelIsa())},
                  {"packet_width", b.settings.packetWidth},
                  {"tile_size", b.settings.tileSize},
                  {"bvh_quality", a.scene.quality},
@@ -117,13 +119,15 @@ void reportConfig(const Bench& b, nlohmann::json& j) {
                  {"scene_box_test", b.settings.sceneBoxTest},
                  {"coverage_mask", b.settings.coverageMask}};
   std::printf(
-      "config: %s, %zu triangles; %d threads, Embree ISA %s; packet %d, tile %d; BVH %s%s%s; "
+      "config: %s, %zu triangles; %d threads, Embree ISA %s, kernels %s; packet %d, tile %d; "
+      "BVH %s%s%s; "
       "AOVs %s; layers %d (%s); %s %dx%d, %d spp\n",
       meshNames.c_str(), st.triangles, b.threads.threads(), b.device.isaName().c_str(),
-      b.settings.packetWidth, b.settings.tileSize, a.scene.quality.c_str(),
-      robust ? " robust" : " not robust", a.scene.compact ? " compact" : "",
-      aovListString(b.aovs).c_str(), b.aovs.layers, layerMethodName(defaultLayerMethod()),
-      b.params.type.c_str(), b.params.width, b.params.height, b.params.spp);
+      kernelIsaName(activeKernelIsa()), b.settings.packetWidth, b.settings.tileSize,
+      a.scene.quality.c_str(), robust ? " robust" : " not robust",
+      a.scene.compact ? " compact" : "", aovListString(b.aovs).c_str(), b.aovs.layers,
+      layerMethodName(defaultLayerMethod()), b.params.type.c_str(), b.params.width, b.params.height,
+      b.params.spp);
   if (a.nullTrace)
     std::printf(
         "null trace: no Embree call; every ray is a fake hit (t 1, normal -dir, geomID 0), so "

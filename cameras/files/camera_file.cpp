@@ -51,6 +51,9 @@ int shareSensor(CameraFile& file, const CalibratedSensor& sensor) {
 
 CalibratedSensor inPixelCentre(const CalibratedSensor& sensor, PixelCentre to) {
   if (sensor.pixelCentre == to) return sensor;
+  if (sensor.lens.info().ownMap())
+    throw Error(cat("camera model ", sensor.lens.info().name, " has no principal point to give in ",
+                    pixelCentreName(to), " pixel centres"));
   // The raster position of the principal point is the same in both conventions.
   const glm::dvec2 raster =
       rasterOfSourcePixel({sensor.lens.cx(), sensor.lens.cy()}, sensor.pixelCentre);
@@ -65,33 +68,46 @@ CalibratedSensor inPixelCentre(const CalibratedSensor& sensor, PixelCentre to) {
   return out;
 }
 
-// COLMAP's models written as OpenCV's: OPENCV and FULL_OPENCV are OpenCV's standard model
-// with its own coefficient order (k1 k2 p1 p2 k3 k4 k5 k6); the radial models are that model
-// with the missing coefficients zero; OPENCV_FISHEYE is cv::fisheye, and the radial fisheyes
-// are cv::fisheye with the missing coefficients zero (θd = θ(1 + k1θ² + k2θ⁴ + …)).
+// The model's OpenCV spelling (LensModelInfo::opencv): each slot filled from its coefficient;
+// nothing when the model has none or a non-zero coefficient has no slot.
 std::optional<OpenCVLens> openCVLens(const Lens& lens) {
-  const std::vector<double> d = lens.distortion();
-  switch (lens.model()) {
-    case LensModelId::SimplePinhole:
-    case LensModelId::Pinhole:
-      return OpenCVLens{false, {0, 0, 0, 0}};
-    case LensModelId::SimpleRadial:
-      return OpenCVLens{false, {d[0], 0, 0, 0}};
-    case LensModelId::Radial:
-      return OpenCVLens{false, {d[0], d[1], 0, 0}};
-    case LensModelId::OpenCV:
-    case LensModelId::FullOpenCV:
-      return OpenCVLens{false, d};
-    case LensModelId::OpenCVFisheye:
-      return OpenCVLens{true, d};
-    case LensModelId::SimpleRadialFisheye:
-      return OpenCVLens{true, {d[0], 0, 0, 0}};
-    case LensModelId::RadialFisheye:
-      return OpenCVLens{true, {d[0], d[1], 0, 0}};
-    case LensModelId::ThinPrismFisheye:
-      return std::nullopt;
+  const LensSpelling& spelling = lens.info().opencv;
+  if (!spelling.expressible()) return std::nullopt;
+  const std::optional<std::vector<double>> dist = slotValues(spelling, lens.distortion());
+  if (!dist) return std::nullopt;
+  return OpenCVLens{std::string(spelling.name) == "fisheye", *dist};
+}
+
+std::optional<std::vector<double>> slotValues(const LensSpelling& spelling,
+                                              const std::vector<double>& coefficients) {
+  std::vector<double> values(spelling.slots.size(), 0.0);
+  std::vector<bool> used(coefficients.size(), false);
+  for (size_t i = 0; i < spelling.slots.size(); ++i)
+    if (spelling.slots[i] >= 0) {
+      values[i] = coefficients.at(size_t(spelling.slots[i]));
+      used[size_t(spelling.slots[i])] = true;
+    }
+  for (size_t j = 0; j < coefficients.size(); ++j)
+    if (!used[j] && coefficients[j] != 0) return std::nullopt;
+  return values;
+}
+
+std::optional<Lens> lensOfSlots(const LensModelInfo& model, const std::vector<double>& intrinsics,
+                                const LensSpelling& spelling, const std::vector<double>& values) {
+  std::vector<double> params;
+  if (model.singleFocal()) {
+    if (intrinsics[0] != intrinsics[1]) return std::nullopt;
+    params = {intrinsics[0], intrinsics[2], intrinsics[3]};
+  } else {
+    params = intrinsics;
   }
-  return std::nullopt;
+  params.resize(model.paramNames.size(), 0.0);
+  for (size_t i = 0; i < values.size(); ++i) {
+    if (values[i] == 0) continue;
+    if (i >= spelling.slots.size() || spelling.slots[i] < 0) return std::nullopt;
+    params[model.intrinsicCount() + size_t(spelling.slots[i])] = values[i];
+  }
+  return Lens(model.id, params);
 }
 
 json rowMajorJson(const glm::dmat4& m) {

@@ -40,6 +40,15 @@ struct OpenCVLens {
   std::vector<double> dist;
 };
 std::optional<OpenCVLens> openCVLens(const Lens& lens);
+/// A model's coefficients in a format's slots (LensSpelling), or nothing when a non-zero
+/// coefficient has no slot there.
+std::optional<std::vector<double>> slotValues(const LensSpelling& spelling,
+                                              const std::vector<double>& coefficients);
+/// The lens of `model` whose coefficients fill a format's slot `values` (fx, fy, cx, cy in
+/// `intrinsics`), or nothing when the model cannot hold them: a non-zero value in a slot it
+/// does not fill, or fx ≠ fy for a model with one focal length.
+std::optional<Lens> lensOfSlots(const LensModelInfo& model, const std::vector<double>& intrinsics,
+                                const LensSpelling& spelling, const std::vector<double>& values);
 
 /// A JSON value for an error message (bytes that are not UTF-8 shown as U+FFFD: text from YAML
 /// or a hostile file need not be UTF-8, and json::dump would throw on it).

@@ -23,6 +23,7 @@
 // R in the last bits), but q itself round-trips exactly, so the text and binary files written
 // from one CameraFile read back to identical CameraFiles, and a file read, written and read
 // again gives back its own quaternions.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -233,8 +234,10 @@ std::vector<ColmapImage> readImagesText(const std::string& path) {
 
 std::vector<ColmapCamera> readCamerasBinary(const std::string& path) {
   BinaryReader in(path);
-  // id, model, width, height and at least three parameters.
-  const uint64_t count = in.readCount(4 + 4 + 8 + 8 + 3 * 8, "the number of cameras");
+  // id, model, width, height and at least as many parameters as the model with fewest.
+  size_t fewest = SIZE_MAX;
+  for (const LensModelInfo& m : lensModels()) fewest = std::min(fewest, m.paramNames.size());
+  const uint64_t count = in.readCount(4 + 4 + 8 + 8 + fewest * 8, "the number of cameras");
   std::vector<ColmapCamera> cameras;
   for (uint64_t k = 0; k < count; ++k) {
     ColmapCamera c;

@@ -36,6 +36,7 @@
 // holds camera-to-world, and inverting a rigid transform twice rounds its translation (the
 // rotation part is exact).
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -54,14 +55,23 @@ using nlohmann::json;
 
 namespace {
 
-// The camera_model names nerfstudio accepts that map onto COLMAP's models.
-const std::vector<std::string>& nerfModelNames() {
-  static const std::vector<std::string> names = {"SIMPLE_PINHOLE", "PINHOLE", "SIMPLE_RADIAL",
-                                                 "RADIAL",         "OPENCV",  "OPENCV_FISHEYE"};
+// The camera_model names nerfstudio accepts that map onto COLMAP's models: the rows' nerfstudio
+// spellings, in the table's order.
+std::vector<std::string> nerfModelNames() {
+  std::vector<std::string> names;
+  for (const LensModelInfo& m : lensModels())
+    if (m.nerfstudio.expressible() &&
+        std::find(names.begin(), names.end(), m.nerfstudio.name) == names.end())
+      names.emplace_back(m.nerfstudio.name);
   return names;
 }
 
-bool isFisheyeName(const std::string& name) { return name == "OPENCV_FISHEYE"; }
+// Whether nerfstudio's camera_model `name` is a fisheye: whether the models it spells are.
+bool isFisheyeName(const std::string& name) {
+  for (const LensModelInfo& m : lensModels())
+    if (m.nerfstudio.expressible() && name == m.nerfstudio.name) return m.fisheye;
+  return false;
+}
 
 // The intrinsics of one frame as the file gives them.
 struct NerfIntrinsics {
@@ -108,7 +118,7 @@ NerfIntrinsics frameIntrinsics(const json& doc, const json& frame, bool angles,
     if (!m->is_string())
       throw Error(cat(context, ": camera_model must be a string, got ", shown(*m)));
     in.model = m->get<std::string>();
-    const auto& names = nerfModelNames();
+    const std::vector<std::string> names = nerfModelNames();
     if (std::find(names.begin(), names.end(), in.model) == names.end())
       throw Error(cat(context, ": camera_model '", in.model, "' is not supported (supported: ",
                       join(names, ", "), ")", didYouMean(in.model, names)));
@@ -168,35 +178,31 @@ NerfIntrinsics frameIntrinsics(const json& doc, const json& frame, bool angles,
   return in;
 }
 
+// The named model when it holds the values, else the first model, in the table's order, of the
+// named model's kind (perspective or fisheye) with two focal lengths that holds them (nerfstudio
+// has one camera_model for several of COLMAP's: OPENCV for OPENCV and FULL_OPENCV).
 Lens nerfLens(const NerfIntrinsics& in, const std::string& context) {
-  const double k1 = in.k[0], k2 = in.k[1], k3 = in.k[2], k4 = in.k[3], p1 = in.p[0], p2 = in.p[1];
-  const auto lens = [&](LensModelId id, std::vector<double> params) {
-    return withContext(context, [&] { return Lens(id, std::move(params)); });
+  const std::vector<double> values = {in.k[0], in.k[1], in.k[2], in.k[3], in.p[0], in.p[1]};
+  const std::vector<double> intrinsics = {in.fx, in.fy, in.cx, in.cy};
+  const bool fisheye = isFisheyeName(in.model);
+  const auto holding = [&](const LensModelInfo& m) {
+    return withContext(context, [&] { return lensOfSlots(m, intrinsics, m.nerfstudio, values); });
   };
-  if (isFisheyeName(in.model)) {
-    if (p1 != 0 || p2 != 0)
-      throw Error(cat(context, ": OPENCV_FISHEYE with p1 = ", p1, ", p2 = ", p2,
-                      ": COLMAP's OPENCV_FISHEYE has no tangential terms (p1, p2 must be 0)"));
-    return lens(LensModelId::OpenCVFisheye, {in.fx, in.fy, in.cx, in.cy, k1, k2, k3, k4});
-  }
-  if (k4 != 0)
-    throw Error(cat(context, ": k4 = ", k4,
-                    ": nerfstudio's k4 multiplies r⁸ in the radial polynomial, which no COLMAP "
-                    "model has (FULL_OPENCV's k4 is a denominator term); not supported"));
-  const bool radialOnly = p1 == 0 && p2 == 0 && k3 == 0;
-  const bool oneFocal = in.fx == in.fy;
-  // The named model when the values fit it, else the smallest model that holds them.
-  if (in.model == "SIMPLE_PINHOLE" && oneFocal && radialOnly && k1 == 0 && k2 == 0)
-    return lens(LensModelId::SimplePinhole, {in.fx, in.cx, in.cy});
-  if (in.model == "SIMPLE_RADIAL" && oneFocal && radialOnly && k2 == 0)
-    return lens(LensModelId::SimpleRadial, {in.fx, in.cx, in.cy, k1});
-  if (in.model == "RADIAL" && oneFocal && radialOnly)
-    return lens(LensModelId::Radial, {in.fx, in.cx, in.cy, k1, k2});
-  if (k3 != 0)
-    return lens(LensModelId::FullOpenCV, {in.fx, in.fy, in.cx, in.cy, k1, k2, p1, p2, k3, 0, 0, 0});
-  if (in.model == "OPENCV" || k1 != 0 || k2 != 0 || p1 != 0 || p2 != 0)
-    return lens(LensModelId::OpenCV, {in.fx, in.fy, in.cx, in.cy, k1, k2, p1, p2});
-  return lens(LensModelId::Pinhole, {in.fx, in.fy, in.cx, in.cy});
+  for (const LensModelInfo& m : lensModels())
+    if (m.nerfstudio.expressible() && in.model == m.name)
+      if (const auto lens = holding(m)) return *lens;
+  for (const LensModelInfo& m : lensModels())
+    if (m.nerfstudio.expressible() && m.fisheye == fisheye && !m.singleFocal())
+      if (const auto lens = holding(m)) return *lens;
+  // Nothing holds them: nerfstudio's perspective k4 multiplies r⁸, which no COLMAP model has
+  // (FULL_OPENCV's k4 is a denominator term); COLMAP's OPENCV_FISHEYE has no p1, p2.
+  const char* names[] = {"k1", "k2", "k3", "k4", "p1", "p2"};
+  std::vector<std::string> given;
+  for (size_t i = 0; i < values.size(); ++i)
+    if (values[i] != 0) given.push_back(cat(names[i], " = ", values[i]));
+  throw Error(cat(context, ": ", in.model.empty() ? "PINHOLE" : in.model, " with ",
+                  join(given, ", "), ": no COLMAP model of nerfstudio's ",
+                  fisheye ? "fisheye" : "perspective", " camera models holds them"));
 }
 
 bool anyFrameHas(const json& frames, const char* key) {
@@ -219,45 +225,30 @@ struct NerfSensor {
 NerfSensor nerfSensor(const CalibratedSensor& sensor, const std::string& context) {
   const CalibratedSensor s = inPixelCentre(sensor, PixelCentre::HalfInteger);
   const Lens& lens = s.lens;
-  const std::vector<double> d = lens.distortion();
-  NerfSensor n{lens.info().name, lens.fx(), lens.fy(),    lens.cx(), lens.cy(),
-               s.width,          s.height,  {0, 0, 0, 0}, {0, 0}};
-  switch (lens.model()) {
-    case LensModelId::SimplePinhole:
-    case LensModelId::Pinhole:
-      break;
-    case LensModelId::SimpleRadial:
-      n.k[0] = d[0];
-      break;
-    case LensModelId::Radial:
-      n.k = {d[0], d[1], 0, 0};
-      break;
-    case LensModelId::OpenCV:
-      n.k = {d[0], d[1], 0, 0};
-      n.p = {d[2], d[3]};
-      break;
-    case LensModelId::FullOpenCV:
-      if (d[5] != 0 || d[6] != 0 || d[7] != 0)
-        throw Error(cat(context, ": FULL_OPENCV with k4, k5, k6 = ", d[5], ", ", d[6], ", ", d[7],
-                        ": nerfstudio has no rational radial terms (only k4 = k5 = k6 = 0 can be "
-                        "written)"));
-      n.model = "OPENCV";
-      n.k = {d[0], d[1], d[4], 0};
-      n.p = {d[2], d[3]};
-      break;
-    case LensModelId::OpenCVFisheye:
-      n.k = d;
-      n.p.clear();
-      break;
-    case LensModelId::SimpleRadialFisheye:
-    case LensModelId::RadialFisheye:
-      n.model = "OPENCV_FISHEYE";
-      n.k = {d[0], d.size() > 1 ? d[1] : 0.0, 0, 0};
-      n.p.clear();
-      break;
-    case LensModelId::ThinPrismFisheye:
-      throw Error(cat(context, ": THIN_PRISM_FISHEYE has no nerfstudio camera_model"));
+  const LensSpelling& spelling = lens.info().nerfstudio;
+  if (!spelling.expressible())
+    throw Error(cat(context, ": ", lens.info().name, " has no nerfstudio camera_model"));
+  const std::optional<std::vector<double>> values = slotValues(spelling, lens.distortion());
+  if (!values) {
+    std::vector<std::string> left;
+    const std::vector<double> d = lens.distortion();
+    for (size_t j = 0; j < d.size(); ++j)
+      if (d[j] != 0 &&
+          std::find(spelling.slots.begin(), spelling.slots.end(), int(j)) == spelling.slots.end())
+        left.push_back(cat(lens.info().paramNames[lens.info().intrinsicCount() + j], " = ", d[j]));
+    throw Error(cat(context, ": ", lens.info().name, " with ", join(left, ", "), ": nerfstudio's ",
+                    spelling.name, " has no slot for them (only 0 can be written)"));
   }
+  NerfSensor n{spelling.name,
+               lens.fx(),
+               lens.fy(),
+               lens.cx(),
+               lens.cy(),
+               s.width,
+               s.height,
+               {values->begin(), values->begin() + 4},
+               {}};
+  if (values->size() > 4) n.p = {(*values)[4], (*values)[5]};
   return n;
 }
 

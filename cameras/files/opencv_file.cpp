@@ -172,16 +172,22 @@ Lens openCVCameraLens(const std::vector<double>& K, const std::vector<double>& d
       throw Error(cat(context, ": dist ", extraNames[i - 8], " = ", dist[i],
                       ": OpenCV's thin-prism and tilt terms are not supported (COLMAP's "
                       "THIN_PRISM_FISHEYE is a fisheye model and does not coincide with them)"));
+  // The first model, in the table's order, whose OpenCV slots take the coefficients: every one
+  // given (zeros alone: any model that holds them), the standard model, two focal lengths.
   bool zero = true;
   for (double d : dist) zero &= d == 0;
-  return withContext(context, [&] {
-    if (zero) return Lens(LensModelId::Pinhole, {fx, fy, cx, cy});
-    if (n == 4)
-      return Lens(LensModelId::OpenCV, {fx, fy, cx, cy, dist[0], dist[1], dist[2], dist[3]});
-    const auto at = [&](size_t i) { return i < n ? dist[i] : 0.0; };
-    return Lens(LensModelId::FullOpenCV,
-                {fx, fy, cx, cy, at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7)});
-  });
+  const std::vector<double> given(dist.begin(), dist.begin() + long(std::min<size_t>(n, 8)));
+  for (const LensModelInfo& m : lensModels()) {
+    if (!m.opencv.expressible() || std::string(m.opencv.name) != "standard" || m.singleFocal())
+      continue;
+    if (!zero && m.opencv.slots.size() < given.size()) continue;
+    const auto lens = withContext(context, [&] {
+      return lensOfSlots(m, {fx, fy, cx, cy}, m.opencv, given);
+    });
+    if (lens) return *lens;
+  }
+  throw Error(cat(context, ": no camera model holds dist (",
+                  join(given, " ", [](double d) { return cat(d); }), ")"));
 }
 
 struct NamedCamera {

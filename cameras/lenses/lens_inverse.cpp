@@ -353,11 +353,119 @@ MaskOf<T> unproject(const LensInverse& c, const T& px, const T& py, T& dx, T& dy
   return solve;
 }
 
-}  // namespace
+// ---- A model's own formula (LensFormula): one pixel at a time, in double.
 
-APERTURE_VECTOR_KERNEL void unprojectEight(const LensInverse& lens, const double* px,
-                                           const double* py, double* dirX, double* dirY,
-                                           double* dirZ, bool* solve) {
+/// The r in the valid region with ρ(r) = t (t >= 0): the formula's closed form, or Newton's
+/// method kept inside the bracket [0, the fold] by bisection.
+bool invertFormula(const LensInverse& c, double t, double& r) {
+  if (!(t >= 0)) return false;
+  if (t == 0) {
+    r = 0;
+    return true;
+  }
+  if (c.bounded && !(t < c.maxDistorted)) return false;
+  const double* k = c.coefficients.data();
+  if (c.formula->inverse) {
+    r = c.formula->inverse(k, t);
+    return r >= 0 && r < c.maxUndistorted;
+  }
+  double lo = 0, hi = c.maxUndistorted, rho = 0, drho = 0;
+  if (!c.bounded) {
+    for (hi = std::max(1.0, t);; hi *= 2) {
+      c.formula->profile(k, hi, rho, drho);
+      if (!(rho < t)) break;
+      if (hi > 1e300) return false;
+    }
+  }
+  r = std::min(t, 0.5 * (lo + hi));
+  for (int i = 0; i < kMaxRadialIterations; ++i) {
+    c.formula->profile(k, r, rho, drho);
+    const double f = rho - t;
+    if (f == 0) return drho > 0;
+    (f < 0 ? lo : hi) = r;
+    const double newton = r - f / drho;
+    const double next = newton > lo && newton < hi ? newton : 0.5 * (lo + hi);
+    if (std::abs(next - r) <= 1e-15 * r)
+      return std::abs(f) <= kAcceptedResidual * std::max(1.0, t) && drho > 0;
+    r = next;
+  }
+  return false;
+}
+
+/// Newton's method on a formula's 2D map from (x, y) towards (tx, ty), as newton2d: solved
+/// when converged inside the radial fold with a positive Jacobian determinant.
+bool newtonFormula(const LensInverse& c, double tx, double ty, double& x, double& y) {
+  const double scale = std::max(1.0, std::sqrt(tx * tx + ty * ty));
+  double du = 0, dv = 0, j[4];
+  distortByFormula(c, x, y, du, dv, j);
+  double rx = du - tx, ry = dv - ty, error = std::sqrt(rx * rx + ry * ry);
+  bool stalled = false;
+  for (int i = 0;; ++i) {
+    const double det = j[0] * j[3] - j[2] * j[1];
+    if (!(std::isfinite(error) && std::isfinite(det) && det != 0)) return false;
+    if (error <= kConvergedResidual * scale || (stalled && error <= kAcceptedResidual * scale))
+      return det > 0 && std::sqrt(x * x + y * y) < c.maxUndistorted;
+    if (stalled || i == kMaxNewtonIterations) return false;
+    double sx = (j[3] * rx - j[2] * ry) / det, sy = (-j[1] * rx + j[0] * ry) / det;
+    stalled = true;  // unless a step below lowers the residual
+    for (int h = 0; h < kMaxHalvings; ++h) {
+      const double nx = x - sx, ny = y - sy, reach = std::sqrt(nx * nx + ny * ny);
+      double ndu = 0, ndv = 0, nj[4];
+      distortByFormula(c, nx, ny, ndu, ndv, nj);
+      const double nrx = ndu - tx, nry = ndv - ty, nextError = std::sqrt(nrx * nrx + nry * nry);
+      if (reach < c.maxUndistorted && nextError <= error) {
+        stalled = std::sqrt(sx * sx + sy * sy) <= kStalledStep * std::max(1.0, reach);
+        x = nx, y = ny, rx = nrx, ry = nry, error = nextError;
+        for (int e = 0; e < 4; ++e) j[e] = nj[e];
+        break;
+      }
+      sx *= 0.5, sy *= 0.5;
+    }
+  }
+}
+
+bool undistortFormula(const LensInverse& c, double du, double dv, double& u, double& v) {
+  if (!std::isfinite(du) || !std::isfinite(dv)) return false;
+  const double t = std::sqrt(du * du + dv * dv);
+  double r = 0;
+  const bool radial = invertFormula(c, t, r);
+  if (!c.formula->nonRadial) {
+    if (!radial) return false;
+    const double along = t == 0 ? 0.0 : r / t;
+    u = du * along, v = dv * along;
+    return true;
+  }
+  // As undistort(): from the radial inverse along the point's direction, or from just inside
+  // the fold when the radial part alone has none there, unless the point lies beyond the
+  // non-radial terms' reach.
+  if (t == 0) {
+    u = v = 0;
+  } else {
+    if (!radial && !(t < c.nonRadialLimit)) return false;
+    const double along = radial ? r / t : 0.99 * c.maxUndistorted / t;
+    u = du * along, v = dv * along;
+  }
+  return newtonFormula(c, du, dv, u, v);
+}
+
+bool unprojectFormula(const LensInverse& c, double px, double py, double dir[3]) {
+  if (c.formula->rayOf) return c.formula->rayOf(c.coefficients.data(), px, py, dir);
+  double u = 0, v = 0;
+  if (!undistortFormula(c, (px - c.cx) / c.fx, (py - c.cy) / c.fy, u, v)) return false;
+  if (!c.fisheye) {
+    const double inv = 1.0 / std::sqrt((u * u + v * v) + 1.0);
+    dir[0] = u * inv, dir[1] = v * inv, dir[2] = inv;
+    return true;
+  }
+  const double theta = std::sqrt(u * u + v * v);
+  const double s = theta == 0 ? 0.0 : std::sin(theta) / theta;
+  dir[0] = u * s, dir[1] = v * s, dir[2] = std::cos(theta);
+  return true;
+}
+
+/// unprojectEight's kernel.
+void unprojectEightLanes(const LensInverse& lens, const double* px, const double* py, double* dirX,
+                         double* dirY, double* dirZ, bool* solve) {
   Lanes x, y, dx = {}, dy = {}, dz = {};
   LaneMasks wanted;
   for (int k = 0; k < kLensLanes; ++k) x[k] = px[k], y[k] = py[k], wanted[k] = maskOf(solve[k]);
@@ -368,15 +476,66 @@ APERTURE_VECTOR_KERNEL void unprojectEight(const LensInverse& lens, const double
   }
 }
 
+}  // namespace
+
+void distortByFormula(const LensInverse& c, double u, double v, double& du, double& dv, double* j) {
+  // The radial part (x, y) = (ρ(r)/r)·(u, v), whose Jacobian is (ρ/r)·I plus
+  // (ρ' − ρ/r)·n nᵀ along the unit radius n.
+  const double* k = c.coefficients.data();
+  const double r = std::sqrt(u * u + v * v);
+  double rho = 0, drho = 0;
+  c.formula->profile(k, r, rho, drho);
+  const double gain = r == 0 ? drho : rho / r;
+  const double x = u * gain, y = v * gain;
+  double jr[4] = {drho, 0, 0, drho};
+  if (r > 0) {
+    const double nx = u / r, ny = v / r, extra = drho - gain;
+    jr[0] = gain + extra * nx * nx, jr[1] = extra * nx * ny;
+    jr[2] = extra * nx * ny, jr[3] = gain + extra * ny * ny;
+  }
+  if (!c.formula->nonRadial) {
+    du = x, dv = y;
+    if (j)
+      for (int e = 0; e < 4; ++e) j[e] = jr[e];
+    return;
+  }
+  double dx = 0, dy = 0, jn[4];
+  c.formula->nonRadial(k, x, y, dx, dy, j ? jn : nullptr);
+  du = x + dx, dv = y + dy;
+  if (!j) return;
+  // (I + Jn)·Jr, column by column.
+  for (int col = 0; col < 2; ++col) {
+    const double a = jr[2 * col], b = jr[2 * col + 1];
+    j[2 * col] = (1 + jn[0]) * a + jn[2] * b;
+    j[2 * col + 1] = jn[1] * a + (1 + jn[3]) * b;
+  }
+}
+
+void unprojectEight(const LensInverse& lens, const double* px, const double* py, double* dirX,
+                    double* dirY, double* dirZ, bool* solve) {
+  if (lens.formula) {  // a model's own formula: one pixel at a time
+    for (int k = 0; k < kLensLanes; ++k) {
+      double dir[3] = {0, 0, 1};
+      solve[k] = solve[k] && unprojectFormula(lens, px[k], py[k], dir);
+      dirX[k] = dir[0], dirY[k] = dir[1], dirZ[k] = dir[2];
+    }
+    return;
+  }
+  runKernel<&unprojectEightLanes>(lens, px, py, dirX, dirY, dirZ, solve);
+}
+
 bool unprojectOne(const LensInverse& lens, double px, double py, double dir[3]) {
+  if (lens.formula) return unprojectFormula(lens, px, py, dir);
   return unproject(lens, px, py, dir[0], dir[1], dir[2], maskOf(true)) != 0;
 }
 
 bool undistortOne(const LensInverse& lens, double du, double dv, double& u, double& v) {
+  if (lens.formula) return undistortFormula(lens, du, dv, u, v);
   return undistort(lens, du, dv, u, v, maskOf(true)) != 0;
 }
 
 bool invertRadialOne(const LensInverse& lens, double t, bool exact, double& r) {
+  if (lens.formula) return invertFormula(lens, t, r);
   return invertRadial(lens, t, exact, r, maskOf(true)) != 0;
 }
 

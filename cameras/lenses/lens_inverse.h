@@ -84,10 +84,47 @@ inline void distortPoint(const DistortionTerms& t, T u, T v, T& du, T& dv, bool 
   dv = g * v + 2 * t.p2 * uv + t.p1 * (s + 2 * vv) + t.sy1 * s;
 }
 
+/// A model's own distortion, for a model the shared polynomial form (DistortionTerms) does not
+/// hold: its radial profile ρ(r), the distorted radius (normalised coordinates) of the
+/// undistorted one, r = |(x/z, y/z)| or, `overTheta`, the angle θ off-axis. ρ(0) = 0 and
+/// ρ'(0) > 0; ρ is NaN where the model has no image. The valid region ends at the first r
+/// where ρ is not finite or ρ' <= 0 (Lens::findValidRegion).
+struct LensFormula {
+  /// ρ(r) and dρ/dr for the coefficients k (the params after the focal lengths and principal
+  /// point, in COLMAP's order).
+  void (*profile)(const double* k, double r, double& rho, double& drho) = nullptr;
+  /// The exact inverse r(ρ) inside the valid region, when there is a closed form (else the
+  /// inverse is Newton's method on `profile`).
+  double (*inverse)(const double* k, double rho) = nullptr;
+  /// Throws Error (naming `model` and the value) for coefficients the model refuses; null:
+  /// any finite values.
+  void (*check)(const char* model, const double* k) = nullptr;
+  /// The profile is over θ (the ray at θ off-axis, up to π: a model that sees behind the
+  /// camera), whatever COLMAP calls the model.
+  bool overTheta = false;
+  /// Terms that are not radial, added to the radially distorted point (x, y): their value and,
+  /// when j is given, their Jacobian by (x, y) column by column (j[0] = d(dx)/dx,
+  /// j[1] = d(dy)/dx, j[2] = d(dx)/dy, j[3] = d(dy)/dy). Null: a radial model.
+  void (*nonRadial)(const double* k, double x, double y, double& dx, double& dy,
+                    double* j) = nullptr;
+  /// How far `nonRadial` can move a point of radius <= `radius` (a bound).
+  double (*reach)(const double* k, double radius) = nullptr;
+  /// A map that is not radial about a principal point (EQUIRECTANGULAR): the unit ray of a
+  /// pixel and the pixel of a direction, from all the parameters, and the linear part of the
+  /// map as intrinsics. Null: the radial profile above, after the intrinsics.
+  bool (*rayOf)(const double* params, double px, double py, double dir[3]) = nullptr;
+  bool (*pixelOf)(const double* params, const double dir[3], double& px, double& py) = nullptr;
+  void (*intrinsicsOf)(const double* params, double& fx, double& fy, double& cx,
+                       double& cy) = nullptr;
+};
+
 /// Everything the inverse reads of a lens, made once with it (Lens::inverse_): its terms,
 /// intrinsics, valid region and the radial inverse's first-guess table.
 struct LensInverse {
   DistortionTerms terms;
+  /// The model's own formula (LensModelInfo::formula) and its coefficients; null: `terms`.
+  const LensFormula* formula = nullptr;
+  std::vector<double> coefficients;
   double fx = 1, fy = 1, cx = 0, cy = 0;
   bool fisheye = false;
   bool bounded = false;       ///< LensValidRegion::bounded()
@@ -102,6 +139,19 @@ struct LensInverse {
   double step = 0;
   int cells() const { return inverseRadius.empty() ? 0 : int(inverseRadius.size()) - 1; }
 };
+
+/// A formula's whole distortion (u, v) -> (u', v'): the radial profile, then the non-radial
+/// terms; `j` (if given) receives the Jacobian column by column, as distortPoint's.
+void distortByFormula(const LensInverse& lens, double u, double v, double& du, double& dv,
+                      double* j);
+
+/// The radial profile ρ(r) of a lens and dρ/dr, by its formula.
+inline void profileOf(const LensInverse& c, double r, double& rho, double& drho) {
+  if (c.formula)
+    c.formula->profile(c.coefficients.data(), r, rho, drho);
+  else
+    radialProfileOf(c.terms, r, rho, drho);
+}
 
 /// Pixels unprojectEight solves side by side.
 inline constexpr int kLensLanes = 8;

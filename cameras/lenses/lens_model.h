@@ -12,6 +12,7 @@
 // model is not invertible (past the first fold of the radial polynomial, beyond a fisheye's
 // fold or beyond 180° off-axis), a pixel has no ray: unproject() returns nothing and the
 // renderer records a miss.
+#include <deque>
 #include <glm/glm.hpp>
 #include <optional>
 #include <string>
@@ -21,37 +22,84 @@
 
 namespace aperture {
 
-enum class LensModelId {
-  SimplePinhole,
-  Pinhole,
-  SimpleRadial,
-  Radial,
-  OpenCV,
-  FullOpenCV,
-  OpenCVFisheye,
-  SimpleRadialFisheye,
-  RadialFisheye,
-  ThinPrismFisheye,
+/// A lens model's identity: COLMAP's CameraModelId for COLMAP's models. A model registered
+/// by registerLensModel takes any other value.
+enum class LensModelId : int {
+  SimplePinhole = 0,
+  Pinhole = 1,
+  SimpleRadial = 2,
+  Radial = 3,
+  OpenCV = 4,
+  OpenCVFisheye = 5,
+  FullOpenCV = 6,
+  FOV = 7,
+  SimpleRadialFisheye = 8,
+  RadialFisheye = 9,
+  ThinPrismFisheye = 10,
+  RadTanThinPrismFisheye = 11,
+  SimpleDivision = 12,
+  Division = 13,
+  SimpleFisheye = 14,
+  Fisheye = 15,
+  EUCM = 16,
+  Equirectangular = 17,
 };
 
-/// One model as COLMAP declares it.
+/// How a camera file format spells a model: its name there and, per coefficient slot of the
+/// format, the index of the model's distortion coefficient that fills it (-1: the slot is
+/// zero). No name: the format cannot express the model.
+struct LensSpelling {
+  const char* name = nullptr;
+  std::vector<int> slots;
+  bool expressible() const { return name != nullptr; }
+};
+
+/// One model: everything aperture knows of it, in one row. The readers and writers of camera
+/// files, the parameter checks and the formulas all read these rows.
 struct LensModelInfo {
   LensModelId id;
   const char* name;                     ///< COLMAP's name: "SIMPLE_RADIAL"
   int colmapId;                         ///< COLMAP's model_id (cameras.bin)
   std::vector<const char*> paramNames;  ///< COLMAP's order: "f", "cx", "cy", "k"
-  bool fisheye;  ///< distortion acts on the angle θ off-axis rather than on x/z, y/z
+  /// COLMAP's fisheye models: distortion acts on the angle θ off-axis rather than on x/z, y/z
+  /// (a formula may also be over θ: LensFormula::overTheta).
+  bool fisheye;
+  /// The formula, one of two kinds: the coefficients (params after the focal lengths and the
+  /// principal point, in COLMAP's order) as terms of the shared polynomial form, or a formula
+  /// of the model's own.
+  DistortionTerms (*terms)(const double* k) = nullptr;
+  const LensFormula* formula = nullptr;
+  /// OpenCV's spelling: "standard" (slots k1 k2 p1 p2 k3 k4 k5 k6) or "fisheye" (cv::fisheye,
+  /// slots k1 k2 k3 k4).
+  LensSpelling opencv;
+  /// nerfstudio's camera_model and its slots k1 k2 k3 k4 p1 p2 (camera_utils.py).
+  LensSpelling nerfstudio;
+  /// Blender's camera type (bpy.types.Camera type / panorama_type) that is this model without
+  /// distortion: "PERSP" for the pinholes. No slots: Blender's cameras have no distortion.
+  LensSpelling blender;
   bool singleFocal() const { return paramNames[0][1] == '\0'; }  ///< "f" rather than "fx", "fy"
+  /// Whether the model maps pixels to rays by a map of its own, without focal lengths and
+  /// principal point among its parameters (EQUIRECTANGULAR: LensFormula::rayOf).
+  bool ownMap() const { return formula && formula->rayOf; }
+  /// The number of parameters before the distortion coefficients (none for an own map: all
+  /// its parameters are its coefficients).
+  size_t intrinsicCount() const { return ownMap() ? 0 : singleFocal() ? 3 : 4; }
 };
 
-/// Every supported model, in COLMAP's id order.
-const std::vector<LensModelInfo>& lensModels();
+/// Every model, COLMAP's in COLMAP's id order, then the registered ones. A deque: a row's
+/// address never changes.
+const std::deque<LensModelInfo>& lensModels();
 const LensModelInfo& lensModelInfo(LensModelId id);
 /// The model named `name` (COLMAP's spelling, case-insensitive); throws Error naming it, the
 /// supported models and the closest one.
 const LensModelInfo& findLensModel(const std::string& name);
 /// The model with COLMAP's `colmapId`, or null.
 const LensModelInfo* findLensModelByColmapId(int colmapId);
+/// Adds a model to the table (a model aperture does not ship, a test's); throws Error when its
+/// id, name or COLMAP id is taken, or it has not exactly one formula. Not thread-safe: register
+/// before any camera is made. unregisterLensModel removes the last one registered.
+const LensModelInfo& registerLensModel(LensModelInfo row);
+void unregisterLensModel(LensModelId id);
 
 /// Where the forward model is invertible, computed once per lens. Radii are of the
 /// undistorted normalised coordinates |(x/z, y/z)| for the pinhole models and the angle θ
@@ -110,14 +158,15 @@ class Lens {
   std::optional<glm::dvec2> undistort(const glm::dvec2& distorted) const;
 
   const LensValidRegion& validRegion() const { return valid_; }
+  /// Whether the lens's radii are angles θ off-axis (a fisheye, or a formula over θ).
+  bool overTheta() const { return inverse_.fisheye; }
 
   bool operator==(const Lens& o) const { return model_ == o.model_ && params_ == o.params_; }
 
  private:
-  static DistortionTerms termsOf(LensModelId model, const std::vector<double>& distortion);
   /// The radial profile ρ(r) = r·g(r²) and its derivative.
   void radialProfile(double r, double& rho, double& drho) const {
-    radialProfileOf(inverse_.terms, r, rho, drho);
+    profileOf(inverse_, r, rho, drho);
   }
   /// The r in the valid region with ρ(r) = t (t >= 0), by bracketed Newton; nothing past it.
   /// Not `exact`: the table's first guess where it has one (for the 2D Newton to refine).
@@ -127,6 +176,10 @@ class Lens {
   LensValidRegion findValidRegion() const;
   /// How far the tangential and thin-prism terms can move a point of the valid region.
   double nonRadialReach() const;
+  /// Whether the distortion is radial only (it cannot fold the map in 2D inside the fold).
+  bool radialOnly() const {
+    return inverse_.formula ? inverse_.formula->nonRadial == nullptr : inverse_.terms.radialOnly;
+  }
 
   LensModelId model_;
   std::vector<double> params_;

@@ -8,8 +8,8 @@
 #include <string>
 #include <type_traits>
 
-#include "cameras/models/frame.h"
-#include "cameras/models/view_volume.h"
+#include "cameras/geometry/frame.h"
+#include "cameras/geometry/view_volume.h"
 #include "cameras/schema/image_window.h"
 #include "cameras/schema/param_schema.h"
 #include "cameras/schema/params.h"
@@ -88,7 +88,7 @@ class CameraBase : public Camera {
   /// the one owner of the shift formula).
   ImageWindow window() const { return {width_, height_, vw_, vh_, shift_}; }
   /// Image-plane coordinates (u, v) of a raster position, shift included (ImageWindow).
-  void rasterToPlane(double x, double y, double& u, double& v) const {
+  void planeFromRaster(double x, double y, double& u, double& v) const {
     const ImageWindow w = window();
     u = w.u(x);
     v = w.v(y);
@@ -117,18 +117,18 @@ class CameraBase : public Camera {
   double uHi() const { return window().uHi(); }
   double vLo() const { return window().vLo(); }
   double vHi() const { return window().vHi(); }
-  /// Raster position of image-plane coordinates (inverse of rasterToPlane).
-  glm::dvec2 planeToRaster(double u, double v) const { return window().raster(u, v); }
+  /// Raster position of image-plane coordinates (inverse of planeFromRaster).
+  glm::dvec2 rasterFromPlane(double u, double v) const { return window().raster(u, v); }
   /// The one NDC map of the planar cameras, as a matrix on homogeneous image-plane coordinates
   /// (u, v, z, w): OpenEXR's NDC x = (u − uLo) / vw, y = (vHi − v) / vh, so the window's
   /// top-left corner (uLo, vHi) goes to (0, 0) and its bottom-right corner (uHi, vLo) to
-  /// (1, 1); NDC · (W, H) is planeToRaster. z and w pass through. GLM column vectors.
+  /// (1, 1); NDC · (W, H) is rasterFromPlane. z and w pass through. GLM column vectors.
   glm::dmat4 ndcFromPlane() const;
 
  protected:
   /// The model's projection from OpenEXR camera space (CameraDescription::cameraFromWorld) to
   /// homogeneous image-plane coordinates (u, v, z', w): u / w and v / w are the (u, v) of
-  /// rasterToPlane. Nothing where no 4x4 matrix expresses the projection (panoramas); then
+  /// planeFromRaster. Nothing where no 4x4 matrix expresses the projection (panoramas); then
   /// describe() leaves ndcFromWorld empty.
   virtual std::optional<glm::dmat4> planeFromCamera() const { return std::nullopt; }
   /// Model-specific parts of describe(): the (name, value) pairs of CameraDescription::extra,

@@ -15,7 +15,7 @@
 #include <mutex>
 
 #include "cameras/lenses/direction_table.h"
-#include "cameras/models/models.h"
+#include "cameras/models/camera_models.h"
 #include "core/util/error.h"
 #include "core/util/units.h"
 #include "core/util/vector_kernel.h"
@@ -50,6 +50,28 @@ CalibratedSensor calibratedSensorOf(const CameraParams& p) {
   const std::vector<double>& k = *p.intrinsics;
   const double fx = k[0], fy = k[1], cx = k[2], cy = k[3];
   std::vector<double> params;
+  if (model.ownMap()) {
+    // Its parameters are all "distortion" (EQUIRECTANGULAR: w, h); the intrinsics must be the
+    // linear part of its map, as Lens reports them (and calibratedCameraParams writes them).
+    if (!p.distortion)
+      throw Error(cat("--distortion: camera model ", model.name, " needs its parameters (",
+                      join(model.paramNames, ","), ")"));
+    const Lens lens(model.id, *p.distortion);
+    const double want[4] = {lens.fx(), lens.fy(), lens.cx(), lens.cy()};
+    for (int i = 0; i < 4; ++i)
+      if (!(std::abs(k[size_t(i)] - want[i]) <= 1e-9 * std::abs(want[i])))
+        throw Error(cat("--intrinsics: camera model ", model.name, " with ",
+                        join(model.paramNames, ","), " = ",
+                        join(*p.distortion, ",", [](double d) { return cat(d); }),
+                        " has fx,fy,cx,cy = ", want[0], ",", want[1], ",", want[2], ",", want[3],
+                        "; got ", fx, ",", fy, ",", cx, ",", cy));
+    CalibratedSensor s;
+    s.width = p.width;
+    s.height = p.height;
+    s.lens = lens;
+    s.pixelCentre = parsePixelCentre(p.pixelCentre);
+    return s;
+  }
   if (model.singleFocal()) {
     if (fx != fy)
       throw Error(cat("--intrinsics: camera model ", model.name,
@@ -210,8 +232,8 @@ inline void worldDirectionLane(const CalibratedFrame& f, double cx, double cy, d
 /// contiguous entries in lane order, read by one lane loop. The two loops keep their own
 /// copies of the lane's two lines: a shared lambda made the 16-wide kernel 13 % slower.
 template <int kBW, int kBH>
-APERTURE_VECTOR_KERNEL void tableCentres(const CalibratedFrame& f, const DirectionTable& table,
-                                         int x0, int y0, RayLanes& out, int* valid) {
+void tableCentres(const CalibratedFrame& f, const DirectionTable& table, int x0, int y0,
+                  RayLanes& out, int* valid) {
   constexpr int kLanes = kBW * kBH;
   const double *tx = table.x(), *ty = table.y(), *tz = table.z();
   const unsigned char* tv = table.validity();
@@ -252,8 +274,8 @@ struct PinholeLens {
 /// A kBW x kBH block of pixel centres of an undistorted pinhole lens, lanes past the image's
 /// edges included. x and y are divided once per column and row of the block.
 template <int kBW, int kBH>
-APERTURE_VECTOR_KERNEL void pinholeCentres(const CalibratedFrame& f, const PinholeLens& lens,
-                                           int x0, int y0, RayLanes& out, int* valid) {
+void pinholeCentres(const CalibratedFrame& f, const PinholeLens& lens, int x0, int y0,
+                    RayLanes& out, int* valid) {
   constexpr int kLanes = kBW * kBH;
   double xs[kBW], ys[kBH];
   for (int col = 0; col < kBW; ++col)
@@ -390,7 +412,7 @@ class CalibratedCamera final : public CameraBase {
     lp.params = lens.params();
     lp.pixelCentre = pixelCentreName(sensor_.pixelCentre);
     c.lens = lp;
-    c.extra.emplace_back("valid_region", lens.validRegion().text(lens.info().fisheye));
+    c.extra.emplace_back("valid_region", lens.validRegion().text(lens.overTheta()));
   }
 
   void describeCounts(CameraDescription& c) const override {
@@ -415,14 +437,14 @@ class CalibratedCamera final : public CameraBase {
     if (pinhole_)
       return withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
         constexpr int kBW = decltype(bw)::value, kBH = decltype(bh)::value;
-        pinholeCentres<kBW, kBH>(f, *pinhole_, req.x0, req.y0, out, valid);
+        runKernel<&pinholeCentres<kBW, kBH>>(f, *pinhole_, req.x0, req.y0, out, valid);
       });
     constexpr int kB = DirectionTable::kBlock;
     const bool whole = req.x0 + req.blockW <= width_ && req.y0 + req.blockH <= height_;
     if (!whole || req.x0 % kB + req.blockW > kB) return false;
     return withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
       constexpr int kBW = decltype(bw)::value, kBH = decltype(bh)::value;
-      tableCentres<kBW, kBH>(f, table(), req.x0, req.y0, out, valid);
+      runKernel<&tableCentres<kBW, kBH>>(f, table(), req.x0, req.y0, out, valid);
     });
   }
 
@@ -481,7 +503,7 @@ const ParamSpec kIntrinsics =
 const ParamSpec kLensModel =
     ParamSpec("lens_model", K::Choice, fieldAccess<&CameraParams::lensModel>())
         .withHelp("COLMAP camera model of the lens (src/colmap/sensor/models.h)")
-        .withChoices(lensModelNames());
+        .withChoicesNow(lensModelNames);
 const ParamSpec kDistortion =
     ParamSpec("distortion", K::Numbers, fieldAccess<&CameraParams::distortion>())
         .withHelp(

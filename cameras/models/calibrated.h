@@ -8,8 +8,8 @@
 #include <optional>
 #include <vector>
 
+#include "cameras/geometry/frame.h"
 #include "cameras/lenses/calibration.h"
-#include "cameras/models/frame.h"
 #include "cameras/schema/params.h"
 #include "core/engine/camera.h"
 

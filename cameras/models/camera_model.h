@@ -1,6 +1,6 @@
 #pragma once
 // One camera model as its module declares it: name, summary, factory and the parameters it
-// reads. Each model module defines one (models.h); the registry (registry.h) lists them.
+// reads. Each model module defines one (camera_models.h); the registry (registry.h) lists them.
 #include <algorithm>
 #include <glm/glm.hpp>
 #include <memory>

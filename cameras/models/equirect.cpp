@@ -9,7 +9,7 @@
 #include <cmath>
 #include <vector>
 
-#include "cameras/models/models.h"
+#include "cameras/models/camera_models.h"
 #include "core/util/error.h"
 #include "core/util/units.h"
 #include "core/util/vector_kernel.h"
@@ -30,8 +30,8 @@ struct EquirectCentres {
 /// sines and cosines (the same libm calls on the same arguments, made once per column and
 /// row by the camera): g = (cos lat·sin lon)·U + sin lat·V − (cos lat·cos lon)·W, g / |g|.
 template <int kBW, int kBH>
-APERTURE_VECTOR_KERNEL void equirectCentres(const EquirectCentres& c, const glm::dvec3& eye, int x0,
-                                            int y0, RayLanes& out, int* valid) {
+void equirectCentres(const EquirectCentres& c, const glm::dvec3& eye, int x0, int y0, RayLanes& out,
+                     int* valid) {
   constexpr int kLanes = kBW * kBH;
   alignas(64) float dx[kLanes], dy[kLanes], dz[kLanes];
   alignas(64) double laneSinLon[kLanes], laneCosLat[kLanes], laneCosLon[kLanes], laneSinLat[kLanes];
@@ -98,7 +98,7 @@ class EquirectCamera final : public PacketCamera<EquirectCamera> {
                               frame_.w,       width_,         height_};
       const bool done = withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
         constexpr int kBW = decltype(bw)::value, kBH = decltype(bh)::value;
-        equirectCentres<kBW, kBH>(c, renderEyeD_, req.x0, req.y0, out, valid);
+        runKernel<&equirectCentres<kBW, kBH>>(c, renderEyeD_, req.x0, req.y0, out, valid);
       });
       if (done) return;
     }

@@ -12,7 +12,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "cameras/models/models.h"
+#include "cameras/models/camera_models.h"
 #include "core/util/error.h"
 #include "core/util/parallel.h"
 #include "core/util/units.h"
@@ -52,8 +52,7 @@ struct FisheyeCentres {
 /// row run forwards or backwards through the table, or both across the centre column), so the
 /// arithmetic is one lane loop over contiguous arrays that the compiler vectorises whole.
 template <int kBW, int kBH>
-APERTURE_VECTOR_KERNEL void fisheyeCentres(const FisheyeCentres& c, int x0, int y0, RayLanes& out,
-                                           int* valid) {
+void fisheyeCentres(const FisheyeCentres& c, int x0, int y0, RayLanes& out, int* valid) {
   constexpr int kLanes = kBW * kBH;
   double as[kBW], bs[kBH];
   size_t qjs[kBW], qis[kBH];
@@ -124,7 +123,7 @@ class FisheyeCamera final : public PacketCamera<FisheyeCamera> {
                              width_,    height_};
       const bool done = withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
         constexpr int kBW = decltype(bw)::value, kBH = decltype(bh)::value;
-        fisheyeCentres<kBW, kBH>(c, req.x0, req.y0, out, valid);
+        runKernel<&fisheyeCentres<kBW, kBH>>(c, req.x0, req.y0, out, valid);
       });
       if (done) return;
     }

@@ -2,7 +2,7 @@
 // −W, from a world direction or from two shear angles.
 #include <cmath>
 
-#include "cameras/models/models.h"
+#include "cameras/models/camera_models.h"
 #include "cameras/models/parallel_projection.h"
 #include "core/util/error.h"
 #include "core/util/units.h"

@@ -1,5 +1,5 @@
 // Orthographic camera: parallel rays along −W from origins e + u·U + v·V on the image plane.
-#include "cameras/models/models.h"
+#include "cameras/models/camera_models.h"
 #include "cameras/models/parallel_projection.h"
 
 namespace aperture {

@@ -20,8 +20,7 @@ struct ParallelCentres {
 /// A kBW x kBH block of rays through pixel centres, rayAt() term by term: origin
 /// (e + u·U) + v·V, u and v from the camera's pixel-centre table.
 template <int kBW, int kBH>
-APERTURE_VECTOR_KERNEL void parallelCentres(const ParallelCentres& c, int x0, int y0, RayLanes& out,
-                                            int* valid) {
+void parallelCentres(const ParallelCentres& c, int x0, int y0, RayLanes& out, int* valid) {
   constexpr int kLanes = kBW * kBH;
   const double* __restrict us = c.centres.u.data() + x0;
   const double* __restrict vs = c.centres.v.data() + y0;
@@ -64,7 +63,7 @@ void ParallelCamera::generate(const PacketRequest& req, RayLanes& out, int* vali
                             frame_.u, frame_.v, glm::vec3(dir_)};
     const bool done = withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
       constexpr int kBW = decltype(bw)::value, kBH = decltype(bh)::value;
-      parallelCentres<kBW, kBH>(c, req.x0, req.y0, out, valid);
+      runKernel<&parallelCentres<kBW, kBH>>(c, req.x0, req.y0, out, valid);
     });
     if (done) return;
   }
@@ -75,8 +74,8 @@ std::optional<glm::dvec2> ParallelCamera::project(const glm::dvec3& worldPoint) 
   const glm::dvec3 p = worldPoint - frame_.e;
   const double depth = -glm::dot(p, frame_.w);
   if (depth < 0) return std::nullopt;
-  return planeToRaster(glm::dot(p, frame_.u) - shearU_ * depth,
-                       glm::dot(p, frame_.v) - shearV_ * depth);
+  return rasterFromPlane(glm::dot(p, frame_.u) - shearU_ * depth,
+                         glm::dot(p, frame_.v) - shearV_ * depth);
 }
 
 ViewVolume ParallelCamera::viewVolume(double nearDist, double farDist) const {

@@ -17,7 +17,7 @@ class ParallelCamera final : public PacketCamera<ParallelCamera> {
   bool usesLens() const { return false; }
   bool rayAt(double x, double y, double, double, glm::dvec3& org, glm::dvec3& dir) const {
     double u, v;
-    rasterToPlane(x, y, u, v);
+    planeFromRaster(x, y, u, v);
     org = renderEyeD_ + u * frame_.u + v * frame_.v;
     dir = dir_;
     return true;

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <limits>
 
-#include "cameras/models/models.h"
+#include "cameras/models/camera_models.h"
 #include "core/util/error.h"
 #include "core/util/units.h"
 #include "core/util/vector_kernel.h"
@@ -36,9 +36,8 @@ namespace {
 /// (u·U + v·V) − d·W times 1 / its length, in double, rounded once. A per-ISA kernel
 /// (core/util/vector_kernel.h): no divide but the reciprocal, constant trip counts, vector stores.
 template <int kBW, int kBH>
-APERTURE_VECTOR_KERNEL void pinholeCentreRays(const PinholeConstants& in,
-                                              const PixelCentreTable& centres, int x0, int y0,
-                                              RayLanes& out, int* valid) {
+void pinholeCentreRays(const PinholeConstants& in, const PixelCentreTable& centres, int x0, int y0,
+                       RayLanes& out, int* valid) {
   constexpr int kLanes = kBW * kBH;
   const double* __restrict columnU = centres.u.data() + x0;
   const double* __restrict rowV = centres.v.data() + y0;
@@ -73,8 +72,8 @@ void PerspectiveCamera::generateUnclipped(const PacketRequest& req, RayLanes& ou
   // Pinhole rays through pixel centres: every sample at spp 1, the centre ray at any spp.
   if (pinholeCentres_ || (req.centreRay() && lensRadius_ == 0)) {
     const bool done = withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
-      pinholeCentreRays<decltype(bw)::value, decltype(bh)::value>(pinhole_, centres_, req.x0,
-                                                                  req.y0, out, valid);
+      runKernel<&pinholeCentreRays<decltype(bw)::value, decltype(bh)::value>>(
+          pinhole_, centres_, req.x0, req.y0, out, valid);
     });
     if (done) return;
   }
@@ -109,7 +108,7 @@ std::optional<glm::dvec2> PerspectiveCamera::project(const glm::dvec3& worldPoin
   const glm::dvec3 p = worldPoint - frame_.e;
   const double depth = -glm::dot(p, frame_.w);
   if (!(depth > 0)) return std::nullopt;
-  return planeToRaster(d_ * glm::dot(p, frame_.u) / depth, d_ * glm::dot(p, frame_.v) / depth);
+  return rasterFromPlane(d_ * glm::dot(p, frame_.u) / depth, d_ * glm::dot(p, frame_.v) / depth);
 }
 
 ViewVolume PerspectiveCamera::viewVolume(double nearDist, double farDist) const {

@@ -29,7 +29,7 @@ class PerspectiveCamera final : public PacketCamera<PerspectiveCamera> {
   bool rayAt(double x, double y, double lensX, double lensY, glm::dvec3& org,
              glm::dvec3& dir) const {
     double u, v;
-    rasterToPlane(x, y, u, v);
+    planeFromRaster(x, y, u, v);
     const glm::dvec3 pinhole = u * frame_.u + v * frame_.v - d_ * frame_.w;
     if (lensRadius_ > 0) {
       double a, b;

@@ -2,7 +2,7 @@
 // at e, focused at depth f along −W. The ray code is PerspectiveCamera::rayAt.
 #include <cmath>
 
-#include "cameras/models/models.h"
+#include "cameras/models/camera_models.h"
 #include "cameras/models/perspective.h"
 #include "core/util/error.h"
 #include "core/util/vector_kernel.h"
@@ -14,8 +14,7 @@ namespace {
 /// The kernel of generateThinLensCentres for a kBW x kBH block; u and v of the pixel centres
 /// come from the camera's tables (no per-ray divide for them).
 template <int kBW, int kBH>
-APERTURE_VECTOR_KERNEL void thinLensCentres(const ThinLensCentres& c, int x0, int y0, RayLanes& out,
-                                            int* valid) {
+void thinLensCentres(const ThinLensCentres& c, int x0, int y0, RayLanes& out, int* valid) {
   constexpr int kLanes = kBW * kBH;
   const double* __restrict us = c.columnU + x0;
   const double* __restrict vs = c.rowV + y0;
@@ -66,7 +65,7 @@ bool generateThinLensCentres(const ThinLensCentres& c, const PacketRequest& req,
                              int* valid) {
   return withBlockShape(req.blockW, req.blockH, [&](auto bw, auto bh) {
     constexpr int kBW = decltype(bw)::value, kBH = decltype(bh)::value;
-    thinLensCentres<kBW, kBH>(c, req.x0, req.y0, out, valid);
+    runKernel<&thinLensCentres<kBW, kBH>>(c, req.x0, req.y0, out, valid);
   });
 }
 

@@ -2,7 +2,7 @@
 // The union of cameras' view volumes as a world-box test for core/engine/cull.h.
 #include <vector>
 
-#include "cameras/models/view_volume.h"
+#include "cameras/geometry/view_volume.h"
 #include "cameras/schema/params.h"
 #include "core/engine/cull.h"
 

@@ -1,7 +1,7 @@
 #include "cameras/registry/registry.h"
 
 #include "cameras/models/calibrated.h"
-#include "cameras/models/models.h"
+#include "cameras/models/camera_models.h"
 #include "core/util/error.h"
 #include "core/util/spelling.h"
 

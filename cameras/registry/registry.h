@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "cameras/geometry/view_volume.h"
 #include "cameras/models/camera_model.h"
-#include "cameras/models/view_volume.h"
 #include "cameras/registry/resolve.h"
 #include "cameras/schema/params.h"
 #include "core/engine/camera.h"

@@ -124,7 +124,8 @@ std::string describeCameraParam(const ParamSpec& spec, const CameraParams& defau
   if (*spec.unit) add(spec.unit);
   if (spec.kind == ParamKind::Choice) {
     // No fixed list: the registered camera models (the `type` parameter).
-    std::vector<std::string> words(spec.choices.begin(), spec.choices.end());
+    const std::vector<const char*> list = spec.choiceList();
+    std::vector<std::string> words(list.begin(), list.end());
     if (words.empty()) words = cameraTypeNames();
     add(join(words, "|"));
   }
@@ -148,7 +149,7 @@ std::string cameraParamsMarkdown() {
     for (const char* c : p->conflicts) rel += std::string(rel.empty() ? "not " : ", not ") + c;
     for (const char* r : p->needs) rel += std::string(rel.empty() ? "needs " : ", needs ") + r;
     std::string range = p->range.text();
-    for (const char* c : p->choices) range += std::string(range.empty() ? "" : " \\| ") + c;
+    for (const char* c : p->choiceList()) range += std::string(range.empty() ? "" : " \\| ") + c;
     s << "| `" << p->name << "` | `" << p->flag() << "` | " << users << " | " << p->unit << " | "
       << (p->kind == ParamKind::Flag ? "off" : p->defaultText()) << " | " << range << " | " << rel
       << " | " << p->help << " |\n";

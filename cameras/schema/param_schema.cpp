@@ -148,11 +148,12 @@ void checkParamValue(const ParamSpec& spec, const ParamValue& value, const std::
   }
   if (spec.kind == ParamKind::Choice) {
     const std::string& word = std::get<std::string>(value);
-    if (spec.choices.empty()) return;  // `type`: checked by the registry
-    if (std::find(spec.choices.begin(), spec.choices.end(), word) == spec.choices.end()) {
-      const std::string list = join(spec.choices, ", ");
+    const std::vector<const char*> choices = spec.choiceList();
+    if (choices.empty()) return;  // `type`: checked by the registry
+    if (std::find(choices.begin(), choices.end(), word) == choices.end()) {
+      const std::string list = join(choices, ", ");
       throw Error(
-          cat(label, ": '", word, "' is not one of ", list, didYouMean(word, names(spec.choices))));
+          cat(label, ": '", word, "' is not one of ", list, didYouMean(word, names(choices))));
     }
   }
   if (spec.kind == ParamKind::Size && spec.maxPixels > 0) {

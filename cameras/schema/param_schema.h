@@ -93,6 +93,12 @@ struct ParamSpec {
   /// A model this parameter selects when given without `type` (the pose matrices and
   /// intrinsics select "calibrated"); null: the default type applies.
   const char* selectsModel = nullptr;
+  /// For Choice: the choices as a table holds them when asked (a table that can grow: the lens
+  /// models, cameras/lens_model.h); null: `choices`.
+  std::vector<const char*> (*choicesNow)() = nullptr;
+
+  /// The choices of a Choice parameter (choicesNow() or choices; empty: the camera models).
+  std::vector<const char*> choiceList() const { return choicesNow ? choicesNow() : choices; }
 
   ParamSpec(const char* paramName, ParamKind paramKind, ParamAccess paramAccess)
       : name(paramName), kind(paramKind), access(paramAccess) {}
@@ -145,6 +151,10 @@ struct ParamSpec {
   }
   ParamSpec&& withSelectsModel(const char* m) && {
     selectsModel = m;
+    return std::move(*this);
+  }
+  ParamSpec&& withChoicesNow(std::vector<const char*> (*c)()) && {
+    choicesNow = c;
     return std::move(*this);
   }
 

@@ -137,8 +137,7 @@ struct RunBatch {
 /// Fills `out` for runs[0 .. kRunBatch) (the caller pads a short batch by repeating a run).
 /// Each box is the run's cells grown by p.grow; a corner's position is linear in it: the low
 /// corner's, plus the matrix's columns scaled by the box's edges. A per-ISA kernel.
-APERTURE_VECTOR_KERNEL void boundRunCorners(const RunProjection& p, const OccupiedRun* runs,
-                                            RunBatch& out) {
+void boundRunCorners(const RunProjection& p, const OccupiedRun* runs, RunBatch& out) {
   APERTURE_LANE_LOOP
   for (int k = 0; k < kRunBatch; ++k) {
     const OccupiedRun& r = runs[k];
@@ -225,7 +224,7 @@ class RunProjector {
         const size_t first = b * kRunBatch, count = std::min(n - first, size_t(kRunBatch));
         for (size_t k = 0; k < size_t(kRunBatch); ++k)
           runs[k] = grid_.runs[first + std::min(k, count - 1)];
-        boundRunCorners(c_, runs, batch);
+        runKernel<&boundRunCorners>(c_, runs, batch);
         for (size_t k = 0; k < count; ++k) {
           const std::optional<PixelRect> r = rectOf(batch, int(k));
           if (!r) unusable = true;

@@ -1,8 +1,13 @@
 #pragma once
-// Embree packet types by width, and RayLanes views into them.
+// Embree packet types by width, RayLanes views into them, and the gate every packet passes
+// on its way into Embree (sealLanes).
 #include <embree3/rtcore.h>
 
+#include <atomic>
+#include <cmath>
+
 #include "core/engine/camera.h"
+#include "core/util/vector_kernel.h"
 
 namespace aperture {
 
@@ -94,16 +99,75 @@ void clearHits(typename PacketOf<N>::type& p) {
   }
 }
 
-/// rtcIntersectN for the packet width; `valid` is Embree's −1/0 lane mask (unused for N = 1,
-/// which traces its one ray as the single active lane of rtcIntersect4).
+/// The largest magnitude of a ray's origin and direction components that Embree takes: its
+/// packet kernels assert |x| <= 1.844e18 (FLT_LARGE, kernels/common/ray.h) for every active
+/// lane, and a float ray past it is of no use anyway.
+constexpr float kEmbreeLargest = 1.844e18f;
+
+/// Whether Embree may trace the ray: origin and direction components within kEmbreeLargest
+/// (false for ±inf and NaN) and 0 <= tnear <= tfar (RTCRay: "the ray segment must be in the
+/// range [0, ∞]"; false when either is NaN). 0/1, without branches, so lane loops vectorise.
+inline int traceableRay(float ox, float oy, float oz, float dx, float dy, float dz, float tnear,
+                        float tfar) {
+  const float m = kEmbreeLargest;
+  return int(std::fabs(ox) <= m) & int(std::fabs(oy) <= m) & int(std::fabs(oz) <= m) &
+         int(std::fabs(dx) <= m) & int(std::fabs(dy) <= m) & int(std::fabs(dz) <= m) &
+         int(tnear >= 0.0f) & int(tnear <= tfar);
+}
+
+/// The gate of every packet Embree traces (intersect<N>, the visibility's rtcOccluded16, the
+/// baseline): lane k stays active (valid[k] = −1) only when it was (valid[k] != 0) and its
+/// ray is traceableRay; every other lane gets valid[k] = 0 and the empty segment tnear 1,
+/// tfar 0. Embree needs both. Its packet kernels assert that every active lane holds a valid
+/// ray (Debian's Embree is built with assertions: an abort). And a device without native
+/// kernels of the packet's width (rtcIntersect16 without AVX-512, rtcIntersect8 on SSE4.2)
+/// traces the packet as a ray stream, which ignores the mask and skips only the lanes whose
+/// tfar < tnear (RTCRay, rtcIntersectNM): a masked lane holding a NaN ray reached the
+/// assertion that way. Returns the active lanes.
 template <int N>
-void intersect(RTCScene scene, RTCIntersectContext* ctx, const int* valid,
+int sealLanes(int* __restrict valid, const RayLanes& l) {
+  // Locals: the stores could otherwise alias the lane pointers and force reloads every lane.
+  const float *ox = l.orgX, *oy = l.orgY, *oz = l.orgZ, *dx = l.dirX, *dy = l.dirY, *dz = l.dirZ;
+  float* __restrict tnear = l.tnear, * __restrict tfar = l.tfar;
+  int active = 0;
+  APERTURE_LANE_LOOP
+  for (int k = 0; k < N; ++k) {
+    const int live = int(valid[k] != 0) &
+                     traceableRay(ox[k], oy[k], oz[k], dx[k], dy[k], dz[k], tnear[k], tfar[k]);
+    valid[k] = -live;
+    tnear[k] = live ? tnear[k] : 1.0f;
+    tfar[k] = live ? tfar[k] : 0.0f;
+    active += live;
+  }
+  return active;
+}
+
+/// A test seam: when set, called with every packet just as Embree receives it (after
+/// sealLanes), from the thread that traces it. Set it only while nothing renders.
+using PacketObserver = void (*)(int width, const int* valid, const RayLanes& rays);
+inline std::atomic<PacketObserver> packetObserver{nullptr};
+
+/// Calls the packet observer, if any, on a sealed packet.
+inline void observePacket(int width, const int* valid, const RayLanes& rays) {
+  if (const PacketObserver o = packetObserver.load(std::memory_order_relaxed))
+    o(width, valid, rays);
+}
+
+/// rtcIntersectN for the packet width; `valid` is Embree's −1/0 lane mask (for N = 1, which
+/// traces its one ray as the single active lane of rtcIntersect4, valid[0]). The packet first
+/// passes sealLanes, so `valid` and the segments of the lanes it clears change: a lane whose
+/// ray Embree cannot take comes back inactive, with its hit untouched.
+template <int N>
+void intersect(RTCScene scene, RTCIntersectContext* ctx, int* valid,
                typename PacketOf<N>::type& p) {
+  const RayLanes lanes = rayLanes<N>(p);
+  const int active = sealLanes<N>(valid, lanes);
+  observePacket(N, valid, lanes);
+  if (active == 0) return;
   if constexpr (N == 1) {
     // One ray per call, but through the 4-wide kernel with one active lane: rtcIntersect1
     // breaks ties between coincident triangles differently from the packet kernels (seen on
     // the crown), and every packet width must give the same image.
-    (void)valid;
     alignas(16) RTCRayHit4 q;
     alignas(16) const int one[4] = {-1, 0, 0, 0};
     q.ray.org_x[0] = p.ray.org_x, q.ray.org_y[0] = p.ray.org_y, q.ray.org_z[0] = p.ray.org_z;

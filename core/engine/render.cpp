@@ -291,28 +291,30 @@ struct BlockColor {
 };
 
 /// Keeps the lanes to trace in Embree's −1/0 mask: the camera gave a ray, the lane lies in
-/// the image and the ray is finite. Counts the skipped non-finite rays; returns the active
-/// lane count. Branch-free over the lanes, so it compiles to vector compares.
+/// the image and Embree can trace the ray (traceableRay: finite, within Embree's range, a
+/// segment in [0, ∞]). Counts the skipped rays; returns the active lane count. Branch-free
+/// over the lanes, so it compiles to vector compares. intersect<N> applies the same test
+/// again (sealLanes), with the lanes this one clears.
 template <int N>
 int selectLanes(const ImagePlan& plan, const PacketRequest& req, PacketState<N>& st,
                 TileCounters& count) {
   constexpr int kBW = blockWidthFor(N);
   const RayLanes& l = st.lanes;
   const float *ox = l.orgX, *oy = l.orgY, *oz = l.orgZ, *dx = l.dirX, *dy = l.dirY, *dz = l.dirZ;
+  const float *tnear = l.tnear, *tfar = l.tfar;
   int* __restrict valid = st.valid;
   // Locals: the stores to valid[] could otherwise alias them and force reloads every lane.
   const int x0 = req.x0, y0 = req.y0, width = plan.width, height = plan.height;
-  int active = 0, nonFinite = 0;
+  int active = 0, untraceable = 0;
   APERTURE_LANE_LOOP
   for (int k = 0; k < N; ++k) {  // 0/1 integers and & rather than && (no branches)
     const int live = int(valid[k] != 0) & int(laneInImage(x0, y0, kBW, k, width, height));
-    const int isFinite = int(finiteLane(ox[k])) & int(finiteLane(oy[k])) & int(finiteLane(oz[k])) &
-                         int(finiteLane(dx[k])) & int(finiteLane(dy[k])) & int(finiteLane(dz[k]));
-    nonFinite += live & (isFinite ^ 1);
-    valid[k] = -(live & isFinite);
-    active += live & isFinite;
+    const int ok = traceableRay(ox[k], oy[k], oz[k], dx[k], dy[k], dz[k], tnear[k], tfar[k]);
+    untraceable += live & (ok ^ 1);
+    valid[k] = -(live & ok);
+    active += live & ok;
   }
-  count.skipped += uint64_t(nonFinite);
+  count.skipped += uint64_t(untraceable);
   return active;
 }
 
@@ -842,8 +844,7 @@ void prefetchBlockRow(const ImagePlan& plan, int y, int x0, int x1, int y1) {
 /// A per-ISA kernel (core/util/vector_kernel.h): the whole block loop, stores included, is
 /// compiled for each x86-64 level.
 template <int N, bool kNull>
-APERTURE_VECTOR_KERNEL void renderTile(const ImagePlan& plan, int x0, int y0, int x1, int y1,
-                                       TileCounters& count) {
+void renderTile(const ImagePlan& plan, int x0, int y0, int x1, int y1, TileCounters& count) {
   // Denormals flushed on every worker (Embree's recommendation); same mode on all threads.
   _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
   _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
@@ -870,13 +871,13 @@ template <bool kNull>
 TileRenderer tileRendererOfWidth(int packetWidth) {
   switch (packetWidth) {
     case 1:
-      return &renderTile<1, kNull>;
+      return &Kernel<&renderTile<1, kNull>>::run;
     case 4:
-      return &renderTile<4, kNull>;
+      return &Kernel<&renderTile<4, kNull>>::run;
     case 8:
-      return &renderTile<8, kNull>;
+      return &Kernel<&renderTile<8, kNull>>::run;
     default:
-      return &renderTile<16, kNull>;
+      return &Kernel<&renderTile<16, kNull>>::run;
   }
 }
 

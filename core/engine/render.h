@@ -50,7 +50,8 @@ struct RenderStats {
   /// Rays with a valid lane: passed to Embree, or resolved as misses by the scene-box test or
   /// the coverage mask.
   uint64_t raysTraced = 0;
-  uint64_t raysSkipped = 0;  ///< lanes masked because the camera gave no ray or it was non-finite
+  uint64_t raysSkipped =
+      0;  ///< lanes masked because the camera gave no ray or Embree cannot trace it (traceableRay)
   /// Of raysTraced, those the scene-box test or the coverage mask resolved as misses without
   /// Embree (in the null trace, those they would have resolved: every lane still fakes a hit
   /// there).

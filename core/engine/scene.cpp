@@ -11,6 +11,7 @@
 
 #include "core/util/error.h"
 #include "core/util/parallel.h"
+#include "core/util/vector_kernel.h"
 
 namespace aperture {
 
@@ -74,6 +75,9 @@ Device::Device(const std::string& givenConfig) : state_(std::make_unique<State>(
   // APERTURE_EMBREE_CONFIG (e.g. "isa=sse4.2") applies when the caller gives none: it pins
   // Embree's kernels so images are bit-comparable across CPUs.
   const char* fromEnvironment = std::getenv("APERTURE_EMBREE_CONFIG");
+  // Its twin for aperture's own kernels, APERTURE_KERNEL_ISA, is read here too, so that a bad
+  // value is reported before any work (core/util/vector_kernel.h).
+  activeKernelIsa();
   const std::string config =
       givenConfig.empty() && fromEnvironment ? std::string(fromEnvironment) : givenConfig;
   device_ = rtcNewDevice(config.empty() ? nullptr : config.c_str());

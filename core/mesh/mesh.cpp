@@ -132,8 +132,7 @@ struct IndexScan {
 
 /// Counts, over the `triangles` triangles at `indices`, the indices >= n and the triangles
 /// that repeat an index: comparisons without branches, which the loop vectoriser takes.
-APERTURE_VECTOR_KERNEL void countBadIndices(const uint32_t* indices, size_t triangles, uint64_t n,
-                                            IndexScan& scan) {
+void countBadIndices(const uint32_t* indices, size_t triangles, uint64_t n, IndexScan& scan) {
   size_t outOfRange = 0, degenerate = 0;
   for (size_t t = 0; t < triangles; ++t) {
     const uint32_t a = indices[3 * t], b = indices[3 * t + 1], c = indices[3 * t + 2];
@@ -152,7 +151,7 @@ IndexScan scanIndices(const Mesh& mesh) {
   std::vector<IndexScan> chunks(chunkCount(triangles));
   forEachChunk(triangles, [&](size_t c, size_t b, size_t e) {
     IndexScan s;
-    countBadIndices(mesh.indices.data() + 3 * b, e - b, n, s);
+    runKernel<&countBadIndices>(mesh.indices.data() + 3 * b, e - b, n, s);
     if (s.outOfRange)
       s.firstOutOfRange = size_t(std::find_if(mesh.indices.begin() + ptrdiff_t(3 * b),
                                               mesh.indices.begin() + ptrdiff_t(3 * e),
@@ -317,7 +316,7 @@ struct PlainPlacement {
 
 /// Rewrites the `count` vertices at `xyz` in place, placed and anchored by `p`: whole blocks of
 /// four vertices with a twelve-wide inner loop that the loop vectoriser takes, then the rest.
-APERTURE_VECTOR_KERNEL void placePlainVertices(const PlainPlacement& p, float* xyz, size_t count) {
+void placePlainVertices(const PlainPlacement& p, float* xyz, size_t count) {
   constexpr size_t kBlock = PlainPlacement::kBlock;
   const size_t floats = 3 * count, whole = floats - floats % kBlock;
   for (size_t i = 0; i < whole; i += kBlock) {
@@ -341,7 +340,7 @@ void writeAnchoredPositions(Mesh& mesh, const WorldVertices& world, const std::v
   const PlainPlacement placement(world, mesh.anchor);
   forEachChunk(n, [&](size_t, size_t b, size_t e) {
     if (plain) {  // the same arithmetic, without the per-vertex tests
-      placePlainVertices(placement, mesh.positions.data() + 3 * b, e - b);
+      runKernel<&placePlainVertices>(placement, mesh.positions.data() + 3 * b, e - b);
       return;
     }
     for (size_t k = b; k < e; ++k) {

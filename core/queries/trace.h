@@ -31,7 +31,8 @@ struct TraceHit {
 };
 
 /// Traces `rays` (closest hit) in packets of `packetWidth` (1, 4, 8 or 16) on the calling
-/// thread. Rays with a non-finite origin or direction are not traced and report a miss.
+/// thread. Rays Embree cannot take (traceableRay, core/engine/packet.h: a non-finite origin or
+/// direction, one past Embree's range, a segment outside [0, ∞]) are not traced: a miss.
 /// Returns one hit per ray, in order. Throws Error for a bad packet width.
 std::vector<TraceHit> traceRays(const Scene& scene, const std::vector<TraceRay>& rays,
                                 int packetWidth = 16);

@@ -329,7 +329,6 @@ void markOccluded(const Scene& scene, const CameraImage& image,
   l.orgX = p.ray.org_x, l.orgY = p.ray.org_y, l.orgZ = p.ray.org_z, l.tnear = p.ray.tnear;
   l.dirX = p.ray.dir_x, l.dirY = p.ray.dir_y, l.dirZ = p.ray.dir_z, l.time = p.ray.time;
   l.tfar = p.ray.tfar, l.mask = p.ray.mask, l.id = p.ray.id, l.flags = p.ray.flags;
-  int active = 0;
   for (int k = 0; k < kLanes; ++k) {
     p.valid[k] = 0;
     setIdleLane(l, k);
@@ -343,9 +342,9 @@ void markOccluded(const Scene& scene, const CameraImage& image,
     if (!(d > 0)) continue;
     setLane(l, k, org, towards / d, float(d * (1.0 - tolerance)));
     p.valid[k] = -1;
-    ++active;
   }
-  if (active == 0) return;
+  if (sealLanes<kLanes>(p.valid, l) == 0) return;
+  observePacket(kLanes, p.valid, l);
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   rtcOccluded16(p.valid, scene.handle(), &ctx, &p.ray);

@@ -81,3 +81,15 @@ def shared_dir() -> Path:
 def bunny(shared_dir: Path) -> Path:
     """The Stanford bunny at its coarsest resolution (948 faces)."""
     return shared_dir / "meshes" / "stanford" / "bun_zipper_res4.ply"
+
+
+@pytest.fixture(scope="session")
+def pycolmap():
+    """pycolmap, COLMAP's own Python bindings (pip; scripts/venv.sh installs it), the reference
+    the camera-model tests check against; they skip with this message when it cannot be
+    imported."""
+    try:
+        import pycolmap as module
+    except ImportError as e:
+        pytest.skip(f"pycolmap cannot be imported ({e}); pip install 'pycolmap>=4.2' (scripts/venv.sh does)")
+    return module

@@ -430,16 +430,18 @@ TEST(CameraFilesCliJob, ImagePlaceholderNeedsCamerasFromAFile) {
 
 // ---- unsupported models ----
 
+// A model COLMAP does not have (Kalibr's name for OpenCV's fisheye).
 TEST(CameraFilesCliErrors, AnUnsupportedModelIsNamed) {
-  const std::string dir = test::scratchDir(), model = dir + "/fov";
+  const std::string dir = test::scratchDir(), model = dir + "/kb";
   fs::create_directories(model);
-  test::writeFile(model + "/cameras.txt", "1 FOV 32 24 40 40 16 12 0.9\n");
+  test::writeFile(model + "/cameras.txt", "1 KANNALA_BRANDT 32 24 40 40 16 12 0.9\n");
   test::writeFile(model + "/images.txt", "1 1 0 0 0 0 0 5 1 a.png\n\n");
   expectRefused(apertureBinary() + " render --quiet --mesh procedural:sphere --cameras " + model +
                     " --out " + dir + "/x.exr",
-                {"FOV", "cameras.txt"}, dir);
-  expectRefused(batchOneLine(model, dir + "/out"), {"FOV", "cameras.txt"}, dir);
-  expectRefused(apertureBinary() + " camera --describe --cameras " + model, {"FOV"}, dir);
+                {"KANNALA_BRANDT", "cameras.txt"}, dir);
+  expectRefused(batchOneLine(model, dir + "/out"), {"KANNALA_BRANDT", "cameras.txt"}, dir);
+  expectRefused(apertureBinary() + " camera --describe --cameras " + model, {"KANNALA_BRANDT"},
+                dir);
 }
 
 // ---- EXR headers ----

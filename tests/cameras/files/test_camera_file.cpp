@@ -330,10 +330,10 @@ TEST(CameraFileColmap, MalformedFilesNameTheFileAndTheEntry) {
   EXPECT_ERROR_MENTIONS(readCameraFile(binaryModel("huge_points", cams, hugePoints.s)),
                         "images.bin", "2D points of image 1", "more than the remaining");
   Bytes badModel;
-  badModel.put<uint64_t>(1).put<uint32_t>(2).put<int32_t>(7).put<uint64_t>(8).put<uint64_t>(8);
+  badModel.put<uint64_t>(1).put<uint32_t>(2).put<int32_t>(18).put<uint64_t>(8).put<uint64_t>(8);
   for (int k = 0; k < 4; ++k) badModel.put(1.0);
   EXPECT_ERROR_MENTIONS(readCameraFile(binaryModel("model_id", badModel.s, imagesBin())),
-                        "cameras.bin", "camera 2", "model id 7");
+                        "cameras.bin", "camera 2", "model id 18");
   Bytes noNul;
   noNul.put<uint64_t>(1).put<uint32_t>(1);
   for (double v : {1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}) noNul.put(v);

@@ -8,9 +8,9 @@
 #include <string>
 #include <tuple>
 
+#include "cameras/geometry/view_volume.h"
 #include "cameras/models/base.h"
 #include "cameras/models/perspective.h"
-#include "cameras/models/view_volume.h"
 #include "cameras/registry/registry.h"
 #include "core/util/error.h"
 #include "core/util/units.h"

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <random>
 
+#include "cameras/geometry/view_volume.h"
 #include "cameras/models/base.h"
-#include "cameras/models/view_volume.h"
 #include "cameras/registry/registry.h"
 #include "core/util/error.h"
 #include "tests/camera_support.h"

@@ -1,7 +1,9 @@
 // The packet contract of core/engine/camera.h: which pixel each lane of a packet covers, and which
 // lanes of a tail block fall outside the image. Expectations are written out pixel by pixel.
+// And the gate of core/engine/packet.h every packet passes into Embree (sealLanes).
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -60,4 +62,69 @@ TEST(PacketContract, TailLanesOutsideTheImageAreTheOnlyOnesOut) {
   // A block inside the image keeps every lane.
   const PacketRequest full{8, 0, 4, 4, 0};
   for (int k = 0; k < full.lanes(); ++k) EXPECT_TRUE(full.inImage(k, 13, 7)) << k;
+}
+
+namespace {
+
+/// Lane k of a packet of width N after sealLanes, from rays chosen to cover each way a ray
+/// can be untraceable, each lane given valid −1 or 0 in turn.
+template <int N>
+void checkSealAtWidth() {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  struct Ray {
+    float org[3], dir[3], tnear, tfar;
+    bool traceable;  // by Embree's documentation (RTCRay) and its range (1.844e18)
+  };
+  const std::vector<Ray> rays = {
+      {{0, 0, 4}, {0, 0, -1}, 0, inf, true},      {{1, 2, 3}, {0, 1, 0}, 0.5f, 2, true},
+      {{0, 0, 4}, {0, 0, -1}, 3, 3, true},        {{nan, 0, 4}, {0, 0, -1}, 0, inf, false},
+      {{0, 0, 4}, {0, inf, -1}, 0, inf, false},   {{0, -inf, 4}, {0, 0, -1}, 0, inf, false},
+      {{1e19f, 0, 4}, {0, 0, -1}, 0, inf, false}, {{0, 0, 4}, {0, 0, -2e18f}, 0, inf, false},
+      {{0, 0, 4}, {0, 0, -1}, -1, inf, false},    {{0, 0, 4}, {0, 0, -1}, 2, 1, false},
+      {{0, 0, 4}, {0, 0, -1}, nan, inf, false},   {{0, 0, 4}, {0, 0, -1}, 0, nan, false},
+      {{0, 0, 4}, {nan, nan, nan}, 0, inf, false}};
+  size_t next = 0;
+  for (int round = 0; round < int(2 * rays.size()); ++round) {
+    PacketBuffers<N> p;
+    std::vector<size_t> which(N);
+    std::vector<int> given(N);
+    for (int k = 0; k < N; ++k) {
+      which[size_t(k)] = next % rays.size();
+      given[size_t(k)] = (next / rays.size() + size_t(k)) % 2 ? 0 : -1;
+      ++next;
+      const Ray& r = rays[which[size_t(k)]];
+      RayLanes& l = p.lanes;
+      l.orgX[k] = r.org[0], l.orgY[k] = r.org[1], l.orgZ[k] = r.org[2];
+      l.dirX[k] = r.dir[0], l.dirY[k] = r.dir[1], l.dirZ[k] = r.dir[2];
+      l.tnear[k] = r.tnear, l.tfar[k] = r.tfar;
+      p.valid[k] = given[size_t(k)];
+    }
+    const int active = sealLanes<N>(p.valid, p.lanes);
+    int expected = 0;
+    for (int k = 0; k < N; ++k) {
+      const Ray& r = rays[which[size_t(k)]];
+      const bool on = given[size_t(k)] != 0 && r.traceable;
+      expected += on;
+      SCOPED_TRACE(::testing::Message() << "width " << N << ", lane " << k << ", ray "
+                                        << which[size_t(k)] << ", valid " << given[size_t(k)]);
+      EXPECT_EQ(p.valid[k], on ? -1 : 0);
+      if (on) {  // untouched
+        EXPECT_EQ(p.lanes.tnear[k], r.tnear);
+        EXPECT_EQ(p.lanes.tfar[k], r.tfar);
+      } else {  // inactive in a ray stream too
+        EXPECT_LT(p.lanes.tfar[k], p.lanes.tnear[k]);
+      }
+    }
+    EXPECT_EQ(active, expected);
+  }
+}
+
+}  // namespace
+
+TEST(PacketGate, OnlyRaysEmbreeTakesStayActiveAndEveryOtherLaneIsAnEmptySegment) {
+  checkSealAtWidth<1>();
+  checkSealAtWidth<4>();
+  checkSealAtWidth<8>();
+  checkSealAtWidth<16>();
 }

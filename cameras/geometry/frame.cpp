@@ -1,4 +1,4 @@
-#include "cameras/models/frame.h"
+#include "cameras/geometry/frame.h"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "cameras/models/view_volume.h"
+#include "cameras/geometry/view_volume.h"
 
 #include <cmath>
 #include <limits>
