@@ -4,7 +4,7 @@
 #   - Embree at AVX2 (APERTURE_EMBREE_CONFIG=isa=avx2: what Embree picks on any CPU without
 #     AVX-512) with aperture's x86-64-v3 kernels (APERTURE_KERNEL_ISA, core/util/vector_kernel.h);
 #   - Embree at SSE4.2 with aperture's baseline kernels.
-# The golden hashes (tests/cameras/test_golden.cpp) must hold under both, as under the
+# The golden hashes (tests/cameras/models/test_golden.cpp) must hold under both, as under the
 # default run of scripts/test.sh. Reuses build/ of scripts/test.sh (run it first): only the
 # tests run again, not the format check (no vector code) nor pytest (the same C++ through
 # the Python module). A combination this CPU cannot run is skipped with a message.

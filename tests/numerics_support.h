@@ -1,6 +1,7 @@
 #pragma once
-// Helpers of the numerics tests (tests/core/test_numerics_*.cpp, tests/cameras/test_numerics_*):
-// one shared device, a mesh with its scene, renders, and agreement of two renders.
+// Helpers of the numerics tests (tests/core/engine/test_numerics_*.cpp,
+// tests/cameras/models/test_numerics_cameras.cpp): one shared device, a mesh with its scene,
+// renders, and agreement of two renders.
 #include <memory>
 #include <string>
 #include <vector>

@@ -1,6 +1,6 @@
-// Output paths checked before any work (apps/services/outputs.h), the order in which a view's files
-// are written (writeViewOutputs, apps/services/view.h), and the depth range a batch's previews
-// share.
+// Output paths checked before any work (apps/services/outputs.h), every preview extension
+// written, and the depth range a batch's previews share. The order of a view's files:
+// test_view.cpp.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,12 +9,11 @@
 #include <vector>
 
 #include "apps/services/outputs.h"
-#include "apps/services/view.h"
 #include "core/exr/exr.h"
 #include "core/io/image.h"
 #include "core/util/error.h"
-#include "tests/apps/unwritable_dir.h"
 #include "tests/support.h"
+#include "tests/unwritable_dir.h"
 
 using namespace aperture;
 using namespace aperture::app;
@@ -160,46 +159,6 @@ TEST(Outputs, EverySupportedPreviewExtensionIsWritten) {
   }
   EXPECT_EQ(filesUnder(dir).size(), supportedExtensions(OutputKind::Preview).size() + 1)
       << "no temporary file remains";
-}
-
-RenderedView smallView(AovMask aovs) {
-  RenderedView view;
-  view.fb = Framebuffer(4, 3, aovs);
-  view.camera.width = 4;
-  view.camera.height = 3;
-  return view;
-}
-
-TEST(Outputs, APreviewThatFailsToWriteLeavesNoExr) {
-  const std::string dir = test::scratchDir();
-  test::writeFile(dir + "/afile", "a regular file");
-  const std::string exr = dir + "/x.exr";
-  const RenderedView view = smallView(kAovColor | kAovDepth);
-  const RenderedView unpreviewable = smallView(kAovPosition);
-  struct Case {
-    const char* what;
-    const RenderedView& view;
-    std::string preview;
-  } cases[] = {
-      {"the preview's directory cannot be created", view, dir + "/afile/p.png"},
-      {"no writer for the extension", view, dir + "/p.xyz"},
-      {"no AOV to preview", unpreviewable, dir + "/p.png"},
-  };
-  for (const Case& c : cases) {
-    const std::string message =
-        errorOf([&] { writeViewOutputs(c.view, ExrMetadata{}, ExrOptions{}, exr, c.preview); });
-    EXPECT_NE(message.find(c.preview), std::string::npos) << c.what << ": " << message;
-    EXPECT_FALSE(fs::exists(exr)) << c.what << ": an EXR was written although its preview failed";
-    EXPECT_EQ(filesUnder(dir), std::vector<std::string>{"afile"}) << c.what;
-  }
-  // Both written; then an EXR that fails leaves its preview (written first) and no EXR.
-  ASSERT_EQ(errorOf([&] { writeViewOutputs(view, {}, {}, exr, dir + "/p.png"); }), "");
-  EXPECT_TRUE(isCompleteExr(exr));
-  EXPECT_TRUE(fs::exists(dir + "/p.png"));
-  const std::string message =
-      errorOf([&] { writeViewOutputs(view, {}, {}, dir + "/afile/y.exr", dir + "/q.png"); });
-  EXPECT_NE(message.find("afile"), std::string::npos) << message;
-  EXPECT_TRUE(fs::exists(dir + "/q.png"));
 }
 
 CameraParams lookAt(const glm::dvec3& eye, const glm::dvec3& at) {

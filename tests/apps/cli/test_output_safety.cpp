@@ -68,16 +68,16 @@ TEST(OutputSafety, FileSizeLimitIsACleanErrorAndKeepsThePreviousFile) {
   EXPECT_TRUE(othersIn(dir, "x.exr").empty()) << "a temporary file was left behind";
 
   // The bench summary JSON and the PNG preview go through the same path.
-  const std::string json = dir + "/b.json";
-  test::writeFile(json, "{\"previous\": true}\n");
-  EXPECT_EQ(
-      runCommand("ulimit -f 0; exec " + apertureBinary() +
-                     " bench --quiet --size 16,16 --frames 1 --warmup 0 --builds 1 --json " + json,
-                 &out),
-      1)
+  const std::string jsonPath = dir + "/b.json";
+  test::writeFile(jsonPath, "{\"previous\": true}\n");
+  EXPECT_EQ(runCommand("ulimit -f 0; exec " + apertureBinary() +
+                           " bench --quiet --size 16,16 --frames 1 --warmup 0 --builds 1 --json " +
+                           jsonPath,
+                       &out),
+            1)
       << out;
-  EXPECT_NE(out.find("cannot write '" + json + "'"), std::string::npos) << out;
-  EXPECT_EQ(readBytes(json), "{\"previous\": true}\n");
+  EXPECT_NE(out.find("cannot write '" + jsonPath + "'"), std::string::npos) << out;
+  EXPECT_EQ(readBytes(jsonPath), "{\"previous\": true}\n");
   EXPECT_EQ(othersIn(dir, "x.exr"), std::vector<std::string>{"b.json"});
 }
 

@@ -1,8 +1,7 @@
 // 3D points files (cameras/files/points_file.h): COLMAP points3D.txt and .bin written here from
 // COLMAP's documented layout (tracks included), a COLMAP folder, PLY vertices (ASCII float with
 // faces, binary double without), NumPy .npy float32 / float64 with headers written by hand;
-// the errors name the file and the entry. Also CameraFile::imageIds of COLMAP models written
-// here with ids out of order.
+// the errors name the file and the entry.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -241,58 +240,6 @@ TEST(PointsFile, ErrorsNameTheFileAndTheEntry) {
   expectError(dir + "/p.xyz", {"'.xyz'", ".txt, .bin, .ply, .npy"});
   test::writeFile(dir + "/p.nyp", "");
   expectError(dir + "/p.nyp", {"did you mean '.npy'"});
-}
-
-// ---- CameraFile::imageIds ----
-
-const char* const kCamerasText =
-    "# CAMERA_ID MODEL WIDTH HEIGHT PARAMS[]\n1 PINHOLE 64 48 50 50 32 24\n";
-
-/// Images with ids 7, 3, 12 in that (file) order.
-const std::vector<std::pair<uint32_t, std::string>>& modelImages() {
-  static const std::vector<std::pair<uint32_t, std::string>> images = {
-      {7, "a.png"}, {3, "b.png"}, {12, "c.png"}};
-  return images;
-}
-
-TEST(PointsFileImageIds, ColmapTextAndBinaryInImageOrder) {
-  const std::string dir = test::scratchDir();
-  std::filesystem::create_directories(dir + "/text");
-  std::filesystem::create_directories(dir + "/bin");
-  std::string imagesText = "# IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME\n";
-  for (const auto& [id, name] : modelImages())
-    imagesText += std::to_string(id) + " 1 0 0 0 0 0 0 1 " + name + "\n\n";
-  test::writeFile(dir + "/text/cameras.txt", kCamerasText);
-  test::writeFile(dir + "/text/images.txt", imagesText);
-
-  std::string camerasBin, imagesBin;
-  put<uint64_t>(camerasBin, 1);
-  put<uint32_t>(camerasBin, 1);
-  put<int32_t>(camerasBin, 1);  // PINHOLE
-  put<uint64_t>(camerasBin, 64);
-  put<uint64_t>(camerasBin, 48);
-  for (double p : {50.0, 50.0, 32.0, 24.0}) put<double>(camerasBin, p);
-  put<uint64_t>(imagesBin, modelImages().size());
-  for (const auto& [id, name] : modelImages()) {
-    put<uint32_t>(imagesBin, id);
-    for (double q : {1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}) put<double>(imagesBin, q);
-    put<uint32_t>(imagesBin, 1);
-    imagesBin += name;
-    imagesBin.push_back('\0');
-    put<uint64_t>(imagesBin, 0);
-  }
-  test::writeFile(dir + "/bin/cameras.bin", camerasBin);
-  test::writeFile(dir + "/bin/images.bin", imagesBin);
-
-  for (const char* model : {"/text", "/bin"}) {
-    const CameraFile file = readCameraFile(dir + model);
-    ASSERT_EQ(file.images.size(), 3u) << model;
-    ASSERT_EQ(file.imageIds.size(), 3u) << model;
-    for (size_t k = 0; k < 3; ++k) {
-      EXPECT_EQ(file.images[k].name, modelImages()[k].second) << model;
-      EXPECT_EQ(file.imageIds[k], std::to_string(modelImages()[k].first)) << model;
-    }
-  }
 }
 
 }  // namespace

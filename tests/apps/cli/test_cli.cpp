@@ -1,6 +1,6 @@
 // End-to-end tests of the `aperture` executable: exit codes, messages, no partial outputs,
 // bit-identical EXRs across packet widths and threads (EXR header reprojection:
-// test_exr_headers.cpp).
+// tests/core/exr/test_exr_header.cpp).
 #include <gtest/gtest.h>
 #include <sys/mount.h>
 
@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "core/exr/exr.h"
-#include "tests/apps/unwritable_dir.h"
 #include "tests/support.h"
+#include "tests/unwritable_dir.h"
 
 using namespace aperture;
 using aperture::test::apertureBinary;

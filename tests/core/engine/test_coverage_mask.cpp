@@ -1,10 +1,10 @@
-// The coverage mask (core/engine/occupancy.h, core/engine/coverage_mask.h,
-// RenderSettings::coverageMask): the frame loop resolves the packets whose block sees no occupied
-// cell as misses without Embree. Checked four ways: every placed triangle lies in occupied cells;
-// the rays the cameras generate project into their own pixel through the projection the mask uses
-// (and a flipped convention is caught); every pixel the unmasked frame loop hits lies in a covered
-// block, over many random poses, while far blocks are left uncovered (and a mask built with the
-// rows flipped is caught); and every AOV and count is bit-identical with the mask on and off.
+// The coverage mask (core/engine/coverage_mask.h, RenderSettings::coverageMask): the frame loop
+// resolves the packets whose block sees no occupied cell (core/engine/occupancy.h, tested in
+// test_occupancy.cpp) as misses without Embree. Checked three ways: the rays the cameras
+// generate project into their own pixel through the projection the mask uses (and a flipped
+// convention is caught); every pixel the unmasked frame loop hits lies in a covered block, over
+// many random poses, while far blocks are left uncovered (and a mask built with the rows flipped
+// is caught); and every AOV and count is bit-identical with the mask on and off.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -30,58 +30,6 @@ namespace coverage_mask_test {
 /// The mesh placed once as loaded and once turned and moved (an Embree instance).
 std::vector<SceneObject> placedTwice(const Mesh& mesh) {
   return test::placedTwice(mesh, {40.0, -5.0, 12.0});
-}
-
-/// Whether the render-space point `p` lies in a run's box of `grid`.
-bool inOccupiedCell(const OccupancyGrid& grid, const glm::dvec3& p) {
-  for (const OccupiedRun& r : grid.runs) {
-    const SceneBox b = grid.runBox(r);
-    if (glm::all(glm::lessThanEqual(glm::dvec3(b.lo), p)) &&
-        glm::all(glm::lessThanEqual(p, glm::dvec3(b.hi))))
-      return true;
-  }
-  return false;
-}
-
-TEST(Occupancy, EveryPlacedTriangleLiesInOccupiedCellsAndEmptySpaceIsNotOccupied) {
-  const Mesh mesh = loadMesh("procedural:spheres?tris=3000");
-  const std::vector<SceneObject> objects = placedTwice(mesh);
-  const Scene scene(test::numericsDevice(), objects);
-  const Occupancy* occupancy = scene.occupancy();
-  ASSERT_NE(occupancy, nullptr);
-  ASSERT_EQ(occupancy->levels.size(), size_t(kOccupancyLevels));
-  const OccupancyGrid* grid = &occupancy->levels.front();
-  EXPECT_EQ(std::max({grid->dims.x, grid->dims.y, grid->dims.z}), kOccupancyCells);
-  for (size_t level = 0; level < occupancy->levels.size(); ++level)
-    for (const SceneObject& o : objects) {
-      const glm::dmat4 renderFromLocal = glm::translate(glm::dmat4(1.0), -scene.renderOrigin()) *
-                                         o.worldFromMesh *
-                                         glm::translate(glm::dmat4(1.0), o.mesh->anchor);
-      for (size_t t = 0; t < mesh.triangleCount(); t += 7) {
-        glm::dvec3 corner[3];
-        for (int c = 0; c < 3; ++c)
-          corner[c] = glm::dvec3(renderFromLocal *
-                                 glm::dvec4(glm::dvec3(mesh.vertex(mesh.indices[3 * t + c])), 1.0));
-        // The corners and points inside the triangle.
-        for (const glm::dvec3& b : {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1),
-                                    glm::dvec3(1.0 / 3), glm::dvec3(0.6, 0.3, 0.1)})
-          ASSERT_TRUE(inOccupiedCell(occupancy->levels[level],
-                                     b.x * corner[0] + b.y * corner[1] + b.z * corner[2]))
-              << "level " << level << " triangle " << t;
-      }
-    }
-  // Each level's cells are kOccupancyCoarsening of the finer one's per axis, and it has fewer
-  // runs.
-  for (size_t level = 1; level < occupancy->levels.size(); ++level) {
-    const OccupancyGrid &coarse = occupancy->levels[level], &fine = occupancy->levels[level - 1];
-    EXPECT_EQ(coarse.cell, fine.cell * kOccupancyCoarsening) << level;
-    EXPECT_LT(coarse.runs.size(), fine.runs.size()) << level;
-  }
-  // The spheres fill a small part of their box: most cells are empty, and the corner of the
-  // box far from both placements is.
-  const size_t cells = size_t(grid->dims.x) * size_t(grid->dims.y) * size_t(grid->dims.z);
-  EXPECT_LT(grid->occupiedCells(), cells / 4);
-  EXPECT_GT(grid->occupiedCells(), 100u);
 }
 
 /// Perspective cameras of every variant the mask serves, and calibrated pinholes in both
