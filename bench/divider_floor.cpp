@@ -1,5 +1,5 @@
 // The divider floor of the pinhole rays (issue 13, item 1): the golden ray hashes
-// (tests/cameras/test_golden.cpp) hold every pinhole direction to p · (1 / sqrt(|p|²)) in
+// (tests/cameras/models/test_golden.cpp) hold every pinhole direction to p · (1 / sqrt(|p|²)) in
 // double, rounded once to float, so each ray costs one double square root and one double
 // divide. This loop runs only those two instructions, on independent data, 16 rays (two
 // 8-wide vectors) per iteration, and prints the time per ray: the least any ray generation

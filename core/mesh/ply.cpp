@@ -6,7 +6,7 @@
 // Binary elements of fixed-size items (vertices without list properties; faces whose counts
 // all equal the first) are parsed in parallel, straight into the mesh's buffers; anything
 // else, and any item the parallel readers find wrong, goes to the serial readers, so the mesh
-// and the error messages are the same either way (tests/core/test_ply_parallel.cpp).
+// and the error messages are the same either way (tests/core/mesh/test_ply_parallel.cpp).
 // The header's counts are checked against the file size before anything is allocated.
 #include "core/mesh/ply.h"
 
