@@ -18,8 +18,8 @@
 //    calls its kernel with the camera's constants);
 //  - results are bit-identical on every level: the build has -ffp-contract=off (no FMA
 //    contraction) and no fast-math, and IEEE +, −, ×, ÷ and √ round the same in every
-//    vector width. tests/cameras/models/test_golden.cpp holds the hashes, and CI runs the suite with
-//    each level forced (scripts/ci-isa.sh).
+//    vector width. tests/cameras/models/test_golden.cpp holds the hashes, and CI runs the suite
+//    with each level forced (scripts/ci-isa.sh).
 //
 // Lane loops (for k over a packet's N lanes, N a constant) are marked APERTURE_LANE_LOOP. GCC
 // otherwise unrolls such a loop completely before its loop vectoriser runs and leaves the
