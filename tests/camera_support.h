@@ -11,6 +11,7 @@
 #include "cameras/models/base.h"
 #include "cameras/registry/registry.h"
 #include "core/engine/packet.h"
+#include "core/util/units.h"
 
 namespace aperture::test {
 
@@ -172,6 +173,35 @@ inline std::vector<CameraParams> everyCamera() {
   c.distortion = std::vector<double>{0.0, 0.0, 0.0, 0.0};
   all.push_back(c);
   return all;
+}
+
+/// Degrees to radians.
+inline double rad(double deg) { return deg * kPi / 180.0; }
+
+/// The camera model of `p` (the registry's makeCameraModel).
+inline std::unique_ptr<CameraBase> make(const CameraParams& p,
+                                        const glm::dvec3& renderOrigin = glm::dvec3(0.0)) {
+  return makeCameraModel(p, renderOrigin);
+}
+
+inline glm::dvec3 toDouble(const glm::vec3& v) { return glm::dvec3(v); }
+
+/// Generates the single-pixel packet (1x1) for pixel (i, j), sample s.
+struct Lane {
+  glm::vec3 org, dir;
+  int valid;
+};
+inline Lane pixelLane(const Camera& cam, int i, int j, int s = 0) {
+  PacketBuffer buf(1);
+  PacketRequest req;
+  req.x0 = j;
+  req.y0 = i;
+  req.blockW = req.blockH = 1;
+  req.sample = s;
+  int valid = 7;
+  cam.generate(req, buf.lanes(), &valid);
+  const RayLanes& l = buf.lanes();
+  return {{l.orgX[0], l.orgY[0], l.orgZ[0]}, {l.dirX[0], l.dirY[0], l.dirZ[0]}, valid};
 }
 
 }  // namespace aperture::test

@@ -1,4 +1,4 @@
-// EXR output/input and atomic file writes.
+// EXR output/input (the atomic writes under it: tests/core/io/test_atomic_file.cpp).
 #include <Imath/ImathBox.h>
 #include <Imath/ImathMatrix.h>
 #include <Imath/half.h>
@@ -9,71 +9,24 @@
 #include <OpenEXR/ImfMatrixAttribute.h>
 #include <OpenEXR/ImfStandardAttributes.h>
 #include <OpenEXR/ImfStringAttribute.h>
-#include <signal.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <glm/glm.hpp>
-#include <limits>
 #include <map>
-#include <sstream>
 
 #include "core/exr/exr.h"
-#include "core/io/atomic_file.h"
 #include "core/util/error.h"
+#include "tests/exr_support.h"
 #include "tests/support.h"
 
 namespace aperture {
 namespace {
 
-namespace fs = std::filesystem;
-constexpr AovMask kAllAovs =
-    kAovColor | kAovDepth | kAovDistance | kAovNormal | kAovPosition | kAovPrimId | kAovGeomId;
-const float kInf = std::numeric_limits<float>::infinity();
-
-/// Every AOV filled with distinct values; every 5th pixel is a miss (+inf, invalid ids).
-Framebuffer patterned(int w, int h) {
-  Framebuffer fb(w, h, kAllAovs);
-  for (size_t i = 0; i < fb.pixelCount(); ++i) {
-    const float f = float(i);
-    for (int c = 0; c < 4; ++c) fb.rgba[4 * i + c] = 0.013f * f + 0.21f * float(c) + 0.001f;
-    for (int c = 0; c < 3; ++c) {
-      fb.normal[3 * i + c] = std::sin(0.7f * f + float(c));
-      fb.position[3 * i + c] = -3.3f + 0.117f * f * float(c + 1);
-    }
-    if (i % 5 == 0) {
-      fb.depth[i] = fb.distance[i] = kInf;
-      fb.primId[i] = fb.geomId[i] = kInvalidId;
-    } else {
-      fb.depth[i] = 1.5f + 0.37f * f;
-      fb.distance[i] = 1.7f + 0.41f * f;
-      fb.primId[i] = uint32_t(1000003u * i + 7u);
-      fb.geomId[i] = uint32_t(i % 3);
-    }
-  }
-  return fb;
-}
-
-std::string readBytes(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-std::vector<std::string> listDir(const std::string& dir) {
-  std::vector<std::string> names;
-  for (const auto& entry : fs::directory_iterator(dir)) names.push_back(entry.path().filename());
-  std::sort(names.begin(), names.end());
-  return names;
-}
+using test::kAllAovs;
+using test::patterned;
+using test::readBytes;
 
 /// Reads one channel of `path` with OpenEXR directly (not through readExr).
 template <typename T>
@@ -578,104 +531,6 @@ TEST(Exr, IsCompleteExrDetectsDamage) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("half.exr"), std::string::npos) << e.what();
   }
-}
-
-TEST(Atomic, TemporaryPathIsAHiddenSiblingWithSuffix) {
-  const std::string a = temporaryPathFor("/some/dir/out.png", ".png");
-  const std::string b = temporaryPathFor("/some/dir/out.png", ".png");
-  const std::string prefix = "/some/dir/.out.png.tmp-" + std::to_string(::getpid()) + "-";
-  EXPECT_EQ(a.compare(0, prefix.size(), prefix), 0) << a;
-  EXPECT_EQ(a.substr(a.size() - 4), ".png");
-  EXPECT_NE(a, b);
-  EXPECT_EQ(temporaryPathFor("bare.exr").compare(0, 14, ".bare.exr.tmp-"), 0);
-}
-
-TEST(Atomic, MissingDirectoryThrowsAndCreatesNothing) {
-  const std::string dir = test::scratchDir();
-  const std::string path = dir + "/absent/out.exr";
-  try {
-    writeExr(path, patterned(4, 4), ExrMetadata{});
-    FAIL() << "no error for a missing directory";
-  } catch (const Error& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find(dir + "/absent"), std::string::npos) << what;
-  }
-  EXPECT_FALSE(fs::exists(dir + "/absent"));
-  EXPECT_TRUE(listDir(dir).empty());
-}
-
-TEST(Atomic, ThrowingWriterKeepsThePreviousFile) {
-  const std::string dir = test::scratchDir();
-  const std::string path = dir + "/notes.txt";
-  writeTextAtomically(path, "previous contents\n");
-  try {
-    writeAtomically(path, [](const std::string& tmp) {
-      test::writeFile(tmp, "half-written");
-      throw Error("simulated failure");
-    });
-    FAIL() << "the writer's exception was swallowed";
-  } catch (const Error& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find(path), std::string::npos) << what;
-    EXPECT_NE(what.find("simulated failure"), std::string::npos) << what;
-  }
-  EXPECT_EQ(readBytes(path), "previous contents\n");
-  EXPECT_EQ(listDir(dir), std::vector<std::string>{"notes.txt"});
-
-  writeTextAtomically(path, "new contents\n");
-  EXPECT_EQ(readBytes(path), "new contents\n");
-  EXPECT_EQ(listDir(dir), std::vector<std::string>{"notes.txt"});
-}
-
-TEST(Atomic, FullDiskKeepsThePreviousExr) {
-  const std::string dir = test::scratchDir();
-  const std::string path = dir + "/frame.exr";
-  writeExr(path, patterned(8, 8), ExrMetadata{});
-  const std::string before = readBytes(path);
-  ASSERT_FALSE(before.empty());
-
-  int fds[2];
-  ASSERT_EQ(::pipe(fds), 0);
-  const pid_t child = ::fork();
-  ASSERT_GE(child, 0);
-  if (child == 0) {
-    // Child: files may not grow past 64 KiB; a write beyond fails with EFBIG.
-    ::close(fds[0]);
-    ::alarm(60);
-    ::signal(SIGXFSZ, SIG_IGN);
-    rlimit limit{64 * 1024, 64 * 1024};
-    ::setrlimit(RLIMIT_FSIZE, &limit);
-    std::string message = "no error";
-    int code = 2;
-    try {
-      ExrOptions options;
-      options.compression = ExrCompression::None;
-      writeExr(path, patterned(256, 256), ExrMetadata{}, options);  // ~3.4 MB
-    } catch (const Error& e) {
-      message = e.what();
-      code = 0;
-    } catch (const std::exception& e) {
-      message = std::string("not an aperture::Error: ") + e.what();
-      code = 3;
-    }
-    ssize_t ignored = ::write(fds[1], message.data(), message.size());
-    (void)ignored;
-    ::_exit(code);
-  }
-  ::close(fds[1]);
-  std::string message;
-  char buf[512];
-  ssize_t got;
-  while ((got = ::read(fds[0], buf, sizeof buf)) > 0) message.append(buf, size_t(got));
-  ::close(fds[0]);
-  int status = 0;
-  ASSERT_EQ(::waitpid(child, &status, 0), child);
-  ASSERT_TRUE(WIFEXITED(status)) << "child died, status " << status;
-  EXPECT_EQ(WEXITSTATUS(status), 0) << message;
-  EXPECT_NE(message.find(path), std::string::npos) << message;
-  EXPECT_NE(message.find(std::strerror(EFBIG)), std::string::npos) << message;
-  EXPECT_EQ(readBytes(path), before);
-  EXPECT_EQ(listDir(dir), std::vector<std::string>{"frame.exr"});
 }
 
 }  // namespace
