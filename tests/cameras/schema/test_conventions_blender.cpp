@@ -92,9 +92,9 @@ struct ImageShape {
   const char* name;
   int width, height;
 };
-const ImageShape kShapes[] = {{"landscape 16:9", 1920, 1080}, {"landscape 4:3", 640, 480},
-                              {"portrait 3:4", 480, 640},     {"portrait 9:16", 1080, 1920},
-                              {"square", 512, 512},           {"odd", 61, 45}};
+const ImageShape kBlenderShapes[] = {{"landscape 16:9", 1920, 1080}, {"landscape 4:3", 640, 480},
+                                     {"portrait 3:4", 480, 640},     {"portrait 9:16", 1080, 1920},
+                                     {"square", 512, 512},           {"odd", 61, 45}};
 const Fit kFits[] = {Fit::Auto, Fit::Horizontal, Fit::Vertical};
 const char* fitName(Fit f) {
   return f == Fit::Auto ? "AUTO" : f == Fit::Horizontal ? "HORIZONTAL" : "VERTICAL";
@@ -110,7 +110,7 @@ double worstPixelError(const BlenderCam& c, const CameraParams& params, int w, i
 
 TEST(BlenderCamera, SensorFitMatchesBlenderForEveryShapeAndFit) {
   for (const glm::dvec2 sensor : {glm::dvec2(36, 24), glm::dvec2(24, 36), glm::dvec2(23.5, 15.6)})
-    for (const ImageShape& s : kShapes)
+    for (const ImageShape& s : kBlenderShapes)
       for (Fit fit : kFits) {
         SCOPED_TRACE(testing::Message()
                      << s.name << " " << fitName(fit) << " sensor " << sensor.x << "x" << sensor.y);
@@ -125,7 +125,7 @@ TEST(BlenderCamera, SensorFitMatchesBlenderForEveryShapeAndFit) {
 }
 
 TEST(BlenderCamera, LensShiftMatchesBlenderForEveryShapeAndFit) {
-  for (const ImageShape& s : kShapes)
+  for (const ImageShape& s : kBlenderShapes)
     for (Fit fit : kFits) {
       SCOPED_TRACE(testing::Message() << s.name << " " << fitName(fit));
       BlenderCam c;
@@ -200,7 +200,7 @@ TEST(BlenderCamera, TheOldCropFormulaFailsFor4To3AndPortraitImages) {
 
 // fromBlender and the camera share viewportOfSensor and shiftOfBlenderShift: one formula.
 TEST(BlenderCamera, FromBlenderEqualsTheCameraBuiltFromTheSameParameters) {
-  for (const ImageShape& s : kShapes)
+  for (const ImageShape& s : kBlenderShapes)
     for (Fit fit : kFits) {
       const ImagePlane plane =
           fromBlender(35, 36, 24, ours(fit), s.width, s.height, 1.0, {0.1, 0.2});
