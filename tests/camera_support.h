@@ -217,6 +217,8 @@ inline Lane pixelLane(const Camera& cam, int i, int j, int s = 0) {
   cam.generate(req, buf.lanes(), &valid);
   const RayLanes& l = buf.lanes();
   return {{l.orgX[0], l.orgY[0], l.orgZ[0]}, {l.dirX[0], l.dirY[0], l.dirZ[0]}, valid};
+}
+
 // ---- camera files (tests/cameras/files) ----
 
 /// Expects `call` to throw an Error whose message holds every one of the strings that follow.
@@ -229,170 +231,169 @@ inline Lane pixelLane(const Camera& cam, int i, int j, int s = 0) {
           << "'" << part << "' is missing from: " << message;             \
   } while (0)
 
-  inline glm::dvec3 apply(const glm::dmat4& m, const glm::dvec3& p) {
-    return glm::dvec3(m * glm::dvec4(p, 1));
+inline glm::dvec3 apply(const glm::dmat4& m, const glm::dvec3& p) {
+  return glm::dvec3(m * glm::dvec4(p, 1));
+}
+
+// Rotation of (row, col) of a GLM matrix, row-major reading.
+inline double rc(const glm::dmat4& m, int row, int col) { return m[col][row]; }
+
+inline void expectSameFile(const CameraFile& a, const CameraFile& b) {
+  ASSERT_EQ(a.sensors.size(), b.sensors.size());
+  for (size_t s = 0; s < a.sensors.size(); ++s) {
+    EXPECT_TRUE(a.sensors[s] == b.sensors[s]) << "sensor " << s;
+    EXPECT_EQ(a.sensors[s].lens.params(), b.sensors[s].lens.params()) << "sensor " << s;
   }
-
-  // Rotation of (row, col) of a GLM matrix, row-major reading.
-  inline double rc(const glm::dmat4& m, int row, int col) { return m[col][row]; }
-
-  inline void expectSameFile(const CameraFile& a, const CameraFile& b) {
-    ASSERT_EQ(a.sensors.size(), b.sensors.size());
-    for (size_t s = 0; s < a.sensors.size(); ++s) {
-      EXPECT_TRUE(a.sensors[s] == b.sensors[s]) << "sensor " << s;
-      EXPECT_EQ(a.sensors[s].lens.params(), b.sensors[s].lens.params()) << "sensor " << s;
-    }
-    EXPECT_EQ(a.sensorIds, b.sensorIds);
-    ASSERT_EQ(a.images.size(), b.images.size());
-    for (size_t k = 0; k < a.images.size(); ++k) {
-      EXPECT_EQ(a.images[k].name, b.images[k].name);
-      EXPECT_EQ(a.images[k].sensor, b.images[k].sensor);
-      for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r)
-          EXPECT_EQ(a.images[k].cvCameraFromWorld[c][r], b.images[k].cvCameraFromWorld[c][r])
-              << "image " << k << " (row " << r << ", column " << c << ")";
-    }
+  EXPECT_EQ(a.sensorIds, b.sensorIds);
+  ASSERT_EQ(a.images.size(), b.images.size());
+  for (size_t k = 0; k < a.images.size(); ++k) {
+    EXPECT_EQ(a.images[k].name, b.images[k].name);
+    EXPECT_EQ(a.images[k].sensor, b.images[k].sensor);
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r)
+        EXPECT_EQ(a.images[k].cvCameraFromWorld[c][r], b.images[k].cvCameraFromWorld[c][r])
+            << "image " << k << " (row " << r << ", column " << c << ")";
   }
+}
 
-  inline void expectSamePoses(const CameraFile& a, const CameraFile& b, double tolerance) {
-    ASSERT_EQ(a.images.size(), b.images.size());
-    for (size_t k = 0; k < a.images.size(); ++k)
-      for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r)
-          EXPECT_NEAR(a.images[k].cvCameraFromWorld[c][r], b.images[k].cvCameraFromWorld[c][r],
-                      tolerance)
-              << "image " << k << " (row " << r << ", column " << c << ")";
+inline void expectSamePoses(const CameraFile& a, const CameraFile& b, double tolerance) {
+  ASSERT_EQ(a.images.size(), b.images.size());
+  for (size_t k = 0; k < a.images.size(); ++k)
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r)
+        EXPECT_NEAR(a.images[k].cvCameraFromWorld[c][r], b.images[k].cvCameraFromWorld[c][r],
+                    tolerance)
+            << "image " << k << " (row " << r << ", column " << c << ")";
+}
+
+// ---- calibrated renders of the bunny (tests/cameras/models/test_calibrated_render*.cpp) ----
+
+/// The bunny, loaded and built once for the whole test binary (members destroyed in reverse
+/// order).
+struct Bunny {
+  Mesh mesh;
+  Device device;
+  std::unique_ptr<Scene> scene;
+};
+
+inline const Scene& bunnyScene(const std::string& path) {
+  static std::unique_ptr<Bunny> bunny;
+  if (!bunny) {
+    bunny = std::make_unique<Bunny>();
+    bunny->mesh = loadMesh(path);
+    bunny->scene = std::make_unique<Scene>(bunny->device, std::vector<const Mesh*>{&bunny->mesh});
   }
-
-  // ---- calibrated renders of the bunny (tests/cameras/models/test_calibrated_render*.cpp) ----
-
-  /// The bunny, loaded and built once for the whole test binary (members destroyed in reverse
-  /// order).
-  struct Bunny {
-    Mesh mesh;
-    Device device;
-    std::unique_ptr<Scene> scene;
-  };
-
-  inline const Scene& bunnyScene(const std::string& path) {
-    static std::unique_ptr<Bunny> bunny;
-    if (!bunny) {
-      bunny = std::make_unique<Bunny>();
-      bunny->mesh = loadMesh(path);
-      bunny->scene = std::make_unique<Scene>(bunny->device, std::vector<const Mesh*>{&bunny->mesh});
-    }
-    return *bunny->scene;
-  }
+  return *bunny->scene;
+}
 
 #define REQUIRE_BUNNY(scene)                                           \
   APERTURE_REQUIRE_SHARED_MESH(bunnyPath_, "stanford/bun_zipper.ply"); \
   const Scene& scene = ::aperture::test::bunnyScene(bunnyPath_)
 
-  /// Every AOV of the camera `p` on `scene`, traced `packetWidth` rays at a time. Named apart
-  /// from test::render, which takes an AovMask.
-  inline Framebuffer renderAllAovs(const Scene& scene, const CameraParams& p,
-                                   int packetWidth = 16) {
-    const std::unique_ptr<Camera> camera = makeCamera(p, scene.renderOrigin());
-    RenderSettings settings;
-    settings.packetWidth = packetWidth;
-    Framebuffer fb(
-        p.width, p.height,
-        kAovColor | kAovDepth | kAovDistance | kAovNormal | kAovPosition | kAovPrimId | kAovGeomId);
-    renderImage(scene, *camera, settings, fb);
-    return fb;
+/// Every AOV of the camera `p` on `scene`, traced `packetWidth` rays at a time. Named apart
+/// from test::render, which takes an AovMask.
+inline Framebuffer renderAllAovs(const Scene& scene, const CameraParams& p, int packetWidth = 16) {
+  const std::unique_ptr<Camera> camera = makeCamera(p, scene.renderOrigin());
+  RenderSettings settings;
+  settings.packetWidth = packetWidth;
+  Framebuffer fb(
+      p.width, p.height,
+      kAovColor | kAovDepth | kAovDistance | kAovNormal | kAovPosition | kAovPrimId | kAovGeomId);
+  renderImage(scene, *camera, settings, fb);
+  return fb;
+}
+
+inline glm::dvec3 positionAt(const Framebuffer& fb, size_t k) {
+  return {fb.position[3 * k], fb.position[3 * k + 1], fb.position[3 * k + 2]};
+}
+
+// ---- poses, written out here from eye / at / up ----
+
+/// The lecture frame: W = −view, U = up × W, V = W × U (all unit).
+struct Frame {
+  glm::dvec3 e, u, v, w;
+};
+inline Frame frameOf(const glm::dvec3& eye, const glm::dvec3& at, const glm::dvec3& up) {
+  Frame f;
+  f.e = eye;
+  f.w = glm::normalize(eye - at);
+  f.u = glm::normalize(glm::cross(up, f.w));
+  f.v = glm::cross(f.w, f.u);
+  return f;
+}
+
+// Reference views of the bunny (its README): from the front, a little rolled so that no
+// rotation entry is zero; fisheyes closer, so that the bunny fills more of their wide view.
+inline const glm::dvec3 kBunnyAt(-0.017, 0.11, 0.0);
+inline const glm::dvec3 kRolledUp(0.15, 1.0, 0.05);
+inline Frame perspectiveView() { return frameOf({-0.02, 0.11, 0.35}, kBunnyAt, kRolledUp); }
+
+// ---- re-projection ----
+
+/// Distances between where hit points re-project and the centres of their pixels.
+struct Reprojection {
+  size_t hits = 0;
+  size_t unprojected = 0;  ///< hits whose P the projection gives no position (counted as +inf)
+  double p99 = std::numeric_limits<double>::infinity(),
+         max = std::numeric_limits<double>::infinity();
+  std::string text() const {
+    char s[160];
+    std::snprintf(s, sizeof s, "%zu hits, p99 %.3g px, max %.3g px, %zu without a projection", hits,
+                  p99, max, unprojected);
+    return s;
   }
+};
 
-  inline glm::dvec3 positionAt(const Framebuffer& fb, size_t k) {
-    return {fb.position[3 * k], fb.position[3 * k + 1], fb.position[3 * k + 2]};
-  }
+/// `project` maps a world point to aperture's raster (pixel (i, j) centre at (j + ½, i + ½)).
+using Projection = std::function<std::optional<glm::dvec2>(const glm::dvec3&)>;
 
-  // ---- poses, written out here from eye / at / up ----
-
-  /// The lecture frame: W = −view, U = up × W, V = W × U (all unit).
-  struct Frame {
-    glm::dvec3 e, u, v, w;
-  };
-  inline Frame frameOf(const glm::dvec3& eye, const glm::dvec3& at, const glm::dvec3& up) {
-    Frame f;
-    f.e = eye;
-    f.w = glm::normalize(eye - at);
-    f.u = glm::normalize(glm::cross(up, f.w));
-    f.v = glm::cross(f.w, f.u);
-    return f;
-  }
-
-  // Reference views of the bunny (its README): from the front, a little rolled so that no
-  // rotation entry is zero; fisheyes closer, so that the bunny fills more of their wide view.
-  inline const glm::dvec3 kBunnyAt(-0.017, 0.11, 0.0);
-  inline const glm::dvec3 kRolledUp(0.15, 1.0, 0.05);
-  inline Frame perspectiveView() { return frameOf({-0.02, 0.11, 0.35}, kBunnyAt, kRolledUp); }
-
-  // ---- re-projection ----
-
-  /// Distances between where hit points re-project and the centres of their pixels.
-  struct Reprojection {
-    size_t hits = 0;
-    size_t unprojected = 0;  ///< hits whose P the projection gives no position (counted as +inf)
-    double p99 = std::numeric_limits<double>::infinity(),
-           max = std::numeric_limits<double>::infinity();
-    std::string text() const {
-      char s[160];
-      std::snprintf(s, sizeof s, "%zu hits, p99 %.3g px, max %.3g px, %zu without a projection",
-                    hits, p99, max, unprojected);
-      return s;
+inline Reprojection reprojection(const Framebuffer& fb, const Projection& project) {
+  std::vector<double> errors;
+  Reprojection r;
+  for (int i = 0; i < fb.height; ++i)
+    for (int j = 0; j < fb.width; ++j) {
+      const size_t k = size_t(i) * size_t(fb.width) + size_t(j);
+      if (fb.primId[k] == kInvalidId) continue;
+      const std::optional<glm::dvec2> x = project(positionAt(fb, k));
+      r.unprojected += !x;
+      errors.push_back(x ? glm::length(*x - glm::dvec2(j + 0.5, i + 0.5))
+                         : std::numeric_limits<double>::infinity());
     }
-  };
+  r.hits = errors.size();
+  if (errors.empty()) return r;
+  std::sort(errors.begin(), errors.end());
+  r.p99 = errors[size_t(std::ceil(0.99 * double(errors.size()))) - 1];
+  r.max = errors.back();
+  return r;
+}
 
-  /// `project` maps a world point to aperture's raster (pixel (i, j) centre at (j + ½, i + ½)).
-  using Projection = std::function<std::optional<glm::dvec2>(const glm::dvec3&)>;
+inline CameraParams paramsOfImage(const CameraFile& file, size_t k) {
+  const CalibratedImage& im = file.images.at(k);
+  return calibratedCameraParams(file.sensors.at(size_t(im.sensor)), im.cvCameraFromWorld);
+}
 
-  inline Reprojection reprojection(const Framebuffer& fb, const Projection& project) {
-    std::vector<double> errors;
-    Reprojection r;
-    for (int i = 0; i < fb.height; ++i)
-      for (int j = 0; j < fb.width; ++j) {
-        const size_t k = size_t(i) * size_t(fb.width) + size_t(j);
-        if (fb.primId[k] == kInvalidId) continue;
-        const std::optional<glm::dvec2> x = project(positionAt(fb, k));
-        r.unprojected += !x;
-        errors.push_back(x ? glm::length(*x - glm::dvec2(j + 0.5, i + 0.5))
-                           : std::numeric_limits<double>::infinity());
-      }
-    r.hits = errors.size();
-    if (errors.empty()) return r;
-    std::sort(errors.begin(), errors.end());
-    r.p99 = errors[size_t(std::ceil(0.99 * double(errors.size()))) - 1];
-    r.max = errors.back();
-    return r;
-  }
+// ---- the command line (tests/apps/cli/test_camera_files_cli*.cpp) ----
 
-  inline CameraParams paramsOfImage(const CameraFile& file, size_t k) {
-    const CalibratedImage& im = file.images.at(k);
-    return calibratedCameraParams(file.sensors.at(size_t(im.sensor)), im.cvCameraFromWorld);
-  }
+/// Every file below `dir`, relative, sorted.
+inline std::set<std::string> filesBelow(const std::string& dir) {
+  std::set<std::string> files;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
+    files.insert(std::filesystem::relative(e.path(), dir).generic_string());
+  return files;
+}
 
-  // ---- the command line (tests/apps/cli/test_camera_files_cli*.cpp) ----
-
-  /// Every file below `dir`, relative, sorted.
-  inline std::set<std::string> filesBelow(const std::string& dir) {
-    std::set<std::string> files;
-    for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
-      files.insert(std::filesystem::relative(e.path(), dir).generic_string());
-    return files;
-  }
-
-  /// Runs a command that must be refused: non-zero exit (not a signal), every part of `expect`
-  /// in its output, and no file added below `dir`.
-  inline void expectRefused(const std::string& command, const std::vector<std::string>& expect,
-                            const std::string& dir) {
-    SCOPED_TRACE(command);
-    const std::set<std::string> before = filesBelow(dir);
-    std::string out;
-    const int code = runCommand(command, &out);
-    EXPECT_GT(code, 0) << out;
-    for (const std::string& e : expect)
-      EXPECT_NE(out.find(e), std::string::npos) << "'" << e << "' is missing from: " << out;
-    EXPECT_EQ(filesBelow(dir), before) << "a refused run wrote files";
-  }
+/// Runs a command that must be refused: non-zero exit (not a signal), every part of `expect`
+/// in its output, and no file added below `dir`.
+inline void expectRefused(const std::string& command, const std::vector<std::string>& expect,
+                          const std::string& dir) {
+  SCOPED_TRACE(command);
+  const std::set<std::string> before = filesBelow(dir);
+  std::string out;
+  const int code = runCommand(command, &out);
+  EXPECT_GT(code, 0) << out;
+  for (const std::string& e : expect)
+    EXPECT_NE(out.find(e), std::string::npos) << "'" << e << "' is missing from: " << out;
+  EXPECT_EQ(filesBelow(dir), before) << "a refused run wrote files";
+}
 
 }  // namespace aperture::test
