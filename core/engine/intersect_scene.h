@@ -17,11 +17,12 @@ void resolveChunkHits(const Scene& scene, typename PacketOf<N>::type& p) {
 
 /// intersect<N> on `scene`, with every hit in the scene's terms: objects built in chunks
 /// report the geomID and primID they have when attached whole. Every trace of a Scene goes
-/// through here; intersect<N> clears the lanes of `valid` whose rays Embree cannot take.
+/// through here; intersect<N> clears the lanes of `valid` whose rays Embree cannot take
+/// (`activeTraceable`: the caller already tested the active lanes, intersect<N>).
 template <int N>
 void intersectScene(const Scene& scene, RTCIntersectContext* ctx, int* valid,
-                    typename PacketOf<N>::type& p) {
-  intersect<N>(scene.handle(), ctx, valid, p);
+                    typename PacketOf<N>::type& p, bool activeTraceable = false) {
+  intersect<N>(scene.handle(), ctx, valid, p, activeTraceable);
   if (scene.hasChunks()) resolveChunkHits<N>(scene, p);
 }
 

@@ -142,6 +142,23 @@ int sealLanes(int* __restrict valid, const RayLanes& l) {
   return active;
 }
 
+/// sealLanes for a packet whose active lanes already passed traceableRay (the frame loop's
+/// selectLanes): only the masked lanes get the empty segment, without testing any ray again.
+/// Returns the active lanes.
+template <int N>
+int sealMaskedLanes(const int* __restrict valid, const RayLanes& l) {
+  float* __restrict tnear = l.tnear, * __restrict tfar = l.tfar;
+  int active = 0;
+  APERTURE_LANE_LOOP
+  for (int k = 0; k < N; ++k) {
+    const int live = int(valid[k] != 0);
+    tnear[k] = live ? tnear[k] : 1.0f;
+    tfar[k] = live ? tfar[k] : 0.0f;
+    active += live;
+  }
+  return active;
+}
+
 /// A test seam: when set, called with every packet just as Embree receives it (after
 /// sealLanes), from the thread that traces it. Set it only while nothing renders.
 using PacketObserver = void (*)(int width, const int* valid, const RayLanes& rays);
@@ -157,11 +174,14 @@ inline void observePacket(int width, const int* valid, const RayLanes& rays) {
 /// traces its one ray as the single active lane of rtcIntersect4, valid[0]). The packet first
 /// passes sealLanes, so `valid` and the segments of the lanes it clears change: a lane whose
 /// ray Embree cannot take comes back inactive, with its hit untouched.
+/// `activeTraceable`: the caller vouches that every active lane passed traceableRay, so only
+/// the masked lanes are sealed (sealMaskedLanes).
 template <int N>
-void intersect(RTCScene scene, RTCIntersectContext* ctx, int* valid,
-               typename PacketOf<N>::type& p) {
+void intersect(RTCScene scene, RTCIntersectContext* ctx, int* valid, typename PacketOf<N>::type& p,
+               bool activeTraceable = false) {
   const RayLanes lanes = rayLanes<N>(p);
-  const int active = sealLanes<N>(valid, lanes);
+  const int active =
+      activeTraceable ? sealMaskedLanes<N>(valid, lanes) : sealLanes<N>(valid, lanes);
   observePacket(N, valid, lanes);
   if (active == 0) return;
   if constexpr (N == 1) {

@@ -293,8 +293,8 @@ struct BlockColor {
 /// Keeps the lanes to trace in Embree's −1/0 mask: the camera gave a ray, the lane lies in
 /// the image and Embree can trace the ray (traceableRay: finite, within Embree's range, a
 /// segment in [0, ∞]). Counts the skipped rays; returns the active lane count. Branch-free
-/// over the lanes, so it compiles to vector compares. intersect<N> applies the same test
-/// again (sealLanes), with the lanes this one clears.
+/// over the lanes, so it compiles to vector compares. intersect<N> then seals only the masked
+/// lanes (sealMaskedLanes) instead of testing every ray again.
 template <int N>
 int selectLanes(const ImagePlan& plan, const PacketRequest& req, PacketState<N>& st,
                 TileCounters& count) {
@@ -388,7 +388,8 @@ bool tracePacket(const ImagePlan& plan, const PacketRequest& req, PacketState<N>
     fakeHits<N>(plan, st);
   } else {
     clearHits<N>(st.packet);
-    intersectScene<N>(plan.scene, &st.ctx, st.valid, st.packet);
+    // selectLanes tested every active lane with traceableRay; later steps only clear lanes.
+    intersectScene<N>(plan.scene, &st.ctx, st.valid, st.packet, true);
   }
   return true;
 }
