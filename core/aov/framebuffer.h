@@ -16,6 +16,13 @@ enum Aov : uint32_t {
   kAovPrimId = 1u << 5,    ///< primID (UINT)
   kAovGeomId = 1u << 6,    ///< geomID (UINT)
   kAovShadingNormal = 1u << 7,  ///< Ns.X Ns.Y Ns.Z: interpolated vertex normal, unit length
+  kAovInstanceId = 1u << 8,     ///< instance id (UINT; ObjectIds, core/engine/scene.h)
+  kAovMeshId = 1u << 9,         ///< mesh id (UINT)
+  kAovMaterialId = 1u << 10,    ///< material id (UINT)
+  kAovBarycentric = 1u << 11,   ///< Embree's u, v of the hit (index-buffer vertex order)
+  kAovUv = 1u << 12,            ///< texture coordinates interpolated (Mesh::texcoords)
+  kAovVertexColor = 1u << 13,   ///< vertex colour interpolated, linear RGBA
+  kAovAlbedo = 1u << 14,        ///< unlit base colour, linear RGBA (Material, TextureSampler)
 };
 using AovMask = uint32_t;
 inline constexpr uint32_t kInvalidId = 0xFFFFFFFFu;

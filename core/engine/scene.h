@@ -13,6 +13,7 @@
 #include "core/engine/occupancy.h"
 #include "core/engine/scene_box.h"
 #include "core/mesh/mesh.h"
+#include "core/mesh/scene_file.h"
 
 namespace aperture {
 
@@ -128,13 +129,27 @@ struct TriangleSubset {
   size_t triangleCount() const { return primIds.size(); }
 };
 
+/// What the id AOVs report for a hit on an object, numbered scene-wide by the scene set-up
+/// (apps/services/scene_setup): instance = `instance` (plus the mesh's faceGroups[t] where it
+/// has them), mesh = `mesh`, material = `materialBase` (plus the mesh's faceMaterials[t]).
+struct ObjectIds {
+  uint32_t instance = 0, mesh = 0, materialBase = 0;
+};
+
 /// One placement of a mesh: world = worldFromMesh · (mesh.anchor + position).
 struct SceneObject {
+  SceneObject() = default;
+  explicit SceneObject(const Mesh* mesh_) : mesh(mesh_) {}
+  SceneObject(const Mesh* mesh_, const glm::dmat4& worldFromMesh_,  // NOLINT: {mesh, placement}
+              const TriangleSubset* subset_ = nullptr, const ObjectIds& ids_ = {})
+      : mesh(mesh_), worldFromMesh(worldFromMesh_), subset(subset_), ids(ids_) {}
+
   const Mesh* mesh = nullptr;
   glm::dmat4 worldFromMesh{1.0};
   /// Optional: only these triangles go into the BVH (they share the mesh's vertex buffer;
   /// must outlive the Scene). Objects placing the same mesh must give the same subset.
   const TriangleSubset* subset = nullptr;
+  ObjectIds ids;
 };
 
 /// The render origin of a Scene over `objects` (not empty): the first object's anchor, placed
@@ -178,6 +193,12 @@ class Scene {
   /// The mesh of object `object` (the top-level geomID, or the instance's): its properties
   /// and vertex normals, indexed by meshTriangle().
   const Mesh& objectMesh(unsigned object) const { return *objectMeshes_[object]; }
+  /// The ids of object `object` (the top-level geomID, or the instance's).
+  const ObjectIds& objectIds(unsigned object) const { return objects_[object].ids; }
+  /// The materials and textures the albedo AOV reads (set by the scene set-up); null when
+  /// none were given.
+  const SurfaceLooks* looks() const { return looks_.get(); }
+  void setLooks(std::shared_ptr<const SurfaceLooks> looks) { looks_ = std::move(looks); }
   /// Number of objects (top-level geomIDs 0 .. objectCount() - 1).
   size_t objectCount() const { return objectMeshes_.size(); }
   /// Render-space box that holds everything a ray can hit, padded (core/engine/scene_box.h);
@@ -224,6 +245,7 @@ class Scene {
   std::vector<const uint32_t*> primIdMaps_;  ///< per object; empty when nothing is culled
   bool reordered_ = false;                   ///< some object's mesh has Mesh::sourceTriangles
   std::optional<SceneBox> box_;
+  std::shared_ptr<const SurfaceLooks> looks_;
   std::vector<SceneObject> objects_;  ///< as given: occupancy() reads their triangles
   mutable std::once_flag occupancyOnce_;
   mutable std::optional<Occupancy> occupancy_;

@@ -83,8 +83,7 @@ void sortTriangles(Mesh& mesh, const std::vector<uint16_t>& keys) {
     }
   });
   mesh.indices.swap(indices);
-  for (MeshProperty& p : mesh.properties)
-    if (p.domain == PropertyDomain::Face) gather(p.values, from);
+  forEachFaceArray(mesh, [&](std::vector<uint32_t>& values) { gather(values, from); });
   if (mesh.sourceTriangles.empty())
     mesh.sourceTriangles = std::move(from);
   else

@@ -46,7 +46,9 @@ size_t meshBufferBytes(const Mesh& mesh) {
                  mesh.indices.capacity() * sizeof(uint32_t) +
                  mesh.positionsDouble.capacity() * sizeof(double) +
                  mesh.vertexNormals.capacity() * sizeof(float) +
-                 mesh.sourceTriangles.capacity() * sizeof(uint32_t);
+                 mesh.sourceTriangles.capacity() * sizeof(uint32_t) +
+                 (mesh.texcoords.capacity() + mesh.vertexColors.capacity()) * sizeof(float) +
+                 (mesh.faceMaterials.capacity() + mesh.faceGroups.capacity()) * sizeof(uint32_t);
   for (const MeshProperty& p : mesh.properties) bytes += p.values.capacity() * sizeof(uint32_t);
   return bytes;
 }
@@ -279,15 +281,13 @@ void dropTrianglesOfBadVertices(Mesh& mesh, const std::vector<uint8_t>& bad, boo
       continue;
     }
     if (a == b || b == c || a == c) ++degenerate;
-    for (MeshProperty& p : mesh.properties)
-      if (p.domain == PropertyDomain::Face) p.values[out / 3] = p.values[t / 3];
+    forEachFaceArray(mesh, [&](std::vector<uint32_t>& values) { values[out / 3] = values[t / 3]; });
     mesh.indices[out++] = a;
     mesh.indices[out++] = b;
     mesh.indices[out++] = c;
   }
   mesh.indices.resize(out);
-  for (MeshProperty& p : mesh.properties)
-    if (p.domain == PropertyDomain::Face) p.values.resize(out / 3);
+  forEachFaceArray(mesh, [&](std::vector<uint32_t>& values) { values.resize(out / 3); });
   mesh.stats.droppedTriangles = dropped;
   mesh.stats.degenerateTriangles = degenerate;
 }
@@ -378,9 +378,21 @@ void checkPropertySizes(const Mesh& mesh) {
       throw Error(cat(mesh.name, ": property '", PropertyAov{p.domain, p.name}.aovName(), "' has ",
                       p.values.size(), " values for ", want, face ? " triangles" : " vertices"));
   }
-  if (!mesh.vertexNormals.empty() && mesh.vertexNormals.size() != 3 * mesh.vertexCount)
-    throw Error(cat(mesh.name, ": ", mesh.vertexNormals.size() / 3, " vertex normals for ",
-                    mesh.vertexCount, " vertices"));
+  const auto checkPerVertex = [&](const std::vector<float>& values, size_t per, const char* what) {
+    if (!values.empty() && values.size() != per * mesh.vertexCount)
+      throw Error(cat(mesh.name, ": ", values.size() / per, " ", what, " for ", mesh.vertexCount,
+                      " vertices"));
+  };
+  checkPerVertex(mesh.vertexNormals, 3, "vertex normals");
+  checkPerVertex(mesh.texcoords, 2, "texture coordinates");
+  checkPerVertex(mesh.vertexColors, 4, "vertex colours");
+  const auto checkPerFace = [&](const std::vector<uint32_t>& values, const char* what) {
+    if (!values.empty() && values.size() != mesh.triangleCount())
+      throw Error(cat(mesh.name, ": ", values.size(), " ", what, " for ", mesh.triangleCount(),
+                      " triangles"));
+  };
+  checkPerFace(mesh.faceMaterials, "face materials");
+  checkPerFace(mesh.faceGroups, "face groups");
 }
 
 }  // namespace

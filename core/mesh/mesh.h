@@ -57,6 +57,14 @@ struct Mesh {
   std::vector<float> vertexNormals;
   /// The integer properties LoadOptions::properties asked for, in that order.
   std::vector<MeshProperty> properties;
+  /// Surface attributes per vertex, kept only when LoadOptions asks (texcoords,
+  /// vertexColors) and the source has them; else empty. Not transformed by finishMesh.
+  std::vector<float> texcoords;     ///< 2 per vertex: glTF TEXCOORD_0 as stored, OBJ vt
+  std::vector<float> vertexColors;  ///< 4 per vertex: glTF COLOR_0 as linear RGBA (RGB: A = 1)
+  /// Per triangle, moved and dropped with the triangles (forEachFaceArray), kept only when
+  /// LoadOptions asks (materials, groups); empty: every triangle has value 0.
+  std::vector<uint32_t> faceMaterials;  ///< index into the source's materials (SceneFile)
+  std::vector<uint32_t> faceGroups;     ///< OBJ: the object (o/g) of each triangle
   /// Empty while the triangles are in the order they were loaded in (the order primID
   /// numbers them by). After orderTrianglesInSpace (core/engine/triangle_order.h) moved them, the
   /// loaded index of each stored triangle: primID outputs go through sourceTriangle().
@@ -76,6 +84,16 @@ struct Mesh {
   /// Bounds of the finite vertices relative to the anchor; empty mesh gives min > max.
   void bounds(glm::vec3& lo, glm::vec3& hi) const;
 };
+
+/// Calls `f` on every per-triangle array of `mesh` that is not empty (face properties,
+/// faceMaterials, faceGroups): whatever moves or drops triangles moves or drops these with them.
+template <class F>
+void forEachFaceArray(Mesh& mesh, F&& f) {
+  for (MeshProperty& p : mesh.properties)
+    if (p.domain == PropertyDomain::Face) f(p.values);
+  if (!mesh.faceMaterials.empty()) f(mesh.faceMaterials);
+  if (!mesh.faceGroups.empty()) f(mesh.faceGroups);
+}
 
 /// Bytes the mesh's buffers hold (capacities: what is allocated, not only what is used):
 /// positions, indices, vertex normals, properties, the source order of reordered triangles
@@ -102,6 +120,12 @@ struct LoadOptions {
   std::vector<PropertyAov> properties;
   /// Keep per-vertex normals when the file has them (the shading-normal AOV asks for them).
   bool vertexNormals = false;
+  /// Surface data the AOVs ask for (app::withAovNeeds): texture coordinates (uv, albedo),
+  /// vertex colours (vertex-color, albedo), per-triangle materials (material, albedo) and OBJ
+  /// objects (instance). Nothing is stored unasked.
+  bool texcoords = false, vertexColors = false, materials = false, groups = false;
+  /// glTF: the index of the scene to load (--gltf-scene); unset: the file's `scene`, else 0.
+  std::optional<int> gltfScene;
   /// PLY only: read the vertex element alone, as a point set (`--points P.ply`): a file
   /// without faces is accepted and face or tristrips elements are skipped, so the mesh may
   /// have no triangles.
