@@ -348,6 +348,59 @@ void editGltf(const std::string& path, const std::function<void(nlohmann::json&)
   writeGltfFile(path, text.data(), text.size());
 }
 
+std::string dataUri(const std::vector<unsigned char>& bytes) {
+  static const char* digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out = "data:application/octet-stream;base64,";
+  for (size_t i = 0; i < bytes.size(); i += 3) {
+    uint32_t v = uint32_t(bytes[i]) << 16;
+    if (i + 1 < bytes.size()) v |= uint32_t(bytes[i + 1]) << 8;
+    if (i + 2 < bytes.size()) v |= bytes[i + 2];
+    out += digits[(v >> 18) & 63];
+    out += digits[(v >> 12) & 63];
+    out += i + 1 < bytes.size() ? digits[(v >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? digits[v & 63] : '=';
+  }
+  return out;
+}
+
+int RawGltf::addView(const std::vector<unsigned char>& bytes, int stride) {
+  while (bin.size() % 4) bin.push_back(0);
+  json view = {{"buffer", 0}, {"byteOffset", bin.size()}, {"byteLength", bytes.size()}};
+  if (stride > 0) view["byteStride"] = stride;
+  bin.insert(bin.end(), bytes.begin(), bytes.end());
+  doc["bufferViews"].push_back(view);
+  return int(doc["bufferViews"].size() - 1);
+}
+
+int RawGltf::addAccessor(int view, int componentType, const std::string& type, size_t count,
+                         bool normalized, size_t byteOffset) {
+  json a = {{"componentType", componentType}, {"type", type}, {"count", count}};
+  if (view >= 0) a["bufferView"] = view;
+  if (normalized) a["normalized"] = true;
+  if (byteOffset) a["byteOffset"] = byteOffset;
+  doc["accessors"].push_back(a);
+  return int(doc["accessors"].size() - 1);
+}
+
+void RawGltf::addMeshNode(const json& attributes, int indices, int mode) {
+  json prim = {{"attributes", attributes}, {"mode", mode}};
+  if (indices >= 0) prim["indices"] = indices;
+  doc["meshes"].push_back({{"primitives", {prim}}});
+  doc["nodes"].push_back({{"mesh", doc["meshes"].size() - 1}});
+  if (!doc.contains("scenes")) doc["scenes"] = json::array({{{"nodes", json::array()}}});
+  doc["scenes"][0]["nodes"].push_back(doc["nodes"].size() - 1);
+}
+
+std::string RawGltf::write(const std::string& path) const {
+  json out = doc;
+  out["asset"] = {{"version", "2.0"}};
+  if (!bin.empty())
+    out["buffers"] = json::array({{{"byteLength", bin.size()}, {"uri", dataUri(bin)}}});
+  const std::string text = out.dump(1);
+  writeGltfFile(path, text.data(), text.size());
+  return path;
+}
+
 std::vector<unsigned char> checkerPng(int size, int cells) {
   std::vector<unsigned char> raw;
   for (int y = 0; y < size; ++y) {

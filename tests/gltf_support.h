@@ -8,10 +8,11 @@
 //   s.nodes.push_back({"n"});  s.nodes[0].mesh = 0;  s.roots = {0};
 //   writeGltf(s, dir + "/tri.glb");
 #include <cstdint>
+#include <cstring>
 #include <functional>
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
-#include <nlohmann/json_fwd.hpp>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -85,6 +86,35 @@ std::string writeGltf(const GltfScene& scene, const std::string& path,
                       GltfCompression compression = GltfCompression::None);
 /// The JSON of a written .gltf, edited by `edit` and written back (bad-input tests).
 void editGltf(const std::string& path, const std::function<void(nlohmann::json&)>& edit);
+
+/// `bytes` as a base64 data URI ("data:application/octet-stream;base64,...").
+std::string dataUri(const std::vector<unsigned char>& bytes);
+
+/// The bytes of `values` (little-endian, as the machine stores them).
+template <class T>
+std::vector<unsigned char> gltfBytes(const std::vector<T>& values) {
+  std::vector<unsigned char> out(values.size() * sizeof(T));
+  if (!out.empty()) std::memcpy(out.data(), values.data(), out.size());
+  return out;
+}
+
+/// A glTF written by hand, for layouts the writer above does not produce (integer and
+/// normalized attributes, strides, sparse accessors): add buffer views of raw bytes, write the
+/// rest of `doc` (accessors, meshes, nodes, scenes) directly, then write() it as one .gltf with
+/// its buffer in a data URI.
+struct RawGltf {
+  nlohmann::json doc = nlohmann::json::object();
+  std::vector<unsigned char> bin;
+  /// Appends `bytes` (4-byte aligned) as buffer view; byteStride when `stride` > 0.
+  int addView(const std::vector<unsigned char>& bytes, int stride = 0);
+  /// Appends an accessor; `view` < 0 leaves bufferView out.
+  int addAccessor(int view, int componentType, const std::string& type, size_t count,
+                  bool normalized = false, size_t byteOffset = 0);
+  /// One mesh of one primitive placed by one node in scene 0 (attributes: name -> accessor).
+  void addMeshNode(const nlohmann::json& attributes, int indices = -1, int mode = 4);
+  /// Writes `path` (asset, buffers and scene added); returns it.
+  std::string write(const std::string& path) const;
+};
 
 /// An RGB PNG of `size` x `size` pixels: a checkerboard of `cells` x `cells` squares, black at
 /// the top-left, white beside it (zlib-compressed, written here with zlib only).
