@@ -123,10 +123,14 @@ Elements elements(const tinygltf::Model& model, int index, const std::string& fi
                a.bufferView, " (", view.size, " bytes)"));
     e.data = view.data + a.byteOffset;
   }
+  if (a.bufferView < 0 && !a.sparse.isSparse)
+    fail(file, ptr + "/bufferView", "no bufferView (and not sparse): the accessor has no data");
   if (a.bufferView < 0 || a.sparse.isSparse) {
-    // Materialise: the base (or zeros), then the sparse values over it.
-    if (a.count > (size_t(1) << 31))
-      fail(file, ptr + "/count", cat("count ", a.count, " is too large"));
+    // Materialise: the base (or zeros), then the sparse values over it. Zeros cost no file
+    // bytes, so their size is bounded.
+    if (a.bufferView < 0 && a.count > (size_t(1) << 26) / elementSize)
+      fail(file, ptr + "/count",
+           cat("count ", a.count, " of zeros (no bufferView) is over 64 MiB"));
     e.owned.assign(a.count * elementSize, 0);
     if (e.data)
       for (size_t i = 0; i < a.count; ++i)

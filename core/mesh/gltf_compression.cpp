@@ -48,8 +48,13 @@ void decodeMeshoptViews(tinygltf::Model& model, const std::string& file) {
       fail(file, p + "/byteLength",
            cat("bytes [", offset, ", ", offset + length, ") run past the end of buffer ", buffer,
                " (", source.size(), " bytes)"));
-    if (count > (size_t(1) << 31) / std::max<size_t>(stride, 1))
-      fail(file, p + "/count", cat(count, " elements of ", stride, " bytes are too many"));
+    // meshoptimizer's codecs compress by at most 64:1 (a 4-byte header per 256 zero bytes of
+    // vertex data); a count beyond a generous multiple of that is refused before allocating.
+    if (count > (size_t(1) << 31) / std::max<size_t>(stride, 1) ||
+        count * stride > 256 * length + 65536)
+      fail(file, p + "/count",
+           cat(count, " elements of ", stride, " bytes cannot come from ", length,
+               " compressed bytes"));
     tinygltf::Buffer decoded;
     decoded.data.resize(count * stride);
     const unsigned char* src = source.data() + offset;

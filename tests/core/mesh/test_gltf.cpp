@@ -2,6 +2,7 @@
 // issue 41 scene in its four layouts, transforms, instancing, materials, textures, cameras.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -153,6 +154,32 @@ TEST(Gltf, ExternalBinAndImageAndFileBytes) {
   EXPECT_TRUE(f.meshes[0].vertexColors.empty());
   EXPECT_TRUE(f.meshes[0].faceMaterials.empty());
   EXPECT_TRUE(f.meshes[0].vertexNormals.empty());
+}
+
+}  // namespace
+}  // namespace aperture
+
+namespace aperture {
+namespace {
+
+// The seeds of the glTF fuzz target (tests/fuzz/corpus/gltf) are files of this writer: they
+// must load. APERTURE_WRITE_GLTF_SEEDS=1 rewrites them (then commit them).
+TEST(Gltf, FuzzSeedsLoad) {
+  const std::string dir = std::string(APERTURE_TESTS_DIR) + "/fuzz/corpus/gltf";
+  test::GltfScene s = test::issue41Scene();
+  s.materials[0].png = test::checkerPng(2, 2);  // small seeds
+  if (std::getenv("APERTURE_WRITE_GLTF_SEEDS")) {
+    std::filesystem::create_directories(dir);
+    test::writeGltf(s, dir + "/scene.glb");
+    test::writeGltf(s, dir + "/draco.glb", GltfCompression::Draco);
+    test::writeGltf(s, dir + "/meshopt.glb", GltfCompression::Meshopt);
+  }
+  for (const char* name : {"scene.glb", "draco.glb", "meshopt.glb"}) {
+    SCOPED_TRACE(name);
+    const SceneFile f = loadGltf(dir + "/" + name, gltfEverything());
+    EXPECT_EQ(f.meshes.size(), 2u);
+    EXPECT_EQ(f.instances.size(), 4u);
+  }
 }
 
 }  // namespace
