@@ -102,7 +102,9 @@ bool decodeTexture(const TextureToOpen& texture, DecodedTexture& out, std::strin
   OIIO::ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);
   OIIO::Filesystem::IOMemReader memory(texture.bytes, texture.size);
+  OIIO::Filesystem::IOProxy* proxy = &memory;
   const bool inMemory = texture.path.empty();
+  if (inMemory) config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
   auto in = inMemory ? OIIO::ImageInput::open("embedded" + texture.extension, &config, &memory)
                      : OIIO::ImageInput::open(texture.path, &config);
   if (!in) {
