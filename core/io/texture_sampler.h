@@ -17,7 +17,7 @@ namespace aperture {
 /// always at the finest level (a footprint of zero width: no mipmaps). (s, t) = (0, 0) is the
 /// image's top-left corner, (1, 1) its bottom-right. Safe to call from any number of threads.
 /// Throws Error naming SurfaceTexture::where and the path (or "embedded") of a texture that is
-/// missing or does not decode. An empty `textures` gives a sampler that is never called.
+/// missing or does not decode. An index out of range samples (0, 0, 0, 0).
 std::shared_ptr<const TextureSampler> openTextureSampler(
     const std::vector<SurfaceTexture>& textures);
 
