@@ -161,6 +161,7 @@ class ObjParser {
         wantGroups_(options.groups),
         wantMaterials_(options.materials),
         trackNames_(names || options.groups || options.materials),
+        wantExtras_(wantCorners_ || trackNames_),
         names_(names) {}
 
   /// Parses [p, end): every line up to the end of the data.
@@ -206,7 +207,15 @@ class ObjParser {
       parseVertex(tok);
     } else if (keyLen == 1 && *b == 'f') {
       parseFace(tok);
-    } else if (keyLen == 2 && b[0] == 'v' && (b[1] == 'n' || b[1] == 't')) {
+    } else if (wantExtras_) {
+      parseOtherStatement(b, keyLen, tok);
+    }
+  }
+
+  /// The statements read only when asked for: vn, vt and the names (out of line, so that the
+  /// v and f loop stays as tight as without them).
+  [[gnu::noinline]] void parseOtherStatement(const char* b, size_t keyLen, LineTokens& tok) {
+    if (keyLen == 2 && b[0] == 'v' && (b[1] == 'n' || b[1] == 't')) {
       if (b[1] == 'n' && wantNormals_) parseNormal(tok);
       if (b[1] == 't' && wantTexcoords_) parseTexcoord(tok);
     } else if (trackNames_) {
@@ -383,17 +392,11 @@ class ObjParser {
 
   /// `f c c c ...`: a polygon, triangulated as a fan.
   void parseFace(LineTokens& tok) {
+    const LineTokens corners = tok;
     const int64_t have = int64_t(pos_.size() / 3);
     const char *b, *e;
     poly_.clear();
-    if (wantCorners_) {
-      texcoords_.poly.clear();
-      normals_.poly.clear();
-    }
-    while (tok.next(b, e)) {
-      poly_.push_back(cornerIndex(b, e, have));
-      if (wantCorners_) parseCornerAttributes(b, e);
-    }
+    while (tok.next(b, e)) poly_.push_back(cornerIndex(b, e, have));
     if (poly_.size() < 3)
       throw Error(cat(path_, ":", line_, ": face has ", poly_.size(),
                       " vertices, needs at least 3 (line ", line_, ")"));
@@ -403,8 +406,21 @@ class ObjParser {
       mesh_.indices.push_back(poly_[k]);
       mesh_.indices.push_back(poly_[k + 1]);
     }
-    if (wantTexcoords_) keepCorners(texcoords_);
-    if (wantNormals_) keepCorners(normals_);
+    if (wantExtras_) parseFaceExtras(corners);
+  }
+
+  /// What a face holds beyond its vertex indices, as far as it is asked for: its corners'
+  /// texture and normal indices (a second scan of the corners [tok...), so that the plain
+  /// geometry loop stays as tight as without them) and its object and material.
+  [[gnu::noinline]] void parseFaceExtras(LineTokens tok) {
+    if (wantCorners_) {
+      texcoords_.poly.clear();
+      normals_.poly.clear();
+      const char *b, *e;
+      while (tok.next(b, e)) parseCornerAttributes(b, e);
+      if (wantTexcoords_) keepCorners(texcoords_);
+      if (wantNormals_) keepCorners(normals_);
+    }
     if (trackNames_) keepFaceIds(poly_.size() - 2);
   }
 
@@ -495,6 +511,7 @@ class ObjParser {
       "normal", "shading normals need a normal on every corner or on none", 3, {}, {}, {}, {}, 0};
   // Objects and materials: tracked for a scene or when groups or materials are asked for.
   bool trackNames_;
+  bool wantExtras_;  ///< wantCorners_ or trackNames_: a face needs parseFaceExtras
   ObjNames* names_;
   NameIds objects_, materials_;
   int64_t currentObject_ = -1, currentMaterial_ = -1;  // -1: the default one
