@@ -193,6 +193,10 @@ TEST(ObjScene, MissingTextureNamesTheMtlLine) {
   const std::string message = test::errorOf([&] { loadObjScene(dir + "/t.obj"); });
   EXPECT_NE(message.find(dir + "/m/t.mtl:3"), std::string::npos) << message;
   EXPECT_NE(message.find(dir + "/m/gone.png"), std::string::npos) << message;
+  // A malformed Kd: the .mtl and its line.
+  test::writeFile(dir + "/m/t.mtl", "newmtl x\n\nKd 1 x 0\n");
+  const std::string kd = test::errorOf([&] { loadObjScene(dir + "/t.obj"); });
+  EXPECT_NE(kd.find(dir + "/m/t.mtl:3"), std::string::npos) << kd;
 }
 
 TEST(ObjScene, MappingOptionsAreRefusedByName) {
