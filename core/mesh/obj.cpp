@@ -555,8 +555,8 @@ std::vector<MtlLibrary> readLibraries(const std::string& objPath, const ObjNames
 }
 
 /// The scene file of the OBJ at `data`: one mesh placed once, its names, and its materials
-/// from the libraries (the first definition of a name wins; a map_Kd is checked, and becomes a
-/// texture, only for a material the faces use).
+/// from the libraries when LoadOptions::materials asks for them (the first definition of a name
+/// wins; a map_Kd is checked, and becomes a texture, only for a material the faces use).
 SceneFile objSceneFile(const char* data, size_t size, const std::string& path,
                        const LoadOptions& options) {
   SceneFile scene;
@@ -568,7 +568,10 @@ SceneFile objSceneFile(const char* data, size_t size, const std::string& path,
   scene.instanceNames = std::move(names.objects);
   scene.meshNames = {fileStem(path)};
   scene.materialNames = names.materials;
-  const std::vector<MtlLibrary> libraries = readLibraries(path, names);
+  // The libraries give colours and textures, which only the material-reading AOVs (material,
+  // albedo) ask for: a depth render of an OBJ whose .mtl did not come along still works.
+  const std::vector<MtlLibrary> libraries =
+      options.materials ? readLibraries(path, names) : std::vector<MtlLibrary>{};
   std::unordered_map<std::string, std::pair<const MtlLibrary*, const MtlMaterial*>> byName;
   for (const MtlLibrary& library : libraries)
     for (const MtlMaterial& m : library.materials) byName.emplace(m.name, std::pair{&library, &m});
