@@ -19,8 +19,8 @@ using test::RawGltf;
 
 /// Appends a meshopt ATTRIBUTES view of `count` elements of `stride` bytes (`raw`, already
 /// filter-encoded) to `g`: the compressed bytes in buffer 0, the view in fallback buffer 1.
-int meshoptView(RawGltf& g, const std::vector<unsigned char>& raw, size_t count, int stride,
-                const char* filter) {
+int gltfMeshoptView(RawGltf& g, const std::vector<unsigned char>& raw, size_t count, int stride,
+                    const char* filter) {
   std::vector<unsigned char> encoded(meshopt_encodeVertexBufferBound(count, size_t(stride)));
   encoded.resize(meshopt_encodeVertexBuffer(encoded.data(), encoded.size(), raw.data(), count,
                                             size_t(stride)));
@@ -62,9 +62,9 @@ TEST(GltfCompression, MeshoptFilters) {
   meshopt_encodeFilterQuat(quat.data(), n, 8, 16, quats.data());
 
   RawGltf g;
-  const int p = g.addAccessor(meshoptView(g, exp, n, 12, "EXPONENTIAL"), 5126, "VEC3", n);
-  const int nm = g.addAccessor(meshoptView(g, oct, n, 8, "OCTAHEDRAL"), 5122, "VEC3", n, true);
-  const int c = g.addAccessor(meshoptView(g, quat, n, 8, "QUATERNION"), 5122, "VEC4", n, true);
+  const int p = g.addAccessor(gltfMeshoptView(g, exp, n, 12, "EXPONENTIAL"), 5126, "VEC3", n);
+  const int nm = g.addAccessor(gltfMeshoptView(g, oct, n, 8, "OCTAHEDRAL"), 5122, "VEC3", n, true);
+  const int c = g.addAccessor(gltfMeshoptView(g, quat, n, 8, "QUATERNION"), 5122, "VEC4", n, true);
   g.addMeshNode({{"POSITION", p}, {"NORMAL", nm}, {"COLOR_0", c}});
   g.doc["extensionsUsed"] = {"EXT_meshopt_compression", "KHR_mesh_quantization"};
   g.doc["extensionsRequired"] = g.doc["extensionsUsed"];
