@@ -234,6 +234,14 @@ void placeFile(LoadedScene& s, const MeshPlacement& p, const LoadedFile& f, bool
   s.ids.instance.insert(s.ids.instance.end(), file.instanceNames.begin(), file.instanceNames.end());
   s.ids.mesh.insert(s.ids.mesh.end(), file.meshNames.begin(), file.meshNames.end());
   s.ids.material.insert(s.ids.material.end(), file.materialNames.begin(), file.materialNames.end());
+  // A file without materials (PLY, procedural) gets the white "default" the glTF and OBJ
+  // loaders give material-less triangles, so its material id names no other file's material.
+  if (file.materialNames.empty()) {
+    Material white;
+    white.name = "default";
+    s.ids.material.push_back(white.name);
+    s.materials.push_back(white);
+  }
   for (size_t k = 0; k < file.materials.size(); ++k) {
     Material m = file.materials[k];
     if (albedo && !m.unsupported.empty())

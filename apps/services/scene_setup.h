@@ -82,7 +82,8 @@ void checkMemoryBudget(const SceneOptions& o, glm::ivec2 size, const AovSet& aov
 /// core/engine/scene.h): the files' SceneFile::instanceNames, meshNames and materialNames
 /// concatenated in placement order (a file placed twice contributes its names twice). For one
 /// glTF file they are the file's nodes, meshes and materials; a PLY placement adds its stem
-/// as an instance and a mesh.
+/// as an instance and a mesh, and a file without materials (PLY, procedural) a white material
+/// "default" (as the glTF and OBJ loaders name the material of triangles without one).
 struct SceneIds {
   std::vector<std::string> instance, mesh, material;
 };

@@ -4,7 +4,8 @@
 // triangles composed here from the writer's nodes, not by the loader); the names behind the
 // ids in the EXR header and summary.json; a mesh placed by three nodes built once; a job
 // placing a GLB like a PLY (its transform moves the whole file); bad files refused with the
-// file and a JSON pointer and nothing written; visibility over a glTF.
+// file and a JSON pointer and nothing written; visibility over a glTF; an OBJ's objects and
+// materials numbered after a PLY placed before it.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -377,6 +378,59 @@ TEST(GltfScenesCli, VisibilityTakesAGltfOfOneMeshAndRefusesSeveral) {
   EXPECT_NE(log.find("the scene places 4 meshes (quad_a, quad_b, quad_c, tri)"), std::string::npos)
       << log;
   EXPECT_FALSE(std::filesystem::exists(dir + "/several.npz"));
+}
+
+TEST(SceneFilesCli, ObjObjectsAndMaterialsAreNumberedAfterThePlacementsBefore) {
+  const std::string dir = test::scratchDir();
+  test::writeFile(dir + "/left.ply",
+                  "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float "
+                  "y\nproperty float z\nelement face 1\nproperty list uchar int "
+                  "vertex_indices\nend_header\n-5 -1 0\n-3 -1 0\n-3 1 0\n-5 1 0\n4 0 1 2 3\n");
+  test::writeFile(dir + "/objs.mtl", "newmtl m1\nKd 1 0 0\nnewmtl m2\nKd 0 1 0\n");
+  test::writeFile(dir + "/objs.obj",
+                  "mtllib objs.mtl\no a\nusemtl m1\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
+                  "f 1 2 3 4\no b\nusemtl m2\nv 3 -1 0\nv 5 -1 0\nv 5 1 0\nv 3 1 0\nf 5 6 7 8\n");
+  const std::string out = dir + "/ids.exr";
+  std::string log;
+  ASSERT_EQ(test::runCommand(test::apertureBinary() + " render --quiet --mesh " +
+                                 test::quote(dir + "/left.ply") + " --mesh " +
+                                 test::quote(dir + "/objs.obj") +
+                                 " --eye 0,0,12 --at 0,0,0 --fov 60 --size 120,40 --aov "
+                                 "position,instance,mesh,material,albedo --out " +
+                                 test::quote(out),
+                             &log),
+            0)
+      << log;
+  ExrMetadata meta;
+  const Framebuffer fb = readExr(out, &meta);
+  struct Expected {
+    double lo, hi;
+    uint32_t instance, mesh, material;
+    glm::vec4 albedo;
+  };
+  const Expected regions[] = {{-4.9, -3.1, 0, 0, 0, glm::vec4(1)},  // the PLY: its "default"
+                              {-0.9, 0.9, 1, 1, 1, glm::vec4(1, 0, 0, 1)},
+                              {3.1, 4.9, 2, 1, 2, glm::vec4(0, 1, 0, 1)}};
+  int checked[3] = {0, 0, 0};
+  for (size_t px = 0; px < fb.pixelCount(); ++px) {
+    if (fb.instanceId[px] == kInvalidId) continue;
+    const double x = fb.position[3 * px];
+    for (int r = 0; r < 3; ++r) {
+      const Expected& e = regions[r];
+      if (x < e.lo || x > e.hi) continue;
+      EXPECT_EQ(fb.instanceId[px], e.instance) << px;
+      EXPECT_EQ(fb.meshId[px], e.mesh) << px;
+      EXPECT_EQ(fb.materialId[px], e.material) << px;
+      for (int c = 0; c < 4; ++c) EXPECT_EQ(fb.albedo[4 * px + c], e.albedo[c]) << px;
+      ++checked[r];
+    }
+  }
+  for (int r = 0; r < 3; ++r) EXPECT_GT(checked[r], 20) << r;
+  EXPECT_EQ(*stringVector(meta, "aperture.instanceNames"),
+            (std::vector<std::string>{"left", "a", "b"}));
+  EXPECT_EQ(*stringVector(meta, "aperture.meshNames"), (std::vector<std::string>{"left", "objs"}));
+  EXPECT_EQ(*stringVector(meta, "aperture.materialNames"),
+            (std::vector<std::string>{"default", "m1", "m2"}));
 }
 
 }  // namespace

@@ -66,12 +66,16 @@ TEST(SceneSetupIds, PlacementsAreNumberedSceneWideAndARepeatedFileIsBuiltOnce) {
   // A PLY placement holds one instance and one mesh, named after the file's stem.
   EXPECT_EQ(s.ids.instance, (std::vector<std::string>{"a", "b", "a"}));
   EXPECT_EQ(s.ids.mesh, (std::vector<std::string>{"a", "b", "a"}));
-  EXPECT_TRUE(s.ids.material.empty());
+  // Each placement of a file without materials gets a "default" of its own.
+  EXPECT_EQ(s.ids.material, (std::vector<std::string>{"default", "default", "default"}));
   for (uint32_t k = 0; k < 3; ++k) {
     EXPECT_EQ(s.scene->objectIds(k).instance, k);
     EXPECT_EQ(s.scene->objectIds(k).mesh, k);
-    EXPECT_EQ(s.scene->objectIds(k).materialBase, 0u);
+    EXPECT_EQ(s.scene->objectIds(k).materialBase, k);
   }
+  ASSERT_NE(s.scene->looks(), nullptr);
+  EXPECT_EQ(s.scene->looks()->materials.size(), 3u);
+  EXPECT_EQ(s.scene->looks()->materials[1].baseColor, glm::vec4(1.0f));
   // a.ply is finished once and instanced twice; b.ply is attached directly.
   EXPECT_EQ(s.meshes.size(), 2u);
   EXPECT_EQ(s.objects[0].mesh, s.objects[2].mesh);
