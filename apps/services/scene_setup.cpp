@@ -236,6 +236,7 @@ void placeFile(LoadedScene& s, const MeshPlacement& p, const LoadedFile& f, bool
   s.ids.material.insert(s.ids.material.end(), file.materialNames.begin(), file.materialNames.end());
   // A file without materials (PLY, procedural) gets the white "default" the glTF and OBJ
   // loaders give material-less triangles, so its material id names no other file's material.
+  s.fileMaterials = s.fileMaterials || !file.materialNames.empty();
   if (file.materialNames.empty()) {
     Material white;
     white.name = "default";
@@ -285,7 +286,8 @@ void computeWorldBounds(LoadedScene& s) {
 
 /// The scene's SurfaceLooks: its materials and, for the albedo AOV, their textures' sampler.
 void setSurfaceLooks(LoadedScene& s, const SceneSpec& spec) {
-  if (s.materials.empty()) return;
+  // A scene of material-less files only has no looks: the albedo AOV is refused there.
+  if (!s.fileMaterials) return;
   auto looks = std::make_shared<SurfaceLooks>();
   looks->materials = s.materials;
   if (spec.textures && !s.textures.empty()) looks->textures = openTextureSampler(s.textures);

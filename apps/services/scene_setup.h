@@ -102,7 +102,10 @@ struct LoadedScene {
   /// `textures`), which buildLoadedScene sets on the Scene (SurfaceLooks; the textures'
   /// sampler only when SceneSpec::textures).
   std::vector<Material> materials;
-  std::vector<SurfaceTexture> textures;   ///< empty unless SceneSpec::textures
+  std::vector<SurfaceTexture> textures;  ///< empty unless SceneSpec::textures
+  /// Some file has materials of its own: only then does the Scene get SurfaceLooks (the
+  /// "default" materials of material-less files alone give none, and albedo is refused).
+  bool fileMaterials = false;
   std::deque<TriangleSubset> subsets;     ///< the culled triangles, when culling
   std::optional<CullStats> cull;          ///< set when the scene was culled
   std::unique_ptr<Scene> scene;           ///< null until buildLoadedScene

@@ -106,21 +106,21 @@ const WorldTriangle* firstHit(const std::vector<WorldTriangle>& tris, const glm:
   return best;
 }
 
-struct Rendered {
+struct GltfRendered {
   Framebuffer fb;
   ExrMetadata meta;
 };
 
 constexpr const char* kAovs = "depth,normal,position,primid,geomid,instance,mesh,material";
 
-Rendered renderFile(const std::string& mesh, const std::string& view, const std::string& out) {
+GltfRendered renderFile(const std::string& mesh, const std::string& view, const std::string& out) {
   std::string log;
   const int code =
       test::runCommand(test::apertureBinary() + " render --quiet --mesh " + test::quote(mesh) +
                            " " + view + " --aov " + kAovs + " --out " + test::quote(out),
                        &log);
   EXPECT_EQ(code, 0) << log;
-  Rendered r;
+  GltfRendered r;
   if (code == 0) r.fb = readExr(out, &r.meta);
   return r;
 }
@@ -184,7 +184,7 @@ TEST(GltfScenesCli, EveryEncodingRendersTheSamePixelsAndTheIdsOfTheTriangleSeen)
   const std::vector<WorldTriangle> tris = worldTriangles(scene);
   glm::dvec3 eye;
   const std::string view = sceneView(tris, &eye);
-  const Rendered gltf =
+  const GltfRendered gltf =
       renderFile(test::writeGltf(scene, dir + "/scene.gltf"), view, dir + "/gltf.exr");
   ASSERT_FALSE(gltf.fb.depth.empty());
   const std::map<uint32_t, int> seen = checkIdsByBruteForce(gltf.fb, tris, eye);
@@ -207,8 +207,8 @@ TEST(GltfScenesCli, EveryEncodingRendersTheSamePixelsAndTheIdsOfTheTriangleSeen)
       {"draco.glb", test::GltfCompression::Draco},
       {"meshopt.glb", test::GltfCompression::Meshopt}};
   for (const auto& [name, compression] : others) {
-    const Rendered r = renderFile(test::writeGltf(scene, dir + "/" + name, compression), view,
-                                  dir + "/" + name + ".exr");
+    const GltfRendered r = renderFile(test::writeGltf(scene, dir + "/" + name, compression), view,
+                                      dir + "/" + name + ".exr");
     test::expectIdentical(r.fb, gltf.fb, name);
   }
 }
@@ -336,7 +336,7 @@ TEST(GltfScenesCli, ABadFileIsRefusedWithItsJsonPointerAndNothingIsWritten) {
 }
 
 /// A COLMAP text model of one pinhole camera at (0, 0, -10) looking along +z.
-std::string colmapModel(const std::string& dir) {
+std::string frontCameraModel(const std::string& dir) {
   std::filesystem::create_directories(dir);
   test::writeFile(dir + "/cameras.txt", "1 PINHOLE 64 48 60 60 32 24\n");
   test::writeFile(dir + "/images.txt", "1 1 0 0 0 0 0 10 1 front.png\n\n");
@@ -345,7 +345,7 @@ std::string colmapModel(const std::string& dir) {
 
 TEST(GltfScenesCli, VisibilityTakesAGltfOfOneMeshAndRefusesSeveral) {
   const std::string dir = test::scratchDir();
-  const std::string model = colmapModel(dir + "/sparse");
+  const std::string model = frontCameraModel(dir + "/sparse");
   // One quad placed by one node: the same faces as the PLY of its triangles.
   test::GltfScene one;
   test::GltfPrimitive quad;

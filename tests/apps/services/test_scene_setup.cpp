@@ -73,9 +73,7 @@ TEST(SceneSetupIds, PlacementsAreNumberedSceneWideAndARepeatedFileIsBuiltOnce) {
     EXPECT_EQ(s.scene->objectIds(k).mesh, k);
     EXPECT_EQ(s.scene->objectIds(k).materialBase, k);
   }
-  ASSERT_NE(s.scene->looks(), nullptr);
-  EXPECT_EQ(s.scene->looks()->materials.size(), 3u);
-  EXPECT_EQ(s.scene->looks()->materials[1].baseColor, glm::vec4(1.0f));
+  EXPECT_EQ(s.scene->looks(), nullptr);  // no file has materials: albedo is refused
   // a.ply is finished once and instanced twice; b.ply is attached directly.
   EXPECT_EQ(s.meshes.size(), 2u);
   EXPECT_EQ(s.objects[0].mesh, s.objects[2].mesh);
