@@ -13,10 +13,15 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 
-float wrapDegrees(double deg) {
-  double a = std::fmod(deg, 360.0);
+// deg in [0, 360).
+double wrap360(double deg) {
+  double a = deg >= 0 && deg < 360.0 ? deg : std::fmod(deg, 360.0);
   if (a < 0) a += 360.0;
-  const float f = float(a);
+  return a >= 360.0 ? 0.0 : a;
+}
+
+float wrapDegrees(double deg) {
+  const float f = float(wrap360(deg));
   return f >= 360.0f ? 0.0f : f;
 }
 
@@ -176,9 +181,10 @@ LidarRays sweepRays(const LidarSensor& sensor, const Trajectory& trajectory, int
     for (size_t u = first; u < last; ++u) {
       double c = 1, s = 0, columnDeg = 0;
       if (spinning) {
-        columnDeg = sensor.columnAzimuthDeg(ids[u]);
-        c = std::cos(columnDeg * kDeg);
-        s = std::sin(columnDeg * kDeg);
+        const double turn = sensor.columnAzimuthDeg(ids[u]);
+        c = std::cos(turn * kDeg);
+        s = std::sin(turn * kDeg);
+        columnDeg = wrap360(turn);
       }
       for (size_t b = 0; b < unit; ++b) {
         const size_t i = u * unit + b;
