@@ -260,6 +260,35 @@ TEST(LidarSpec, LivoxCsvGivesTimesAndElevations) {
   EXPECT_NE(test::errorOf([&] { loadLidar(short_); }).find("short.csv line 2"), std::string::npos);
 }
 
+TEST(LidarSpec, SpecsStartFromAVendorFileAndOverrideItsFields) {
+  writeSpec("os.json", kOusterNested);
+  const std::string spec = writeSpec("mine.json", R"({"name": "os-fast", "from": "os.json",
+    "sweep_rate_hz": 20, "max_range_m": 40,
+    "beams": {"time_offset_ns": [0, 10, 20, 30]},
+    "sensor_from_lidar": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]})");
+  const LidarSensor s = loadLidar(spec);
+  EXPECT_EQ(s.name, "os-fast");
+  EXPECT_EQ(s.source.path, spec);
+  EXPECT_EQ(s.sweepRateHz, 20);
+  EXPECT_EQ(s.maxRange, 40);
+  EXPECT_EQ(s.columns, 512);               // from the metadata
+  EXPECT_EQ(s.beams[2].azimuthDeg, 1);     // from the metadata, negated
+  EXPECT_EQ(s.beams[3].timeOffsetNs, 30);  // given over it
+  EXPECT_EQ(s.sensorFromLidar, glm::dmat4(1.0));
+
+  const std::string wrongLength = writeSpec("short.json", R"({"from": "os.json",
+    "beams": {"time_offset_ns": [0, 10]}})");
+  std::string e = test::errorOf([&] { loadLidar(wrongLength); });
+  EXPECT_NE(e.find("beams.time_offset_ns"), std::string::npos) << e;
+  EXPECT_NE(e.find("the beam table 4"), std::string::npos) << e;
+
+  const std::string twoBases = writeSpec("two.json", R"({"from": "os.json",
+    "pattern": [[0, 0, 0]]})");
+  EXPECT_NE(test::errorOf([&] { loadLidar(twoBases); }).find("give one of"), std::string::npos);
+  const std::string wrongType = writeSpec("type.json", R"({"from": "os.json", "type": "pattern"})");
+  EXPECT_NE(test::errorOf([&] { loadLidar(wrongType); }).find("'type'"), std::string::npos);
+}
+
 TEST(LidarSpec, PresetsLoadWithTheirBeamCountsAndCiteTheirSources) {
   const std::vector<std::pair<std::string, size_t>> expected{
       {"VLP-16", 16}, {"HDL-32E", 32}, {"HDL-64E", 64}, {"OS1-64", 64}, {"OS1-128", 128}};
