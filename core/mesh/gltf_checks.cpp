@@ -149,9 +149,12 @@ struct Checker {
     }
   }
 
-  /// `offset` + `length` bytes must lie in buffer `buffer`, unless it is an empty fallback.
+  /// `offset` + `length` bytes must lie in buffer `buffer`.
   void inBuffer(size_t buffer, int64_t offset, int64_t length, const std::string& p) const {
-    if (emptyFallback[buffer]) return;
+    if (emptyFallback[buffer])
+      bad(p + "/buffer", cat("buffer ", buffer,
+                             " is a meshopt fallback without data: only compressed views may "
+                             "name it"));
     const size_t have = bufferBytes[buffer];
     if (offset < 0 || uint64_t(offset) > have)
       bad(p + "/byteOffset",

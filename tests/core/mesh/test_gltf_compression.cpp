@@ -126,3 +126,29 @@ TEST(GltfCompression, DracoDataThatDoesNotDecode) {
 
 }  // namespace
 }  // namespace aperture
+
+namespace aperture {
+namespace {
+
+// Found by fuzz_gltf (tests/fuzz/regressions/gltf): an uncompressed view in the empty fallback
+// buffer was read past its one byte.
+TEST(GltfCompression, PlainViewInAnEmptyFallbackIsRefused) {
+  const std::string path = test::writeGltf(test::issue41Scene(), test::scratchDir() + "/f.gltf",
+                                           test::GltfCompression::Meshopt);
+  size_t view = 0;
+  test::editGltf(path, [&](nlohmann::json& d) {
+    d["bufferViews"].push_back({{"buffer", 1}, {"byteLength", 8}});
+    view = d["bufferViews"].size() - 1;
+  });
+  try {
+    loadGltf(path);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("/bufferViews/" + std::to_string(view) + "/buffer"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace aperture
