@@ -69,14 +69,31 @@ def _look_at(
 Camera.look_at = staticmethod(_look_at)  # type: ignore[attr-defined]
 
 
-def load_cameras(path: str | os.PathLike[str], images: Iterable[str] | None = None) -> list[Camera]:
+def load_cameras(
+    path: str | os.PathLike[str],
+    images: Iterable[str] | None = None,
+    *,
+    width: int | None = None,
+    height: int | None = None,
+    gltf_scene: int | None = None,
+) -> list[Camera]:
     """The cameras of a camera file the command line accepts: a COLMAP model folder (text or
-    binary), a transforms.json (nerfstudio, NeRF, instant-ngp) or an OpenCV JSON/YAML. Each
-    Camera has ``.name``, the image's name. ``images`` selects images by name, in that order
-    (default: all, in the file's order, which is the order ``aperture batch`` renders).
-    Raises FileNotFoundError for a missing path, ValueError for bad contents or an unknown
-    image name."""
-    return _load_cameras(os.fspath(path), None if images is None else [str(i) for i in images])
+    binary), a transforms.json (nerfstudio, NeRF, instant-ngp), an OpenCV JSON/YAML, or the
+    camera nodes of a glTF scene (.gltf, .glb; ``gltf_scene`` picks the scene, default the
+    file's). Each Camera has ``.name``, the image's name (a glTF camera's: its node's).
+    ``images`` selects images by name, in that order (default: all, in the file's order, which
+    is the order ``aperture batch`` renders). A glTF camera carries no image size: ``width``
+    and ``height`` give it; with one of them the other follows the camera's aspect ratio
+    (aspectRatio, or xmag / ymag), with neither the height is 540 (docs/cameras.md, glTF
+    cameras). Raises FileNotFoundError for a missing path, ValueError for bad contents or an
+    unknown image name."""
+    return _load_cameras(
+        os.fspath(path),
+        None if images is None else [str(i) for i in images],
+        width,
+        height,
+        gltf_scene,
+    )
 
 
 def read_exr(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:

@@ -111,8 +111,16 @@ class Scene:
     ) -> dict[str, np.ndarray]:
         """Per point: the cameras that see it, as CSR index arrays (GIL released)."""
 
-def load_cameras(path: _PathLike, images: Iterable[str] | None = None) -> list[Camera]:
-    """The cameras of a COLMAP model, transforms.json or OpenCV JSON/YAML, each with .name."""
+def load_cameras(
+    path: _PathLike,
+    images: Iterable[str] | None = None,
+    *,
+    width: int | None = None,
+    height: int | None = None,
+    gltf_scene: int | None = None,
+) -> list[Camera]:
+    """The cameras of a COLMAP model, transforms.json, OpenCV JSON/YAML or glTF scene (its
+    camera nodes; width / height give their image size), each with .name."""
 
 def camera_parameters() -> list[str]:
     """The keyword names Camera() accepts."""
