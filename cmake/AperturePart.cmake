@@ -35,6 +35,9 @@ set(APERTURE_PART_LIBRARIES
   "Imath/: core/exr"
   "OpenImageIO/: core/io"
   "yaml-cpp/: cameras/files"
+  "tiny_gltf.h: core/mesh"
+  "draco/: core/mesh"
+  "meshoptimizer.h: core/mesh"
 )
 
 # The parts `part` lists.

@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "apps/services/view.h"
+#include "core/aov/aov_table.h"
 #include "core/io/atomic_file.h"
 #include "core/util/error.h"
 
@@ -85,14 +86,22 @@ Totals totalsOf(const std::vector<ImageResult>& results) {
 /// One scene's mesh and BVH figures (the top-level keys of a one-scene job's summary).
 nlohmann::json sceneFigures(const SceneReport& scene) {
   if (!scene.loaded) return {{"meshes", scene.meshes}, {"bvh_builds", 0}};
-  return {{"meshes", scene.meshes},
-          {"load_seconds", scene.loadSeconds},
-          {"bvh_builds", 1},
-          {"build_seconds", scene.build.buildSeconds},
-          {"triangles", scene.build.triangles},
-          {"unique_triangles", scene.build.uniqueTriangles},
-          {"instances", scene.instances},
-          {"embree_bytes", scene.build.embreeBytes}};
+  nlohmann::json figures = {{"meshes", scene.meshes},
+                            {"load_seconds", scene.loadSeconds},
+                            {"bvh_builds", 1},
+                            {"build_seconds", scene.build.buildSeconds},
+                            {"triangles", scene.build.triangles},
+                            {"unique_triangles", scene.build.uniqueTriangles},
+                            {"instances", scene.instances},
+                            {"embree_bytes", scene.build.embreeBytes}};
+  if (scene.idAovs) {
+    nlohmann::json ids = nlohmann::json::object();
+    if (scene.idAovs & kAovInstanceId) ids["instance"] = scene.ids.instance;
+    if (scene.idAovs & kAovMeshId) ids["mesh"] = scene.ids.mesh;
+    if (scene.idAovs & kAovMaterialId) ids["material"] = scene.ids.material;
+    figures["ids"] = ids;
+  }
+  return figures;
 }
 
 /// A job with "scenes": each scene's figures, and load, build and BVH counts summed.
@@ -177,6 +186,11 @@ bool writeSummary(const nlohmann::json& summary, const std::string& path, bool q
 std::map<std::string, std::map<uint32_t, uint64_t>> idCountsOf(const Framebuffer& fb) {
   std::map<std::string, std::map<uint32_t, uint64_t>> counts;
   if (fb.has(kAovGeomId)) counts["geomid"] = countIds(fb.geomId);
+  // The scene-wide ids (ObjectIds), by their rows' names ("instance", "mesh", "material").
+  for (const AovRow& row : aovTable())
+    if ((row.bit & (kAovInstanceId | kAovMeshId | kAovMaterialId)) && fb.has(Aov(row.bit)) &&
+        row.u32)
+      counts[row.name] = countIds(fb.*row.u32);
   for (const PropertyChannel& p : fb.properties) counts[p.property.aovName()] = countIds(p.values);
   return counts;
 }
@@ -185,6 +199,7 @@ SceneReport unloadedSceneReport(const Job& scene) {
   SceneReport r;
   r.name = scene.sceneName;
   for (const MeshPlacement& m : scene.meshes) r.meshes.push_back(m.spec);
+  r.idAovs = scene.aovs.mask & (kAovInstanceId | kAovMeshId | kAovMaterialId);
   return r;
 }
 
@@ -194,6 +209,7 @@ void recordLoadedScene(SceneReport& report, const LoadedScene& scene) {
   report.loadSeconds = scene.loadSeconds;
   report.build = scene.scene->stats();
   report.instances = scene.scene->instanceCount();
+  report.ids = scene.ids;
 }
 
 std::string defaultSummaryPath(const JobFile& jobFile, const Shard& shard) {

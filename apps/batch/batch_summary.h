@@ -21,8 +21,10 @@ struct SceneReport {
   double loadSeconds = 0;
   BuildStats build;
   size_t instances = 0;
-  size_t images = 0;  ///< images of this run (shard) in the scene
-  std::string error;  ///< why it could not be loaded or built
+  size_t images = 0;   ///< images of this run (shard) in the scene
+  std::string error;   ///< why it could not be loaded or built
+  AovMask idAovs = 0;  ///< the job's id AOVs (instance, mesh, material): what `ids` lists
+  SceneIds ids;        ///< the names behind those ids, once loaded (LoadedScene::ids)
 };
 
 /// What summary.json says of `scene` (as the job lists it, before it is loaded).
@@ -42,7 +44,8 @@ struct BatchRun {
   std::vector<std::string> removedTemporaries;  ///< by --resume
 };
 
-/// Per id AOV of `fb` (geomid, then the property AOVs), the number of pixels showing each id.
+/// Per id AOV of `fb` (geomid, instance, mesh, material, then the property AOVs), the number
+/// of pixels showing each id.
 /// Misses (kInvalidId) are not counted, so each AOV's counts sum to the hit pixels. (A
 /// property value of 0xFFFFFFFF, e.g. a label of -1, is indistinguishable from a miss and is
 /// not counted either.)
@@ -53,9 +56,11 @@ std::map<std::string, std::map<uint32_t, uint64_t>> idCountsOf(const Framebuffer
 std::string defaultSummaryPath(const JobFile& jobFile, const Shard& shard);
 
 /// summary.json: the run's totals (images_ok, images_failed, ...; BVH, timings) and one entry
-/// per image ("images"). "frame" in an entry is the frame number along the camera's path. A
-/// job with "scenes" adds "scenes" (per scene: name, meshes, load and build figures, images)
-/// and "scene" in each image entry; the top-level BVH figures are then sums over scenes.
+/// per image ("images"). A scene whose job asks for id AOVs has "ids": for each of them
+/// (instance, mesh, material) the names behind the ids, name k for id k. "frame" in an entry is the
+/// frame number along the camera's path. A job with "scenes" adds "scenes" (per scene: name,
+/// meshes, load and build figures, images) and "scene" in each image entry; the top-level BVH
+/// figures are then sums over scenes.
 nlohmann::json batchSummary(const BatchRun& run, const std::vector<ImageResult>& results);
 
 /// Prints the table (camera, frame, status, timings, output) and the totals line on stdout

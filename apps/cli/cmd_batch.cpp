@@ -308,9 +308,10 @@ double renderBatchImages(BatchPlan& plan, const SceneImages& images, const Loade
   auto write = [&](ImageWriter::Task& task) {
     const auto t0 = BatchClock::now();
     if (job.idCounts) task.result->idCounts = idCountsOf(task.view.fb);
-    writeImageFiles(*task.result, task.view,
-                    viewMetadata(task.view, scene.names, job.aovs, job.build, job.placement),
-                    job.exr, preview, job.cameraFiles, job.writesExr, job.dataset);
+    writeImageFiles(
+        *task.result, task.view,
+        viewMetadata(task.view, scene.names, job.aovs, job.build, job.placement, scene.ids),
+        job.exr, preview, job.cameraFiles, job.writesExr, job.dataset);
     task.result->writeSeconds = secondsSince(t0);
     task.view = RenderedView();
     progress.finished(*task.result);
@@ -528,8 +529,14 @@ Command addBatchCommand(CLI::App& app) {
   CameraFileBatch& cf = args->cameraFile;
   const char* const group = "Without a job file: the images of a camera file";
   sub->add_option("--cameras", cf.cameras, kCameraFileHelp)->group(group)->type_name("PATH");
-  sub->add_option("--mesh", cf.meshes, "Mesh (PLY, OBJ or procedural:NAME); repeatable")
+  sub->add_option("--mesh", cf.meshes,
+                  "Mesh or scene file (PLY, OBJ, glTF .gltf/.glb) or procedural:NAME; repeatable")
       ->group(group);
+  sub->add_option("--gltf-scene", cf.gltfScene,
+                  "The scene (index into \"scenes\") of every glTF --mesh (the job's "
+                  "scene.gltf_scene). Default: the file's \"scene\", else 0")
+      ->group(group)
+      ->type_name("N");
   sub->add_option("--out", cf.outDir, "Output folder: DIR/<image name>.exr, subfolders kept")
       ->group(group)
       ->type_name("DIR");

@@ -1,5 +1,6 @@
 // `aperture render`: one frame of a mesh from one camera into a multi-channel EXR, or one AOV
 // into a dataset file (16-bit PNG depth, PFM, NPY, float TIFF) when --out has that extension.
+#include <algorithm>
 #include <cstdio>
 #include <vector>
 
@@ -105,10 +106,13 @@ int runRender(const RenderArgs& a) {
                  fb.width, fb.height, settings.spp, aovListString(aovs).c_str(), view.stats.seconds,
                  view.stats.mraysPerSecond(), threads.threads());
 
+  // Each file once, in the order first placed (a glTF file's meshes are named by the ids).
   std::vector<std::string> meshNames;
-  for (const Mesh& m : loaded.meshes) meshNames.push_back(m.name);
-  const ExrMetadata meta =
-      viewMetadata(view, meshNames, aovs, a.scene.buildOptions(), a.scene.loadOptions().placement);
+  for (const std::string& name : loaded.names)
+    if (std::find(meshNames.begin(), meshNames.end(), name) == meshNames.end())
+      meshNames.push_back(name);
+  const ExrMetadata meta = viewMetadata(view, meshNames, aovs, a.scene.buildOptions(),
+                                        a.scene.loadOptions().placement, loaded.ids);
   DatasetWriteOptions dataset;
   dataset.depthScale = a.depthScale;
   writeViewOutputs(view, meta, exr, datasets.empty() ? a.out : std::string(), a.preview, preview,

@@ -169,6 +169,24 @@ void writeVisibilityOutputs(const VisibilityArgs& a, const LoadedScene& loaded,
   }
 }
 
+/// Face visibility numbers the faces of one mesh placed once: the .npz's per-face arrays and
+/// the .ply's faces are that mesh's triangles in its loaded order. A scene file that places
+/// several meshes, or one mesh several times (a glTF of several mesh nodes), is refused before
+/// its BVH is built, naming what it places; a glTF whose scene places one mesh works as a PLY.
+void checkOneMeshPlacedOnce(const LoadedScene& loaded) {
+  if (loaded.objects.size() == 1 && loaded.names.size() == 1) return;
+  std::vector<std::string> instances;
+  for (const SceneObject& o : loaded.objects)
+    instances.push_back(o.ids.instance < loaded.ids.instance.size()
+                            ? loaded.ids.instance[o.ids.instance]
+                            : std::to_string(o.ids.instance));
+  throw Error(cat("visibility: ", join(loaded.names, ", "), ": the scene places ",
+                  loaded.objects.size(), " meshes (", join(instances, ", "),
+                  "); face visibility numbers the faces of one mesh placed once, so give one "
+                  "mesh file whose scene places one mesh (for a glTF: a scene of one mesh "
+                  "node, --gltf-scene N)"));
+}
+
 int runVisibility(const VisibilityArgs& a) {
   // Everything that can be checked is checked before the mesh loads.
   checkVisibilityArgs(a);
@@ -183,8 +201,10 @@ int runVisibility(const VisibilityArgs& a) {
 
   ThreadLimit threads(a.threads);
   Device device;
-  SceneOptions sceneOptions = a.scene;
-  LoadedScene loaded = loadScene(device, sceneOptions.spec(), a.quiet);
+  const SceneSpec spec = a.scene.spec();
+  LoadedScene loaded = loadSceneMeshes(spec, a.quiet);
+  checkOneMeshPlacedOnce(loaded);
+  buildLoadedScene(device, loaded, spec, a.quiet);
   std::vector<std::unique_ptr<Camera>> owned;
   std::vector<const Camera*> cameras;
   for (const CameraParams& p : cams.params) {

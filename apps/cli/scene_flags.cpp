@@ -5,8 +5,13 @@ namespace aperture::app {
 void addSceneOptions(CLI::App& app, SceneOptions& o) {
   app.add_option(
       "--mesh", o.meshes,
-      "Mesh file (.ply, .obj) or procedural:NAME?k=v (e.g. procedural:spheres?tris=2000000);"
-      " repeatable. Default: the procedural default scene");
+      "Mesh or scene file (.ply, .obj with its objects and materials, .gltf or .glb with its "
+      "nodes, meshes and materials) or procedural:NAME?k=v (e.g. "
+      "procedural:spheres?tris=2000000); repeatable. Default: the procedural default scene");
+  app.add_option("--gltf-scene", o.gltfScene,
+                 "The scene (index into the file's \"scenes\") of every .gltf/.glb --mesh to "
+                 "load. Default: the file's \"scene\", else scene 0")
+      ->type_name("N");
   app.add_option("--bvh-quality", o.quality,
                  "Embree BVH build quality: low, medium, high (high lets Embree use spatial "
                  "splits: a slower build for tracing as fast or faster; what Embree builds "

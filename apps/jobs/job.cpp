@@ -23,6 +23,7 @@
 #include "core/engine/layers.h"
 #include "core/io/dataset_image.h"
 #include "core/mesh/mesh.h"
+#include "core/mesh/scene_file.h"
 #include "core/util/error.h"
 #include "core/util/spelling.h"
 #include "core/util/units.h"
@@ -402,7 +403,7 @@ MeshPlacement readMesh(const Object& m, const std::string& baseDir) {
 void readScene(const Object& top, const std::string& baseDir, Job& job) {
   if (!top.has("scene")) top.fail(top.keyPath("scene"), "required key is missing");
   const Object scene(top.file(), top.keyPath("scene"), top.required("scene"),
-                     {"meshes", "placement"});
+                     {"meshes", "placement", "gltf_scene"});
   const std::string placement = scene.string("placement").value_or("camera-relative");
   if (placement == "world-space")
     job.placement = Placement::WorldSpace;
@@ -415,6 +416,14 @@ void readScene(const Object& top, const std::string& baseDir, Job& job) {
     const Object m(top.file(), indexPath(scene.keyPath("meshes"), k), meshes[k],
                    {"path", "transform", "matrix"});
     job.meshes.push_back(readMesh(m, baseDir));
+  }
+  if (const std::optional<int> index = scene.integer("gltf_scene")) {
+    if (*index < 0) scene.fail(scene.keyPath("gltf_scene"), cat(*index, ": must be >= 0"));
+    if (std::none_of(job.meshes.begin(), job.meshes.end(),
+                     [](const MeshPlacement& p) { return isGltfPath(p.spec); }))
+      scene.fail(scene.keyPath("gltf_scene"),
+                 "no mesh is a glTF file (.gltf, .glb) to choose a scene of");
+    job.gltfScene = index;
   }
 }
 
@@ -777,6 +786,7 @@ Job cameraFileJob(const CameraFileBatch& b) {
   for (const std::string& m : b.meshes) meshes.push_back({{"path", m}});
   json job = {
       {"scene", {{"meshes", meshes}}}, {"cameras", {{"from", b.cameras}}}, {"aovs", b.aovs}};
+  if (b.gltfScene) job["scene"]["gltf_scene"] = *b.gltfScene;
   const std::string format = toLowerAscii(b.format);
   const std::string pattern = (fs::path(b.outDir) / ("{image}." + format)).generic_string();
   if (format == "exr") {

@@ -59,10 +59,19 @@ struct Job {
   BuildOptions build;
   bool cull = false;  ///< performance.cull: BVH over the triangles the frames may see
   Placement placement = Placement::CameraRelative;  ///< scene.placement
-  /// The scene to load and build: meshes, placement, BVH options, culling and the mesh data
-  /// the AOVs read.
+  /// scene.gltf_scene: the scene of every glTF mesh file (SceneSpec::gltfScene); unset: each
+  /// file's default scene.
+  std::optional<int> gltfScene;
+  /// The scene to load and build: meshes, placement, BVH options, culling, the glTF scene and
+  /// the mesh data the AOVs read.
   SceneSpec sceneSpec() const {
-    return withAovNeeds({meshes, placement, build, cull, {}, false}, aovs);
+    SceneSpec spec;
+    spec.meshes = meshes;
+    spec.placement = placement;
+    spec.build = build;
+    spec.cull = cull;
+    spec.gltfScene = gltfScene;
+    return withAovNeeds(spec, aovs);
   }
   /// "id_counts": summary.json reports per image the pixel count of each id of the property
   /// AOVs and geomid (batchIdCounts).
@@ -123,6 +132,7 @@ JobFile readJobFileText(const std::string& text, const std::string& name,
 /// image of a camera file (or those --image names) to DIR/<image name>.exr, subfolders kept.
 struct CameraFileBatch {
   std::vector<std::string> meshes;
+  std::optional<int> gltfScene;  ///< --gltf-scene: the job's scene.gltf_scene
   std::string cameras;
   std::vector<std::string> images;
   std::string outDir;

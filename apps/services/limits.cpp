@@ -9,12 +9,14 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string_view>
 
 #include "core/aov/aov_table.h"
 #include "core/mesh/mesh.h"
 #include "core/mesh/ply.h"
+#include "core/mesh/scene_file.h"
 #include "core/util/error.h"
 
 namespace aperture {
@@ -215,6 +217,68 @@ void estimateObj(const std::string& head, uint64_t fileBytes, MeshSizeEstimate& 
   m.how = cat("OBJ sample of ", head.size(), " bytes");
 }
 
+/// The JSON of a glTF file: a .gltf is JSON throughout; a .glb's first chunk is (12-byte
+/// header, then the chunk's length and type "JSON"). Empty when neither can be read.
+std::string gltfJson(const std::string& path, uint64_t fileBytes) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return {};
+  if (lowerExtension(path) == ".gltf") {
+    if (fileBytes > (uint64_t(256) << 20)) return {};  // not a plausible scene description
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }
+  unsigned char head[20];
+  if (!in.read(reinterpret_cast<char*>(head), sizeof head)) return {};
+  const auto u32 = [&](int at) {
+    return uint32_t(head[at]) | uint32_t(head[at + 1]) << 8 | uint32_t(head[at + 2]) << 16 |
+           uint32_t(head[at + 3]) << 24;
+  };
+  const uint32_t length = u32(12);
+  if (u32(0) != 0x46546C67u || u32(16) != 0x4E4F534Au || 20 + uint64_t(length) > fileBytes)
+    return {};
+  std::string json(length, '\0');
+  if (!in.read(&json[0], length)) return {};
+  return json;
+}
+
+/// The counts a glTF file declares, from its JSON alone (no buffer is read): each mesh once
+/// (a mesh several nodes place is stored and built once), each triangle primitive's vertices
+/// (its POSITION accessor's count) and triangles (its indices' count, else its vertices', / 3
+/// for mode 4, - 2 for strips and fans), Draco and meshopt primitives by the counts their
+/// accessors declare; buffers the file refers to beside it (.bin) by their byteLength. A JSON
+/// the loader would refuse is left to it (the estimate falls back on the file size).
+void estimateGltf(const std::string& path, uint64_t fileBytes, MeshSizeEstimate& m) {
+  using nlohmann::json;
+  uint64_t vertices = 0, triangles = 0, externalBytes = 0;
+  try {
+    const json j = json::parse(gltfJson(path, fileBytes));
+    const json& accessors = j.at("accessors");
+    const auto count = [&](const json& index) -> uint64_t {
+      return accessors.at(index.get<size_t>()).at("count").get<uint64_t>();
+    };
+    for (const json& mesh : j.value("meshes", json::array()))
+      for (const json& p : mesh.at("primitives")) {
+        const int mode = p.value("mode", 4);
+        if (mode < 4) continue;  // points and lines are skipped
+        const uint64_t v = count(p.at("attributes").at("POSITION"));
+        const uint64_t corners = p.contains("indices") ? count(p.at("indices")) : v;
+        vertices += v;
+        triangles += mode == 4 ? corners / 3 : corners > 2 ? corners - 2 : 0;
+      }
+    for (const json& b : j.value("buffers", json::array()))
+      if (b.contains("uri") && b.at("uri").get<std::string>().rfind("data:", 0) != 0)
+        externalBytes += b.at("byteLength").get<uint64_t>();
+  } catch (const std::exception&) {
+    return;
+  }
+  m.vertices = vertices;
+  m.triangles = triangles;
+  m.meshBytes = keptMeshBytes(m.vertices, m.triangles);
+  // The file and its external buffers are held while the meshes are decoded beside them;
+  // then each mesh's buffers as the PLY loader's (float positions, indices, a flag a vertex).
+  m.loaderBytes = externalBytes + m.meshBytes + m.vertices;
+  m.how = "glTF JSON";
+}
+
 /// The generator's own counts; a spec it rejects is left to it (the estimate counts nothing).
 void estimateProcedural(const std::string& spec, MeshSizeEstimate& m) {
   MeshCounts counts;
@@ -252,6 +316,8 @@ MeshSizeEstimate estimateMeshSize(const std::string& spec) {
     estimatePly(spec, head, m.fileBytes, m);
   else if (ext == ".obj")
     estimateObj(sampleChunks(spec, m.fileBytes), m.fileBytes, m);
+  else if (isGltfPath(spec))
+    estimateGltf(spec, m.fileBytes, m);
   // The loaders map the whole file; its pages count too.
   m.loaderBytes += m.fileBytes;
   if (m.how.empty()) {

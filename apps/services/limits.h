@@ -19,7 +19,7 @@ struct MeshSizeEstimate {
   uint64_t loaderBytes = 0;
   /// Bytes kept once loaded, shared with Embree: float positions (padded) and indices.
   uint64_t meshBytes = 0;
-  std::string how;  ///< "PLY header", "OBJ sample of N bytes", "procedural spec"
+  std::string how;  ///< "PLY header", "OBJ sample of N bytes", "glTF JSON", "procedural spec"
   /// True where the triangle order is known to keep neighbours together, so a large mesh is
   /// built in chunks as it is (kMaxChunksPerCell): the procedural generators make their shapes
   /// one after the other. A file's order is known only once it is loaded: a large one is
@@ -28,10 +28,13 @@ struct MeshSizeEstimate {
   bool spatiallyOrdered = false;
 };
 
-/// Estimates `spec` (a .ply or .obj path or a procedural spec): a PLY's counts from its header
-/// as the loader reads it (readPlyHeader; at most 1 MiB read; binary polygons and strips from
-/// the bytes their lists take, strips as an upper bound), an OBJ's from 1 MiB sampled across
-/// the file and scaled, a procedural mesh's from the generator (proceduralMeshCounts). Counts a
+/// Estimates `spec` (a .ply, .obj, .gltf or .glb path or a procedural spec): a PLY's counts
+/// from its header as the loader reads it (readPlyHeader; at most 1 MiB read; binary polygons
+/// and strips from the bytes their lists take, strips as an upper bound), an OBJ's from 1 MiB
+/// sampled across the file and scaled, a glTF file's from its JSON alone (a .glb's JSON chunk;
+/// every mesh counted once, by the counts its accessors declare, whether its scene places it
+/// or not, so an upper bound for one scene; no buffer is read or decoded), a procedural mesh's
+/// from the generator (proceduralMeshCounts). Counts a
 /// file could not hold are clamped to its size. Never throws: an unreadable path, a header the
 /// loader rejects or a bad procedural spec is left to the loader, which names the problem.
 MeshSizeEstimate estimateMeshSize(const std::string& spec);

@@ -26,7 +26,8 @@ RenderedView renderView(const Scene& scene, const CameraParams& params,
 }
 
 ExrMetadata viewMetadata(const RenderedView& view, const std::vector<std::string>& meshNames,
-                         const AovSet& aovs, const BuildOptions& build, Placement placement) {
+                         const AovSet& aovs, const BuildOptions& build, Placement placement,
+                         const SceneIds& ids) {
   ExrMetadata meta;
   meta.camera = view.camera;
   meta.renderSeconds = view.stats.seconds;
@@ -39,6 +40,12 @@ ExrMetadata viewMetadata(const RenderedView& view, const std::vector<std::string
                    placement == Placement::WorldSpace ? "world-space" : "camera-relative"}};
   if (view.fb.has(kAovNormal) || view.fb.has(kAovShadingNormal))
     meta.strings.emplace_back("aperture.normalFrame", normalFrameName(view.normalFrame));
+  const std::pair<Aov, std::pair<const char*, const std::vector<std::string>*>> idNames[] = {
+      {kAovInstanceId, {"aperture.instanceNames", &ids.instance}},
+      {kAovMeshId, {"aperture.meshNames", &ids.mesh}},
+      {kAovMaterialId, {"aperture.materialNames", &ids.material}}};
+  for (const auto& [aov, named] : idNames)
+    if (aovs.has(aov)) meta.stringVectors.emplace_back(named.first, *named.second);
   return meta;
 }
 

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "apps/services/scene_setup.h"
 #include "cameras/schema/params.h"
 #include "core/aov/framebuffer.h"
 #include "core/engine/render.h"
@@ -29,9 +30,13 @@ RenderedView renderView(const Scene& scene, const CameraParams& params,
                         const RenderSettings& settings, const AovSet& aovs);
 
 /// The header of a rendered view: camera, render time, meshes, AOVs, BVH quality and
-/// traversal mode (robust or not), placement, and the normal frame when it holds normals.
+/// traversal mode (robust or not), placement, the normal frame when it holds normals and, for
+/// each id AOV it holds (instance, mesh, material), the names behind its ids as a string
+/// vector: "aperture.instanceNames", "aperture.meshNames", "aperture.materialNames" (name k
+/// is id k's; from `ids`).
 ExrMetadata viewMetadata(const RenderedView& view, const std::vector<std::string>& meshNames,
-                         const AovSet& aovs, const BuildOptions& build, Placement placement);
+                         const AovSet& aovs, const BuildOptions& build, Placement placement,
+                         const SceneIds& ids = {});
 
 /// Creates the parent directory of `path`; throws Error("<what>: '<path>': cannot create
 /// directory ...").

@@ -14,6 +14,7 @@
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStandardAttributes.h>
 #include <OpenEXR/ImfStringAttribute.h>
+#include <OpenEXR/ImfStringVectorAttribute.h>
 #include <OpenEXR/ImfThreading.h>
 #include <OpenEXR/ImfVecAttribute.h>
 
@@ -173,6 +174,8 @@ void addHeaderAttributes(Imf::Header& header, const ExrMetadata& meta) {
   for (const auto& [name, value] : cam.extra)
     header.insert("aperture.camera." + name, Imf::StringAttribute(value));
   for (const auto& [name, value] : meta.strings) header.insert(name, Imf::StringAttribute(value));
+  for (const auto& [name, values] : meta.stringVectors)
+    header.insert(name, Imf::StringVectorAttribute(values));
   header.insert("software", Imf::StringAttribute("aperture " APERTURE_VERSION));
 }
 
@@ -263,6 +266,8 @@ void readHeaderAttributes(const Imf::Header& header, int width, int height, ExrM
   // Every other string attribute: camera extras back into `extra`, the rest into `strings`.
   const std::string extraPrefix = "aperture.camera.";
   for (auto it = header.begin(); it != header.end(); ++it) {
+    if (const auto* v = dynamic_cast<const Imf::StringVectorAttribute*>(&it.attribute()))
+      meta->stringVectors.emplace_back(it.name(), v->value());
     const auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute());
     if (!s) continue;
     const std::string name = it.name();

@@ -28,6 +28,9 @@ struct ExrMetadata {
   double renderSeconds = 0;
   /// Further string attributes (software version, mesh, settings).
   std::vector<std::pair<std::string, std::string>> strings;
+  /// String vector attributes (OpenEXR's stringvector): the names behind the id AOVs,
+  /// "aperture.instanceNames" and the like, each name at its id.
+  std::vector<std::pair<std::string, std::vector<std::string>>> stringVectors;
 };
 
 /// Writes every allocated AOV of `fb` to `path` with the channel names of the README
@@ -67,7 +70,8 @@ class ExrEncodingThreads {
 /// Reads an EXR written by writeExr back into a Framebuffer (AOVs from the channel names;
 /// half channels widened to float; property channels, UINT "face.*" / "vertex.*", in the
 /// file's channel order, which OpenEXR sorts by name). With `meta`, the header comes back as
-/// written, except that string attributes (camera extras, `strings`) come back sorted by name.
+/// written, except that string attributes (camera extras, `strings`) and `stringVectors` come
+/// back sorted by name.
 /// Throws Error for unreadable or incomplete files.
 Framebuffer readExr(const std::string& path, ExrMetadata* meta = nullptr);
 

@@ -58,13 +58,8 @@ SceneFile loadSceneFile(const std::string& spec, const LoadOptions& options) {
   return singleMeshFile(spec, options);
 }
 
-// Placeholders until the glTF and OBJ scene loaders land (issue 41).
-SceneFile loadGltf(const std::string& path, const LoadOptions&) {
-  throw Error(cat(path, ": glTF is not supported yet"));
-}
-SceneFile loadGltfFromMemory(const char*, size_t, const std::string& name, const LoadOptions&) {
-  throw Error(cat(name, ": glTF is not supported yet"));
-}
+// loadGltf and loadGltfFromMemory: gltf.cpp. A placeholder until the OBJ scene loader lands
+// (issue 41).
 SceneFile loadObjScene(const std::string& path, const LoadOptions& options) {
   SceneFile file;
   file.path = path;

@@ -69,8 +69,11 @@ bool holdsEverything(const app::SceneSpec& have, const app::SceneSpec& need) {
   for (const PropertyAov& p : need.properties)
     if (std::find(have.properties.begin(), have.properties.end(), p) == have.properties.end())
       return false;
-  return (have.vertexNormals || !need.vertexNormals) &&
-         (have.build.contextFilter || !need.build.contextFilter);
+  const auto holds = [](bool h, bool n) { return h || !n; };
+  return holds(have.vertexNormals, need.vertexNormals) && holds(have.texcoords, need.texcoords) &&
+         holds(have.vertexColors, need.vertexColors) && holds(have.materials, need.materials) &&
+         holds(have.groups, need.groups) && holds(have.textures, need.textures) &&
+         holds(have.build.contextFilter, need.build.contextFilter);
 }
 
 /// `have` grown by what `need` adds (properties, vertex normals, the context filter).
@@ -79,6 +82,11 @@ app::SceneSpec unionOf(app::SceneSpec have, const app::SceneSpec& need) {
     if (std::find(have.properties.begin(), have.properties.end(), p) == have.properties.end())
       have.properties.push_back(p);
   have.vertexNormals = have.vertexNormals || need.vertexNormals;
+  have.texcoords = have.texcoords || need.texcoords;
+  have.vertexColors = have.vertexColors || need.vertexColors;
+  have.materials = have.materials || need.materials;
+  have.groups = have.groups || need.groups;
+  have.textures = have.textures || need.textures;
   have.build.contextFilter = have.build.contextFilter || need.build.contextFilter;
   return have;
 }

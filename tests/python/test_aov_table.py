@@ -36,7 +36,7 @@ def test_every_row_has_its_dtype_shape_and_miss() -> None:
 
 
 def test_a_registered_row_appears_in_the_arrays(tmp_path) -> None:
-    with _aperture._AovRegistration("test-uv", ["uv.U", "uv.V"], "float32", -1.0):
+    with _aperture._AovRegistration("test-uv", ["tuv.U", "tuv.V"], "float32", -1.0):
         row = next(r for r in _aperture._aov_table() if r["name"] == "test-uv")
         assert row["channels"] == 2 and row["dtype"] == "float32"
         out = SCENE.render([CAMERA, CAMERA, CAMERA], aovs="depth,test-uv")

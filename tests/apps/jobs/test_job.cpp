@@ -128,6 +128,26 @@ TEST(JobParse, MissingMeshFileIsNamedBeforeAnythingLoads) {
       << msg;
 }
 
+TEST(JobParse, GltfSceneChoosesTheSceneOfTheGltfMeshes) {
+  const std::string dir = scratchDir();
+  writeFile(dir + "/room.glb", "glb");  // existence is all a job checks before loading
+  json j = baseJob();
+  j["scene"]["meshes"] = {{{"path", "procedural:sphere"}}, {{"path", "room.glb"}}};
+  EXPECT_FALSE(parseJobJson(j, dir).sceneSpec().gltfScene.has_value());
+  j["scene"]["gltf_scene"] = 2;
+  const Job job = parseJobJson(j, dir);
+  EXPECT_EQ(job.gltfScene, 2);
+  EXPECT_EQ(job.sceneSpec().gltfScene, 2);
+  EXPECT_EQ(job.sceneSpec().meshes.at(1).spec, dir + "/room.glb");
+  j["scene"]["gltf_scene"] = -1;
+  std::string msg = jobParseError(j, dir);
+  EXPECT_NE(msg.find("scene.gltf_scene: -1: must be >= 0"), std::string::npos) << msg;
+  j["scene"]["gltf_scene"] = 0;
+  j["scene"]["meshes"] = {{{"path", "procedural:sphere"}}};
+  msg = jobParseError(j, dir);
+  EXPECT_NE(msg.find("scene.gltf_scene: no mesh is a glTF file"), std::string::npos) << msg;
+}
+
 TEST(JobParse, DegenerateCamerasAreRejected) {
   json j = baseJob();
   j["cameras"][0]["up"] = {0, 0, 1};  // parallel to the view direction

@@ -81,6 +81,57 @@ TEST(Limits, ObjSampleFindsFacesAfterAllTheVertices) {
   EXPECT_LT(m.vertices, uint64_t(n) * 3);
 }
 
+/// A glTF JSON declaring counts only (its buffers need not exist for the estimate): mesh 0 a
+/// triangle list of 30 vertices and 24 indices plus a point primitive (skipped), mesh 1 a
+/// strip of 10 indices over 12 vertices and a non-indexed list of 9 vertices; node 1 and 2
+/// place mesh 1 twice (counted once); one external buffer of 4096 bytes.
+std::string declaredGltf() {
+  return R"({"asset": {"version": "2.0"},
+    "buffers": [{"uri": "scene.bin", "byteLength": 4096}],
+    "accessors": [{"count": 30}, {"count": 24}, {"count": 7}, {"count": 12}, {"count": 10},
+                  {"count": 9}],
+    "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1},
+                               {"attributes": {"POSITION": 2}, "mode": 0}]},
+               {"primitives": [{"attributes": {"POSITION": 3}, "indices": 4, "mode": 5},
+                               {"attributes": {"POSITION": 5}}]}],
+    "nodes": [{"mesh": 0}, {"mesh": 1}, {"mesh": 1}],
+    "scenes": [{"nodes": [0, 1, 2]}]})";
+}
+
+TEST(Limits, GltfCountsComeFromItsJsonAlone) {
+  const std::string dir = scratchDir();
+  const uint64_t vertices = 30 + 12 + 9, triangles = 24 / 3 + (10 - 2) + 9 / 3;
+  writeFile(dir + "/scene.gltf", declaredGltf());
+  const MeshSizeEstimate text = estimateMeshSize(dir + "/scene.gltf");
+  EXPECT_EQ(text.how, "glTF JSON");
+  EXPECT_EQ(text.vertices, vertices);
+  EXPECT_EQ(text.triangles, triangles);
+  EXPECT_GE(text.loaderBytes, text.fileBytes + 4096 + text.meshBytes);
+  // The same JSON as a .glb's JSON chunk (padded with spaces), then a BIN chunk.
+  std::string chunk = declaredGltf();
+  chunk.resize((chunk.size() + 3) / 4 * 4, ' ');
+  const auto u32 = [](uint32_t v) {
+    return std::string{char(v & 0xFF), char(v >> 8 & 0xFF), char(v >> 16 & 0xFF),
+                       char(v >> 24 & 0xFF)};
+  };
+  const std::string bin(64, '\0');
+  const std::string glb = u32(0x46546C67u) + u32(2) +
+                          u32(uint32_t(12 + 8 + chunk.size() + 8 + bin.size())) +
+                          u32(uint32_t(chunk.size())) + u32(0x4E4F534Au) + chunk +
+                          u32(uint32_t(bin.size())) + u32(0x004E4942u) + bin;
+  writeFile(dir + "/scene.glb", glb);
+  const MeshSizeEstimate binary = estimateMeshSize(dir + "/scene.glb");
+  EXPECT_EQ(binary.how, "glTF JSON");
+  EXPECT_EQ(binary.vertices, vertices);
+  EXPECT_EQ(binary.triangles, triangles);
+  // What the loader would refuse is left to it: the estimate falls back on the file size.
+  writeFile(dir + "/bad.glb", "glTF not really");
+  EXPECT_EQ(estimateMeshSize(dir + "/bad.glb").how, "file size");
+  writeFile(dir + "/bad.gltf",
+            R"({"meshes": [{"primitives": [{"attributes": {"POSITION": 3}}]}]})");
+  EXPECT_EQ(estimateMeshSize(dir + "/bad.gltf").how, "file size");
+}
+
 TEST(Limits, ProceduralSpecAndMissingFiles) {
   // procedural.cpp documents spheres as within 1% of tris=N (never generated here: 5M
   // triangles would take a second) and a sphere as 2*S*(Q-1) triangles.

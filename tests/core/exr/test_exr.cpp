@@ -9,6 +9,7 @@
 #include <OpenEXR/ImfMatrixAttribute.h>
 #include <OpenEXR/ImfStandardAttributes.h>
 #include <OpenEXR/ImfStringAttribute.h>
+#include <OpenEXR/ImfStringVectorAttribute.h>
 
 #include <algorithm>
 #include <cmath>
@@ -102,6 +103,25 @@ TEST(Exr, RoundTripFloatThroughOpenExr) {
   const Framebuffer fb = patterned(13, 7);
   writeExr(path, fb, ExrMetadata{});
   checkDirectRead(path, fb, false);
+}
+
+TEST(Exr, StringVectorsAreOpenExrStringVectorAttributes) {
+  const std::string path = test::scratchDir() + "/names.exr";
+  ExrMetadata meta;
+  const std::vector<std::string> nodes = {"chair_1", "", "table;legs", "n\u00e9"};
+  meta.stringVectors = {{"aperture.meshNames", {"m"}}, {"aperture.instanceNames", nodes}};
+  writeExr(path, patterned(5, 3), meta);
+  Imf::InputFile file(path.c_str());
+  const auto* stored =
+      file.header().findTypedAttribute<Imf::StringVectorAttribute>("aperture.instanceNames");
+  ASSERT_NE(stored, nullptr);
+  EXPECT_EQ(stored->value(), nodes);
+  ExrMetadata back;
+  readExr(path, &back);
+  ASSERT_EQ(back.stringVectors.size(), 2u);  // sorted by name
+  EXPECT_EQ(back.stringVectors[0].first, "aperture.instanceNames");
+  EXPECT_EQ(back.stringVectors[0].second, nodes);
+  EXPECT_EQ(back.stringVectors[1].second, std::vector<std::string>{"m"});
 }
 
 TEST(Exr, RoundTripHalfColorThroughOpenExr) {
