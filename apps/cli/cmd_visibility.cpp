@@ -50,7 +50,7 @@ struct SelectedCameras {
 
 SelectedCameras selectCameras(const VisibilityArgs& a) {
   SelectedCameras s;
-  s.file = readCameraFile(a.cameras);
+  s.file = readCameraFile(a.cameras, CameraFileOptions{a.scene.gltfScene});
   s.images = selectImages(s.file, a.images, "--image");
   if (s.images.empty())
     throw Error(cat("--cameras: '", a.cameras, "' has no images: nothing to compute"));

@@ -480,7 +480,8 @@ void readCameraFileImages(const Object& top, const CameraParams& defaults,
     gltfSize.height = defaults.height;
   }
   try {
-    const CameraFile file = readCameraFile(resolve(baseDir, *from));
+    const CameraFile file =
+        readCameraFile(resolve(baseDir, *from), CameraFileOptions{job.gltfScene});
     const std::vector<const CalibratedImage*> images =
         selectImages(file, names, c.keyPath("images"));
     if (images.size() > kMaxJobImages)

@@ -2,7 +2,8 @@
 // their axes from cameras/files gltfCvCameraFromWorld): a camera placed by a node renders what
 // the same camera given as flags renders, with the flags worked out here by hand from the
 // node's translation, rotation and scale; a wrong axis convention is shown to be caught; the
-// image-size rules.
+// image-size rules; cameras read from glTF files written by the test writer (nested nodes,
+// names, errors).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,6 +15,7 @@
 #include "cameras/registry/resolve.h"
 #include "core/util/units.h"
 #include "tests/camera_support.h"
+#include "tests/gltf_support.h"
 #include "tests/numerics_support.h"
 #include "tests/support.h"
 
@@ -274,6 +276,133 @@ TEST(GltfCameraParams, AxesOfTheNode) {
   glm::dmat4 flat = matrixOfTrs(node);
   flat[2] = glm::dvec4(0.0);
   EXPECT_ERROR_MENTIONS(gltfCvCameraFromWorld(flat, "f"), "f", "z axis");
+}
+
+// ---- cameras read from a glTF file ----
+
+glm::dquat dquatOf(const glm::dvec4& q) { return glm::dquat(q.w, q.x, q.y, q.z); }
+
+/// A triangle, a camera rig (node 1 "rig": translated, turned about y, scaled by 2) carrying
+/// the perspective camera node 2 "cam" (its own translation and rotation), an unnamed
+/// orthographic camera at the root (node 3), and node 4 "cam" again (a second camera of that
+/// name, a child of node 0).
+struct RigNodes {
+  Trs rig, cam;
+};
+RigNodes rigNodes() {
+  RigNodes r;
+  r.rig.t = glm::dvec3(0.2, -0.1, 1.0);
+  r.rig.q = unitQuaternion({0.0, 1.0, 0.0}, 0.1);
+  r.rig.s = glm::dvec3(2.0);
+  r.cam.t = glm::dvec3(0.05, 0.1, 2.4);
+  r.cam.q = unitQuaternion({1.0, 0.4, -0.3}, -0.08);
+  return r;
+}
+
+test::GltfScene rigScene() {
+  const RigNodes r = rigNodes();
+  test::GltfScene s;
+  test::GltfPrimitive triangle;
+  triangle.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  s.meshes.push_back({"tri", {triangle}});
+  s.cameras.resize(2);
+  s.cameras[0].yfov = 0.6;
+  s.cameras[0].aspectRatio = 1.5;
+  s.cameras[0].znear = 0.25;
+  s.cameras[1].orthographic = true;
+  s.cameras[1].xmag = 2.0;
+  s.cameras[1].ymag = 1.0;
+  s.cameras[1].znear = 0.01;
+  s.cameras[1].zfar = 50;
+  s.nodes.resize(5);
+  s.nodes[0].name = "tri";
+  s.nodes[0].mesh = 0;
+  s.nodes[0].children = {4};
+  s.nodes[1].name = "rig";
+  s.nodes[1].translation = r.rig.t;
+  s.nodes[1].rotation = dquatOf(r.rig.q);
+  s.nodes[1].scale = r.rig.s;
+  s.nodes[1].children = {2};
+  s.nodes[2].name = "cam";
+  s.nodes[2].camera = 0;
+  s.nodes[2].translation = r.cam.t;
+  s.nodes[2].rotation = dquatOf(r.cam.q);
+  s.nodes[3].camera = 1;
+  s.nodes[3].translation = glm::dvec3(0.0, 0.0, 8.0);
+  s.nodes[4].name = "cam";
+  s.nodes[4].camera = 0;
+  s.nodes[4].translation = glm::dvec3(0.0, 0.0, 7.0);
+  s.roots = {0, 1, 3};
+  return s;
+}
+
+TEST(GltfCameraFile, NestedNodesRenderAsTheirFlags) {
+  const std::string dir = test::scratchDir();
+  for (const char* name : {"rig.glb", "rig.gltf"}) {
+    SCOPED_TRACE(name);
+    const std::string path = test::writeGltf(rigScene(), dir + "/" + name);
+    const CameraFile file = readCameraFile(path);
+    EXPECT_EQ(file.format, CameraFileFormat::Gltf);
+    ASSERT_EQ(file.images.size(), 3u);
+    // Depth first from the roots: node 4 (under node 0), node 2 (under node 1), node 3. The
+    // two "cam" nodes get their node index; the unnamed one is named after it.
+    EXPECT_EQ(file.images[0].name, "cam_4");
+    EXPECT_EQ(file.images[1].name, "cam_2");
+    EXPECT_EQ(file.images[2].name, "camera_3");
+
+    // By hand: the rig's rotation and scale carry the camera's translation; the view turns by
+    // both rotations (a uniform scale turns nothing).
+    const RigNodes r = rigNodes();
+    const glm::dvec3 eye = r.rig.t + rotatedByQuaternion(r.rig.q, r.rig.s * r.cam.t);
+    const auto turned = [&](const glm::dvec3& v) {
+      return rotatedByQuaternion(r.rig.q, rotatedByQuaternion(r.cam.q, v));
+    };
+    const glm::dvec3 at = eye + turned({0.0, 0.0, -1.0});
+    const glm::dvec3 up = turned({0.0, 1.0, 0.0});
+    // The command line's road: --cameras with --image and --size.
+    const CameraParams fromFile = test::cameraParamsFromFlags(std::string("--cameras ") + path +
+                                                              " --image cam_2 --size 90,60");
+    EXPECT_EQ(fromFile.type, "perspective");
+    ASSERT_TRUE(fromFile.clip);
+    EXPECT_EQ(fromFile.clip->x, 0.25);
+    const CameraParams fromFlags = test::cameraParamsFromFlags(
+        "--camera perspective --size 90,60 --fov " + numberText(0.6 * kDegPerRad) +
+        " --clip 0.25," + numberText(double(std::numeric_limits<float>::max())) + " --eye " +
+        vec3Text(eye) + " --at " + vec3Text(at) + " --up " + vec3Text(up));
+    const Framebuffer a = test::render(*spheres().scene, fromFile);
+    expectSameView(a, test::render(*spheres().scene, fromFlags));
+    // Looking down +Z instead is caught.
+    const CameraParams backwards = test::cameraParamsFromFlags(
+        "--camera perspective --size 90,60 --fov " + numberText(0.6 * kDegPerRad) + " --eye " +
+        vec3Text(eye) + " --at " + vec3Text(eye - turned({0.0, 0.0, -1.0})) + " --up " +
+        vec3Text(up));
+    EXPECT_TRUE(viewsDiffer(a, test::render(*spheres().scene, backwards)));
+
+    // The orthographic camera: no size given, the default height and the width of xmag / ymag.
+    const ParamSet ortho = app::imageParamSet(file, file.images[2]);
+    const CameraParams o = resolveCameraParams(ortho);
+    EXPECT_EQ(o.type, "orthographic");
+    EXPECT_EQ(glm::ivec2(o.width, o.height), glm::ivec2(1080, 540));
+    ASSERT_TRUE(o.viewport);
+    EXPECT_EQ(*o.viewport, glm::dvec2(4.0, 2.0));
+    EXPECT_EQ(o.eye, glm::dvec3(0.0, 0.0, 8.0));
+  }
+}
+
+TEST(GltfCameraFile, Refusals) {
+  const std::string dir = test::scratchDir();
+  test::GltfScene s = rigScene();
+  s.nodes[2].camera = s.nodes[3].camera = s.nodes[4].camera = -1;
+  const std::string none = test::writeGltf(s, dir + "/none.glb");
+  EXPECT_ERROR_MENTIONS(readCameraFile(none), "none.glb", "no camera node");
+  const std::string rig = test::writeGltf(rigScene(), dir + "/rig.glb");
+  EXPECT_ERROR_MENTIONS(readCameraFile(rig, CameraFileOptions{3}), "rig.glb", "3");
+  EXPECT_ERROR_MENTIONS(test::cameraParamsFromFlags("--cameras " + rig), "3 images", "--image");
+  EXPECT_ERROR_MENTIONS(
+      test::cameraParamsFromFlags("--cameras " + rig + " --image cam_2 --size 100,100"),
+      "rig.glb camera 'cam_2' (/nodes/2)", "aspect ratio 1.5");
+  // Writers refuse images without a sensor.
+  EXPECT_ERROR_MENTIONS(writeColmapText(readCameraFile(rig), dir + "/sparse"), "sensor index -1");
 }
 
 }  // namespace
