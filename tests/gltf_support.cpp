@@ -394,8 +394,10 @@ void RawGltf::addMeshNode(const json& attributes, int indices, int mode) {
 std::string RawGltf::write(const std::string& path) const {
   json out = doc;
   out["asset"] = {{"version", "2.0"}};
+  json buffers = doc.value("buffers", json::array());
   if (!bin.empty())
-    out["buffers"] = json::array({{{"byteLength", bin.size()}, {"uri", dataUri(bin)}}});
+    buffers.insert(buffers.begin(), json({{"byteLength", bin.size()}, {"uri", dataUri(bin)}}));
+  if (!buffers.empty()) out["buffers"] = buffers;
   const std::string text = out.dump(1);
   writeGltfFile(path, text.data(), text.size());
   return path;

@@ -112,7 +112,8 @@ struct RawGltf {
                   bool normalized = false, size_t byteOffset = 0);
   /// One mesh of one primitive placed by one node in scene 0 (attributes: name -> accessor).
   void addMeshNode(const nlohmann::json& attributes, int indices = -1, int mode = 4);
-  /// Writes `path` (asset, buffers and scene added); returns it.
+  /// Writes `path` (asset and buffer 0 added: buffers already in doc["buffers"] follow it, so
+  /// theirs are indices 1, 2, ...); returns it.
   std::string write(const std::string& path) const;
 };
 

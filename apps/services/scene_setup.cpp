@@ -25,7 +25,8 @@ void checkMemoryBudget(const SceneOptions& o, glm::ivec2 size, const AovSet& aov
   if (specs.empty()) specs.push_back("procedural:default");
   MemoryEstimate e = estimateMemory(specs, uint64_t(size.x), uint64_t(size.y), aovs,
                                     extraBytesPerPixel, o.buildOptions());
-  if (imageCodec) e.imageCodecBytes = kImageCodecBytes;
+  // The albedo AOV samples textures through the image codec (core/io/texture_sampler.h).
+  if (imageCodec || aovs.has(kAovAlbedo)) e.imageCodecBytes = kImageCodecBytes;
   e.lensTableBytes = directionTableBytes(cameras);
   checkMemoryLimit(e, limit, "--max-memory", o.maxMemory);
 }

@@ -58,17 +58,6 @@ SceneFile loadSceneFile(const std::string& spec, const LoadOptions& options) {
   return singleMeshFile(spec, options);
 }
 
-// loadGltf and loadGltfFromMemory: gltf.cpp. A placeholder until the OBJ scene loader lands
-// (issue 41).
-SceneFile loadObjScene(const std::string& path, const LoadOptions& options) {
-  SceneFile file;
-  file.path = path;
-  file.meshes.push_back(loadObj(path, options));
-  file.fileBytes = file.meshes.back().stats.fileBytes;
-  file.instances.push_back({0, glm::dmat4(1.0), 0});
-  file.instanceNames = {stemOf(path)};
-  file.meshNames = {stemOf(path)};
-  return file;
-}
+// loadGltf and loadGltfFromMemory: core/mesh/gltf.cpp. loadObjScene: core/mesh/obj.cpp.
 
 }  // namespace aperture

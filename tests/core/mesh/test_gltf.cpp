@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 
@@ -180,6 +181,38 @@ TEST(Gltf, FuzzSeedsLoad) {
     EXPECT_EQ(f.meshes.size(), 2u);
     EXPECT_EQ(f.instances.size(), 4u);
   }
+}
+
+}  // namespace
+}  // namespace aperture
+
+namespace aperture {
+namespace {
+
+TEST(Gltf, DataUriImageAndEscapedExternalUri) {
+  test::GltfScene s = test::issue41Scene();
+  const std::vector<unsigned char> png = test::checkerPng(4, 2);
+  const std::string uri = test::dataUri(png);
+  s.materials[0].png.clear();
+  s.materials[0].imageUri = "data:image/png;base64," + uri.substr(uri.find(',') + 1);
+  s.materials[0].wrapS = 33071;
+  s.materials[0].wrapT = 33648;
+  s.materials[0].magFilter = 9729;
+  s.materials[1].imageUri = "my%20checker.png";
+  const std::string dir = test::scratchDir();
+  std::ofstream(dir + "/my checker.png", std::ios::binary)
+      .write(reinterpret_cast<const char*>(png.data()), std::streamsize(png.size()));
+  const std::string path = test::writeGltf(s, dir + "/uris.gltf");
+  const SceneFile f = loadGltf(path);
+  ASSERT_EQ(f.textures.size(), 2u);
+  EXPECT_EQ(f.textures[0].bytes, png);
+  EXPECT_EQ(f.textures[0].mimeType, "image/png");
+  EXPECT_EQ(f.textures[0].wrapS, TextureWrap::ClampToEdge);
+  EXPECT_EQ(f.textures[0].wrapT, TextureWrap::MirroredRepeat);
+  EXPECT_FALSE(f.textures[0].nearest);
+  EXPECT_EQ(f.textures[1].path, dir + "/my checker.png");
+  EXPECT_EQ(f.textures[1].where, path + ": /images/1");
+  EXPECT_EQ(f.materials[1].baseColorTexture, 1);
 }
 
 }  // namespace

@@ -16,7 +16,7 @@ namespace {
 using test::gltfBytes;
 using test::RawGltf;
 
-LoadOptions accessorOptions() {
+LoadOptions gltfAccessorOptions() {
   LoadOptions o;
   o.vertexNormals = o.texcoords = o.vertexColors = o.materials = true;
   return o;
@@ -24,7 +24,7 @@ LoadOptions accessorOptions() {
 
 /// Interleaves `values` (`components` per element of type T) into elements of `stride` bytes.
 template <class T>
-std::vector<unsigned char> strided(const std::vector<T>& values, int components, int stride) {
+std::vector<unsigned char> gltfStrided(const std::vector<T>& values, int components, int stride) {
   const size_t n = values.size() / size_t(components);
   std::vector<unsigned char> out(n * size_t(stride), 0xAB);
   for (size_t i = 0; i < n; ++i)
@@ -41,15 +41,15 @@ TEST(GltfAccessors, QuantizedAndNormalizedAttributes) {
   const std::vector<uint8_t> col = {255, 0, 128, 1, 2, 3, 0, 255, 64};
   const std::vector<uint8_t> idx = {0, 1, 2};
   // Positions: SHORT, not normalized, stride 8 (6 bytes and 2 of padding).
-  const int p = g.addAccessor(g.addView(strided(pos, 3, 8), 8), 5122, "VEC3", 3);
-  const int n = g.addAccessor(g.addView(strided(nrm, 3, 4), 4), 5120, "VEC3", 3, true);
+  const int p = g.addAccessor(g.addView(gltfStrided(pos, 3, 8), 8), 5122, "VEC3", 3);
+  const int n = g.addAccessor(g.addView(gltfStrided(nrm, 3, 4), 4), 5120, "VEC3", 3, true);
   const int t = g.addAccessor(g.addView(gltfBytes(uv)), 5123, "VEC2", 3, true);
-  const int c = g.addAccessor(g.addView(strided(col, 3, 4), 4), 5121, "VEC3", 3, true);
+  const int c = g.addAccessor(g.addView(gltfStrided(col, 3, 4), 4), 5121, "VEC3", 3, true);
   const int i = g.addAccessor(g.addView(gltfBytes(idx)), 5121, "SCALAR", 3);
   g.addMeshNode({{"POSITION", p}, {"NORMAL", n}, {"TEXCOORD_0", t}, {"COLOR_0", c}}, i);
   g.doc["extensionsUsed"] = {"KHR_mesh_quantization"};
   g.doc["extensionsRequired"] = {"KHR_mesh_quantization"};
-  const SceneFile f = loadGltf(g.write(test::scratchDir() + "/q.gltf"), accessorOptions());
+  const SceneFile f = loadGltf(g.write(test::scratchDir() + "/q.gltf"), gltfAccessorOptions());
   ASSERT_EQ(f.meshes.size(), 1u);
   const Mesh& m = f.meshes[0];
   ASSERT_EQ(m.vertexCount, 3u);
@@ -107,7 +107,7 @@ TEST(GltfAccessors, SparseOverBaseViewAndOverZeros) {
   const int n = g.addAccessor(-1, 5126, "VEC3", 4);
   g.doc["accessors"][size_t(n)]["sparse"] = g.doc["accessors"][size_t(p)]["sparse"];
   g.addMeshNode({{"POSITION", p}, {"NORMAL", n}}, -1, 6);
-  const SceneFile f = loadGltf(g.write(test::scratchDir() + "/s.gltf"), accessorOptions());
+  const SceneFile f = loadGltf(g.write(test::scratchDir() + "/s.gltf"), gltfAccessorOptions());
   const Mesh& m = f.meshes[0];
   EXPECT_EQ(test::asVector(m.positions),
             (std::vector<float>{0, 0, 0, 5, 6, 7, 1, 1, 0, -1, -2, -3}));
@@ -157,7 +157,7 @@ TEST(GltfAccessors, PrimitivesConcatenateWithDefaultsForMissingAttributes) {
   s.nodes[0].mesh = 0;
   s.roots = {0};
   const SceneFile f =
-      loadGltf(test::writeGltf(s, test::scratchDir() + "/c.gltf"), accessorOptions());
+      loadGltf(test::writeGltf(s, test::scratchDir() + "/c.gltf"), gltfAccessorOptions());
   const Mesh& m = f.meshes[0];
   EXPECT_EQ(test::asVector(m.indices), (std::vector<uint32_t>{0, 1, 2, 5, 4, 3}));
   EXPECT_EQ(m.texcoords, (std::vector<float>{0, 0, 1, 0, 0, 1, 0, 0, 0, 0, 0, 0}));

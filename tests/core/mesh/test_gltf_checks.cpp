@@ -17,7 +17,7 @@ using nlohmann::json;
 
 /// One indexed triangle with a material, placed by node 0 (accessor 0 POSITION, 1 indices;
 /// views 0 and 1), plus a camera node 1.
-test::GltfScene checkedTriangle() {
+test::GltfScene gltfCheckedTriangle() {
   test::GltfScene s;
   test::GltfPrimitive p;
   p.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
@@ -48,16 +48,16 @@ void expectGltfError(const std::string& path, const std::vector<std::string>& pa
 }
 
 /// The triangle written to a fresh .gltf, edited by `edit`.
-std::string editedTriangle(const std::function<void(json&)>& edit) {
+std::string gltfEditedTriangle(const std::function<void(json&)>& edit) {
   static int serial = 0;
   const std::string path = test::writeGltf(
-      checkedTriangle(), test::scratchDir() + "/t" + std::to_string(serial++) + ".gltf");
+      gltfCheckedTriangle(), test::scratchDir() + "/t" + std::to_string(serial++) + ".gltf");
   test::editGltf(path, edit);
   return path;
 }
 
 TEST(GltfChecks, TheUneditedFileLoads) {
-  const std::string path = test::writeGltf(checkedTriangle(), test::scratchDir() + "/t.gltf");
+  const std::string path = test::writeGltf(gltfCheckedTriangle(), test::scratchDir() + "/t.gltf");
   EXPECT_EQ(loadGltf(path).meshes.size(), 1u);
 }
 
@@ -68,18 +68,18 @@ TEST(GltfChecks, BadJson) {
 }
 
 TEST(GltfChecks, AccessorPastItsView) {
-  expectGltfError(editedTriangle([](json& d) { d["accessors"][0]["count"] = 4; }),
+  expectGltfError(gltfEditedTriangle([](json& d) { d["accessors"][0]["count"] = 4; }),
                   {"/accessors/0/count", "buffer view 0"});
-  expectGltfError(editedTriangle([](json& d) { d["accessors"][0]["byteOffset"] = 400; }),
+  expectGltfError(gltfEditedTriangle([](json& d) { d["accessors"][0]["byteOffset"] = 400; }),
                   {"/accessors/0/byteOffset"});
 }
 
 TEST(GltfChecks, ViewPastItsBufferAndShortBuffer) {
-  expectGltfError(editedTriangle([](json& d) { d["bufferViews"][1]["byteLength"] = 4000; }),
+  expectGltfError(gltfEditedTriangle([](json& d) { d["bufferViews"][1]["byteLength"] = 4000; }),
                   {"/bufferViews/1/byteLength", "buffer 0"});
-  expectGltfError(editedTriangle([](json& d) { d["bufferViews"][1]["byteOffset"] = 4000; }),
+  expectGltfError(gltfEditedTriangle([](json& d) { d["bufferViews"][1]["byteOffset"] = 4000; }),
                   {"/bufferViews/1/byteOffset"});
-  expectGltfError(editedTriangle([](json& d) { d["buffers"][0]["byteLength"] = 4000; }),
+  expectGltfError(gltfEditedTriangle([](json& d) { d["buffers"][0]["byteLength"] = 4000; }),
                   {"/buffers/0/byteLength", "4000"});
 }
 
@@ -95,65 +95,66 @@ TEST(GltfChecks, IndexOutOfRangeOfTheVertices) {
 }
 
 TEST(GltfChecks, NodeGraphCycleAndTwoParents) {
-  expectGltfError(editedTriangle([](json& d) {
+  expectGltfError(gltfEditedTriangle([](json& d) {
                     d["nodes"][0]["children"] = {1};
                     d["nodes"][1]["children"] = {0};
                   }),
                   {"/nodes/", "/children", "cycle"});
-  expectGltfError(editedTriangle([](json& d) {
+  expectGltfError(gltfEditedTriangle([](json& d) {
                     d["nodes"].push_back({{"children", {0}}});
                     d["nodes"].push_back({{"children", {0}}});
                   }),
                   {"/nodes/3/children", "node 0 is also a child of node 2"});
-  expectGltfError(editedTriangle([](json& d) { d["nodes"][0]["children"] = {0}; }),
+  expectGltfError(gltfEditedTriangle([](json& d) { d["nodes"][0]["children"] = {0}; }),
                   {"/nodes/0/children", "own child"});
 }
 
 TEST(GltfChecks, MissingFilesAndBadDataUris) {
   const std::string dir = test::scratchDir();
-  const std::string path = test::writeGltf(checkedTriangle(), dir + "/missing_bin.gltf");
+  const std::string path = test::writeGltf(gltfCheckedTriangle(), dir + "/missing_bin.gltf");
   std::filesystem::remove(dir + "/missing_bin.bin");
   expectGltfError(path, {"/buffers/0/uri", "missing_bin.bin"});
-  expectGltfError(editedTriangle([](json& d) {
+  expectGltfError(gltfEditedTriangle([](json& d) {
                     d["buffers"][0]["uri"] = "data:application/octet-stream,not base64!";
                   }),
                   {"/buffers/0/uri", "not base64"});
-  expectGltfError(editedTriangle([](json& d) {
+  expectGltfError(gltfEditedTriangle([](json& d) {
                     d["images"] = {{{"uri", "missing.png"}}};
                   }),
                   {"/images/0/uri", "missing.png"});
-  expectGltfError(editedTriangle([](json& d) {
+  expectGltfError(gltfEditedTriangle([](json& d) {
                     d["images"] = {{{"uri", "data:image/png;base64,@@@"}}};
                   }),
                   {"/images/0/uri", "not base64"});
 }
 
 TEST(GltfChecks, IndicesOutOfRange) {
-  expectGltfError(editedTriangle([](json& d) { d["nodes"][0]["mesh"] = 3; }),
+  expectGltfError(gltfEditedTriangle([](json& d) { d["nodes"][0]["mesh"] = 3; }),
                   {"/nodes/0/mesh", "mesh 3 does not exist"});
-  expectGltfError(editedTriangle([](json& d) { d["nodes"][1]["camera"] = 1; }),
+  expectGltfError(gltfEditedTriangle([](json& d) { d["nodes"][1]["camera"] = 1; }),
                   {"/nodes/1/camera"});
-  expectGltfError(editedTriangle([](json& d) { d["meshes"][0]["primitives"][0]["material"] = 7; }),
-                  {"/meshes/0/primitives/0/material"});
-  expectGltfError(editedTriangle([](json& d) {
+  expectGltfError(
+      gltfEditedTriangle([](json& d) { d["meshes"][0]["primitives"][0]["material"] = 7; }),
+      {"/meshes/0/primitives/0/material"});
+  expectGltfError(gltfEditedTriangle([](json& d) {
                     d["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 9;
                   }),
                   {"/meshes/0/primitives/0/attributes/POSITION", "accessor 9"});
-  expectGltfError(editedTriangle([](json& d) { d["accessors"][1]["bufferView"] = 5; }),
+  expectGltfError(gltfEditedTriangle([](json& d) { d["accessors"][1]["bufferView"] = 5; }),
                   {"/accessors/1/bufferView"});
-  expectGltfError(editedTriangle([](json& d) { d["scene"] = 2; }), {"/scene"});
+  expectGltfError(gltfEditedTriangle([](json& d) { d["scene"] = 2; }), {"/scene"});
   LoadOptions options;
   options.gltfScene = 4;
-  expectGltfError(editedTriangle([](json&) {}), {"/scenes", "1 scenes"}, options);
+  expectGltfError(gltfEditedTriangle([](json&) {}), {"/scenes", "1 scenes"}, options);
 }
 
 TEST(GltfChecks, RequiredExtensions) {
-  expectGltfError(editedTriangle([](json& d) {
+  expectGltfError(gltfEditedTriangle([](json& d) {
                     d["extensionsRequired"] = {"KHR_mesh_quantization", "EXT_mesh_gpu_instancing"};
                   }),
                   {"/extensionsRequired/1", "EXT_mesh_gpu_instancing"});
   // A texture-only extension marks the materials that use it; the geometry loads.
-  const std::string path = editedTriangle([](json& d) {
+  const std::string path = gltfEditedTriangle([](json& d) {
     d["extensionsUsed"] = {"KHR_texture_basisu"};
     d["extensionsRequired"] = {"KHR_texture_basisu"};
     d["images"] = {{{"uri", d["buffers"][0]["uri"]}}};  // any file: its bytes are not read
@@ -170,7 +171,7 @@ TEST(GltfChecks, RequiredExtensions) {
 }
 
 TEST(GltfChecks, SecondTexCoordIsUnsupportedForAlbedo) {
-  test::GltfScene s = checkedTriangle();
+  test::GltfScene s = gltfCheckedTriangle();
   s.materials[0].png = test::checkerPng(4, 2);
   s.materials[0].texCoord = 1;
   const SceneFile f = loadGltf(test::writeGltf(s, test::scratchDir() + "/tc.glb"));
@@ -180,7 +181,7 @@ TEST(GltfChecks, SecondTexCoordIsUnsupportedForAlbedo) {
 }
 
 TEST(GltfChecks, ChosenSceneAndOrthographicCamera) {
-  test::GltfScene s = checkedTriangle();
+  test::GltfScene s = gltfCheckedTriangle();
   s.cameras[0].orthographic = true;
   s.cameras[0].xmag = 2;
   s.cameras[0].ymag = 3;
