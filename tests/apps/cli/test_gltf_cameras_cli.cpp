@@ -44,7 +44,7 @@ std::string writeCameraScene(const std::string& path) {
   return test::writeGltf(s, path);
 }
 
-std::string number(double x) {
+std::string exactText(double x) {
   char s[40];
   std::snprintf(s, sizeof s, "%.17g", x);
   return s;
@@ -72,8 +72,9 @@ TEST(GltfCamerasCli, BatchRendersEveryCameraNodeAndRenderMatchesFlags) {
   EXPECT_GE(above.depth[centre], 3.5f - 1e-5f);
 
   // render with the flags of "front", by hand: eye its translation, looking down −z, y up.
-  const std::string flags = " --camera perspective --size 60,40 --fov " + number(0.9 * kDegPerRad) +
-                            " --clip 0.1," + number(double(std::numeric_limits<float>::max())) +
+  const std::string flags = " --camera perspective --size 60,40 --fov " +
+                            exactText(0.9 * kDegPerRad) + " --clip 0.1," +
+                            exactText(double(std::numeric_limits<float>::max())) +
                             " --eye 0.3,0.7,4 --at 0.3,0.7,3 --up 0,1,0";
   ASSERT_EQ(test::runCommand(test::apertureBinary() + " render --quiet --mesh " + glb + flags +
                                  " --aov depth --out " + dir + "/flags.exr",

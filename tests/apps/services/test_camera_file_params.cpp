@@ -111,12 +111,12 @@ SceneCamera perspectiveCamera(const Trs& node) {
 
 /// How two renders of one view differ: pixels whose primID differs, and the largest relative
 /// depth difference over the pixels both hit on the same triangle.
-struct Difference {
+struct GltfViewDifference {
   size_t hits = 0, otherPrim = 0;
   double maxDepth = 0;
 };
-Difference differenceOf(const Framebuffer& a, const Framebuffer& b) {
-  Difference d;
+GltfViewDifference gltfViewDifference(const Framebuffer& a, const Framebuffer& b) {
+  GltfViewDifference d;
   for (size_t i = 0; i < a.pixelCount(); ++i) {
     d.hits += a.primId[i] != kInvalidId;
     if (a.primId[i] != b.primId[i]) {
@@ -133,16 +133,16 @@ Difference differenceOf(const Framebuffer& a, const Framebuffer& b) {
 /// a shared edge may fall either side after a last-bit difference in the frame) and depth to
 /// float precision.
 void expectSameView(const Framebuffer& a, const Framebuffer& b) {
-  const Difference d = differenceOf(a, b);
+  const GltfViewDifference d = gltfViewDifference(a, b);
   EXPECT_GT(d.hits, a.pixelCount() / 10) << "the view should see the spheres";
   EXPECT_LE(d.otherPrim, a.pixelCount() / 1000);
   EXPECT_LT(d.maxDepth, 1e-5);
 }
 
-size_t hitsOf(const Framebuffer& fb) { return differenceOf(fb, fb).hits; }
+size_t hitsOf(const Framebuffer& fb) { return gltfViewDifference(fb, fb).hits; }
 
 bool viewsDiffer(const Framebuffer& a, const Framebuffer& b) {
-  const Difference d = differenceOf(a, b);
+  const GltfViewDifference d = gltfViewDifference(a, b);
   return d.otherPrim > a.pixelCount() / 10 || d.maxDepth > 1e-3;
 }
 
