@@ -1,15 +1,15 @@
 #!/usr/bin/env bash
 # Makes .venv, the Python environment of the Python module: nanobind and scikit-build-core to
-# build it, NumPy and pytest to test it, and pycolmap (COLMAP 4's own bindings) to check its
-# camera models against. Quick start (a) installs the module into it; (b)
-# builds it in the CMake tree with .venv's Python and runs its pytest suite. An up-to-date
-# .venv is left as it is.
+# build it, NumPy and pytest to test it, pycolmap (COLMAP 4's own bindings) to check its
+# camera models against, and trimesh to check its glTF scenes against. Quick start (a) installs
+# the module into it; (b) builds it in the CMake tree with .venv's Python and runs its pytest
+# suite. An up-to-date .venv is left as it is.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [[ ! -x .venv/bin/python ]]; then
   python3 -m venv .venv
 fi
-if ! .venv/bin/python -c 'import nanobind, scikit_build_core, numpy, pytest, pycolmap' 2>/dev/null; then
+if ! .venv/bin/python -c 'import nanobind, scikit_build_core, numpy, pytest, pycolmap, trimesh' 2>/dev/null; then
   .venv/bin/python -m pip install -q --disable-pip-version-check nanobind scikit-build-core numpy pytest \
-    'pycolmap>=4.2'
+    'pycolmap>=4.2' trimesh
 fi

@@ -52,21 +52,34 @@ void CameraFlags::add(CLI::App& app, const CameraParams& defaults) {
 }
 
 namespace {
-/// The parameters of the one image of a camera file the command line selects.
-ParamSet cameraFileParams(const std::string& path, const std::vector<std::string>& images) {
-  const CameraFile file = readCameraFile(path);
+/// The parameters of the one image of a camera file the command line selects (a glTF camera
+/// at `gltfSize`).
+ParamSet cameraFileParams(const std::string& path, const std::vector<std::string>& images,
+                          const CameraFileOptions& options, const GltfImageSize& gltfSize) {
+  const CameraFile file = readCameraFile(path, options);
   if (images.size() > 1) throw Error(cat("--image: give one image (got ", images.size(), ")"));
   if (images.empty() && file.images.size() != 1)
     throw Error(cat("--cameras ", path, ": the file has ", file.images.size(),
                     " images; choose one with --image NAME (first: '",
                     file.images.empty() ? "" : file.images.front().name, "')"));
-  return imageParamSet(file, *selectImages(file, images, "--image").front());
+  return imageParamSet(file, *selectImages(file, images, "--image").front(), gltfSize);
 }
 }  // namespace
 
-ParamSet CameraFlags::given() const {
+ParamSet CameraFlags::given(const CameraFileOptions& fileOptions) const {
   if (!images_.empty() && cameraFile_.empty()) throw Error("--image needs --cameras PATH");
-  ParamSet set = cameraFile_.empty() ? ParamSet() : cameraFileParams(cameraFile_, images_);
+  // A glTF camera has no image size of its own: --size, else the default height.
+  GltfImageSize gltfSize;
+  gltfSize.defaultHeight = defaults_.height;
+  for (const Slot& s : slots_)
+    if (std::string(s.spec->name) == "size" && s.option->count() > 0) {
+      const glm::ivec2 size = std::get<glm::ivec2>(parseParamText(*s.spec, s.text, "--size"));
+      gltfSize.width = size.x;
+      gltfSize.height = size.y;
+    }
+  ParamSet set = cameraFile_.empty()
+                     ? ParamSet()
+                     : cameraFileParams(cameraFile_, images_, fileOptions, gltfSize);
   for (const Slot& s : slots_)
     if (s.option->count() > 0)
       set.set(*s.spec, parseParamText(*s.spec, s.text, s.spec->flag()), s.spec->flag());

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "apps/services/command_camera.h"
+#include "cameras/files/camera_file.h"
 #include "cameras/schema/param_schema.h"
 
 namespace aperture::app {
@@ -18,8 +19,9 @@ class CameraFlags {
   void add(CLI::App& app, const CameraParams& defaults = {});
   /// What the command line gave (call after parsing), each value with its flag as source.
   /// With --cameras, the parameters of the one image --image names come first (from the
-  /// camera file) and the flags given override them.
-  ParamSet given() const;
+  /// camera file) and the flags given override them. `fileOptions`: how to read the file
+  /// (the glTF scene of --gltf-scene).
+  ParamSet given(const CameraFileOptions& fileOptions = {}) const;
   CameraParams& defaults() { return defaults_; }
   const CameraParams& defaults() const { return defaults_; }
 

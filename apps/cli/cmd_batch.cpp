@@ -549,6 +549,13 @@ Command addBatchCommand(CLI::App& app) {
       ->group(group)
       ->capture_default_str();
   sub->add_option("--spp", cf.spp, "Samples per pixel")->group(group);
+  sub->add_option("--size", cf.size,
+                  "Image size W,H of cameras that carry none (glTF cameras; without it the "
+                  "height is 540 and the width follows the camera's aspect ratio)")
+      ->group(group)
+      ->delimiter(',')
+      ->expected(2)
+      ->type_name("W,H");
   sub->add_option("--format", cf.format,
                   "exr: every AOV in DIR/<image name>.exr; png (16-bit depth), pfm, npy, tif: "
                   "the one AOV of --aov in DIR/<image name>.<format>")

@@ -76,7 +76,7 @@ Command addBenchCommand(CLI::App& app) {
     if (args->request.scaling)
       return runScaling({parseScalingSizes(args->request.scalingSizes), args->request.scene.compact,
                          args->request.json});
-    args->request.camera = args->camera.given();
+    args->request.camera = args->camera.given(CameraFileOptions{args->request.scene.gltfScene});
     args->request.cameraDefaults = args->camera.defaults();
     return runBench(args->request);
   };

@@ -104,7 +104,7 @@ int runRender(const RenderArgs& a) {
   exr.halfColor = a.half;
   checkDeepHasLayers(a.deep, a.render.layers);
   exr.layersInDeepFile = a.deep;
-  const ParamSet given = a.camera.given();
+  const ParamSet given = a.camera.given(CameraFileOptions{a.scene.gltfScene});
   const CameraParams unframed =
       resolveCommandCamera(given, a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0));
   const RenderSettings settings = a.render.settings(unframed.spp);

@@ -35,9 +35,10 @@ struct TradeoffArgs {
 TradeoffConfig tradeoffConfig(const TradeoffArgs& a) {
   TradeoffConfig c;
   c.scene = a.scene;
-  c.base = a.render.settings(
-      resolveCommandCamera(a.camera.given(), a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0))
-          .spp);
+  c.base =
+      a.render.settings(resolveCommandCamera(a.camera.given(CameraFileOptions{a.scene.gltfScene}),
+                                             a.camera.defaults(), glm::dvec3(0.0), glm::dvec3(0.0))
+                            .spp);
   c.baseExr.compression = parseExrCompression(a.compression);
   c.baseExr.halfColor = a.half;
   c.quick = a.quick;
@@ -70,7 +71,8 @@ CameraParams framedCamera(const TradeoffArgs& a) {
     lo = s.worldLo;
     hi = s.worldHi;
   }
-  const CameraParams params = resolveCommandCamera(a.camera.given(), a.camera.defaults(), lo, hi);
+  const CameraParams params = resolveCommandCamera(
+      a.camera.given(CameraFileOptions{a.scene.gltfScene}), a.camera.defaults(), lo, hi);
   makeCamera(params);
   return params;
 }

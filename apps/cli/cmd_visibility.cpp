@@ -50,13 +50,14 @@ struct SelectedCameras {
 
 SelectedCameras selectCameras(const VisibilityArgs& a) {
   SelectedCameras s;
-  s.file = readCameraFile(a.cameras);
+  s.file = readCameraFile(a.cameras, CameraFileOptions{a.scene.gltfScene});
   s.images = selectImages(s.file, a.images, "--image");
   if (s.images.empty())
     throw Error(cat("--cameras: '", a.cameras, "' has no images: nothing to compute"));
   for (const CalibratedImage* im : s.images) {
     s.params.push_back(resolveCameraParams(imageParamSet(s.file, *im)));
-    calibratedSensorOf(s.params.back());  // the lens is checked before the mesh loads
+    if (s.params.back().type == "calibrated")
+      calibratedSensorOf(s.params.back());  // the lens is checked before the mesh loads
     s.names.push_back(im->name);
   }
   return s;

@@ -472,8 +472,16 @@ void readCameraFileImages(const Object& top, const CameraParams& defaults,
       names.push_back((*list)[k].get<std::string>());
     }
   }
+  // A glTF camera has no image size of its own: the job's "size", else the default height.
+  GltfImageSize gltfSize;
+  gltfSize.defaultHeight = defaults.height;
+  if (top.has("size")) {
+    gltfSize.width = defaults.width;
+    gltfSize.height = defaults.height;
+  }
   try {
-    const CameraFile file = readCameraFile(resolve(baseDir, *from));
+    const CameraFile file =
+        readCameraFile(resolve(baseDir, *from), CameraFileOptions{job.gltfScene});
     const std::vector<const CalibratedImage*> images =
         selectImages(file, names, c.keyPath("images"));
     if (images.size() > kMaxJobImages)
@@ -482,8 +490,9 @@ void readCameraFileImages(const Object& top, const CameraParams& defaults,
       JobImage image;
       image.index = job.images.size();
       image.camera = im->name;
-      image.params = resolveCameraParams(imageParamSet(file, *im), defaults);
-      calibratedSensorOf(image.params);  // the lens is checked now; its table is built later
+      image.params = resolveCameraParams(imageParamSet(file, *im, gltfSize), defaults);
+      if (image.params.type == "calibrated")
+        calibratedSensorOf(image.params);  // the lens is checked now; its table is built later
       expandImageFiles(top, baseDir, job, image, im->name);
       job.images.push_back(std::move(image));
     }
@@ -798,6 +807,7 @@ Job cameraFileJob(const CameraFileBatch& b) {
   if (b.depthScale) job["depth_scale"] = *b.depthScale;
   if (!b.images.empty()) job["cameras"]["images"] = b.images;
   if (b.spp) job["spp"] = *b.spp;
+  if (b.size) job["size"] = *b.size;
   if (b.layers) job["layers"] = *b.layers;
   if (b.deep) job["deep"] = true;
   if (b.preview) job["preview"] = (fs::path(b.outDir) / "{image}.png").generic_string();

@@ -138,6 +138,8 @@ struct CameraFileBatch {
   std::string outDir;
   std::string aovs = "depth";
   std::optional<int> spp;
+  /// --size W,H: the image size of cameras that carry none (glTF cameras; the job's "size").
+  std::optional<std::vector<int>> size;
   bool preview = false;  ///< also DIR/<image name>.png
   /// --format: exr (every AOV in DIR/<image name>.exr) or a dataset format (png pfm npy tif
   /// tiff: the one AOV of --aov in DIR/<image name>.<format>).

@@ -161,6 +161,8 @@ const char* cameraFileFormatName(CameraFileFormat f) {
       return "OpenCV JSON";
     case CameraFileFormat::OpenCVYaml:
       return "OpenCV YAML";
+    case CameraFileFormat::Gltf:
+      return "glTF cameras";
   }
   return "unknown";
 }
@@ -182,7 +184,7 @@ CameraFile readColmapFolder(const std::string& dir) {
 
 }  // namespace
 
-CameraFile readCameraFile(const std::string& path) {
+CameraFile readCameraFile(const std::string& path, const CameraFileOptions& options) {
   std::error_code ec;
   if (fs::is_directory(path, ec)) return readColmapFolder(path);
   if (!fs::exists(path, ec)) throw Error(cat(path, ": no such file or folder"));
@@ -194,6 +196,7 @@ CameraFile readCameraFile(const std::string& path) {
       return readColmapFolder(p.parent_path().empty() ? "." : p.parent_path().string());
   const std::string ext = toLowerAscii(p.extension().string());
   if (ext == ".yaml" || ext == ".yml") return camera_files::readOpenCVYaml(path);
+  if (isGltfPath(path)) return camera_files::readGltfCameras(path, options);
   if (ext == ".json") {
     const json doc = camera_files::readJsonFile(path);
     if (doc.is_object() && doc.contains("frames")) return camera_files::readNerfJson(path, doc);
@@ -201,7 +204,7 @@ CameraFile readCameraFile(const std::string& path) {
   }
   throw Error(cat(path,
                   ": unknown camera file (expected a COLMAP model folder, a transforms.json, "
-                  "an OpenCV .json or an OpenCV .yaml / .yml)"));
+                  "an OpenCV .json or an OpenCV .yaml / .yml, or a glTF .gltf / .glb)"));
 }
 
 // The sidecar is JSON written by nlohmann::json, whose numbers print in the shortest form that

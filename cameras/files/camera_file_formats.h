@@ -19,6 +19,8 @@ CameraFile readColmapBinary(const std::string& dir);
 CameraFile readNerfJson(const std::string& path, const nlohmann::json& doc);
 CameraFile readOpenCVJson(const std::string& path, const nlohmann::json& doc);
 CameraFile readOpenCVYaml(const std::string& path);
+/// The camera nodes of a glTF scene (gltf_file.cpp).
+CameraFile readGltfCameras(const std::string& path, const CameraFileOptions& options);
 
 /// The whole file parsed as JSON; Error naming the file and the parser's message.
 nlohmann::json readJsonFile(const std::string& path);

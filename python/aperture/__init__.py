@@ -69,14 +69,31 @@ def _look_at(
 Camera.look_at = staticmethod(_look_at)  # type: ignore[attr-defined]
 
 
-def load_cameras(path: str | os.PathLike[str], images: Iterable[str] | None = None) -> list[Camera]:
+def load_cameras(
+    path: str | os.PathLike[str],
+    images: Iterable[str] | None = None,
+    *,
+    width: int | None = None,
+    height: int | None = None,
+    gltf_scene: int | None = None,
+) -> list[Camera]:
     """The cameras of a camera file the command line accepts: a COLMAP model folder (text or
-    binary), a transforms.json (nerfstudio, NeRF, instant-ngp) or an OpenCV JSON/YAML. Each
-    Camera has ``.name``, the image's name. ``images`` selects images by name, in that order
-    (default: all, in the file's order, which is the order ``aperture batch`` renders).
-    Raises FileNotFoundError for a missing path, ValueError for bad contents or an unknown
-    image name."""
-    return _load_cameras(os.fspath(path), None if images is None else [str(i) for i in images])
+    binary), a transforms.json (nerfstudio, NeRF, instant-ngp), an OpenCV JSON/YAML, or the
+    camera nodes of a glTF scene (.gltf, .glb; ``gltf_scene`` picks the scene, default the
+    file's). Each Camera has ``.name``, the image's name (a glTF camera's: its node's).
+    ``images`` selects images by name, in that order (default: all, in the file's order, which
+    is the order ``aperture batch`` renders). A glTF camera carries no image size: ``width``
+    and ``height`` give it; with one of them the other follows the camera's aspect ratio
+    (aspectRatio, or xmag / ymag), with neither the height is 540 (docs/cameras.md, glTF
+    cameras). Raises FileNotFoundError for a missing path, ValueError for bad contents or an
+    unknown image name."""
+    return _load_cameras(
+        os.fspath(path),
+        None if images is None else [str(i) for i in images],
+        width,
+        height,
+        gltf_scene,
+    )
 
 
 def read_exr(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
@@ -101,8 +118,8 @@ def _camera_list(cameras: Camera | Iterable[Camera]) -> list[Camera]:
 
 
 class Scene:
-    """A scene to render: meshes by path (``.ply``, ``.obj``) or procedural spec
-    (``"procedural:sphere?radius=2"``), several at once as a list, or one mesh from arrays
+    """A scene to render: meshes by path (``.ply``, ``.obj``, ``.gltf``, ``.glb``) or procedural
+    spec (``"procedural:sphere?radius=2"``), several at once as a list, or one mesh from arrays
     (``vertices`` (n, 3) float32/float64 world positions, ``faces`` (m, 3) integer indices).
     ``Scene()`` is the command line's default procedural scene. Options are the scene flags of
     the command line: ``robust`` (watertight traversal, ``--no-robust`` when False),
@@ -111,7 +128,8 @@ class Scene:
     in spatial order first when its order is scattered, primIDs unchanged; 0: one BVH).
     ``aovs``: the AOVs renders will ask for, so that the mesh data they read (face./vertex.
     properties, vertex normals for shading-normal) is loaded with the meshes; without it, the
-    first render that needs more loads the files again with it (once)."""
+    first render that needs more loads the files again with it (once). ``gltf_scene``: the
+    scene of the glTF files to load (``--gltf-scene``; default: each file's own)."""
 
     def __init__(
         self,
@@ -125,6 +143,7 @@ class Scene:
         world_space: bool = False,
         bvh_chunk: int = _BVH_CHUNK_DEFAULT,
         aovs: str | Iterable[str] = (),
+        gltf_scene: int | None = None,
     ) -> None:
         options = dict(
             robust=robust, quality=quality, compact=compact, world_space=world_space, bvh_chunk=bvh_chunk
@@ -144,7 +163,7 @@ class Scene:
             paths = [os.fspath(path)]
         else:
             paths = [os.fspath(p) for p in path]
-        self._scene = _Scene._from_paths(paths, aovs=_aov_list(aovs), **options)
+        self._scene = _Scene._from_paths(paths, aovs=_aov_list(aovs), gltf_scene=gltf_scene, **options)
 
     @property
     def bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
@@ -155,6 +174,23 @@ class Scene:
     def triangle_count(self) -> int:
         """Triangles in the scene."""
         return self._scene.triangle_count
+
+    @property
+    def ids(self) -> dict[str, list[str]]:
+        """The names behind the id AOVs: ``{"instance": [...], "mesh": [...], "material":
+        [...]}``, each list indexed by its id (the ``instance``, ``mesh`` and ``material`` AOVs).
+        A glTF file gives its nodes, meshes and materials (unnamed ones ``node_<k>``, ...), an
+        OBJ its objects and materials, a PLY its stem; several files are numbered one after the
+        other."""
+        return self._scene.ids
+
+    def triangles(self) -> np.ndarray:
+        """Every triangle of the scene in world space, a new float64 array (T, 3, 3): [t, c]
+        is corner c (index order) of triangle t. Objects in scene order (the files in order; a
+        glTF file's mesh nodes depth first, a mesh placed by several nodes once per node),
+        each object's triangles in primID order. Positions are the float32 vertices as stored
+        (relative to their anchor), placed in double: compare to float precision."""
+        return self._scene.triangles()
 
     @property
     def last_render(self) -> dict[str, float]:

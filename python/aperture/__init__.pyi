@@ -51,7 +51,8 @@ class Camera:
         """The text of `aperture camera --describe` for this camera."""
 
 class Scene:
-    """Meshes by path or procedural spec (several as a list), or one mesh from arrays."""
+    """Meshes by path (.ply, .obj, .gltf, .glb) or procedural spec (several as a list), or one
+    mesh from arrays."""
 
     def __init__(
         self,
@@ -65,11 +66,19 @@ class Scene:
         world_space: bool = False,
         bvh_chunk: int = ...,
         aovs: str | Iterable[str] = (),
+        gltf_scene: int | None = None,
     ) -> None: ...
     @property
     def bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]: ...
     @property
     def triangle_count(self) -> int: ...
+    @property
+    def ids(self) -> dict[str, list[str]]:
+        """{"instance": [...], "mesh": [...], "material": [...]}: the names behind the ids."""
+
+    def triangles(self) -> npt.NDArray[np.float64]:
+        """Every triangle in world space, float64 (T, 3, 3), objects in scene order."""
+
     @property
     def last_render(self) -> dict[str, float]:
         """seconds, rays, hits, frames, mrays_per_second of the last render call."""
@@ -111,8 +120,16 @@ class Scene:
     ) -> dict[str, np.ndarray]:
         """Per point: the cameras that see it, as CSR index arrays (GIL released)."""
 
-def load_cameras(path: _PathLike, images: Iterable[str] | None = None) -> list[Camera]:
-    """The cameras of a COLMAP model, transforms.json or OpenCV JSON/YAML, each with .name."""
+def load_cameras(
+    path: _PathLike,
+    images: Iterable[str] | None = None,
+    *,
+    width: int | None = None,
+    height: int | None = None,
+    gltf_scene: int | None = None,
+) -> list[Camera]:
+    """The cameras of a COLMAP model, transforms.json, OpenCV JSON/YAML or glTF scene (its
+    camera nodes; width / height give their image size), each with .name."""
 
 def camera_parameters() -> list[str]:
     """The keyword names Camera() accepts."""

@@ -104,13 +104,20 @@ PyCamera cameraOfKeywords(const nb::kwargs& kwargs) {
 }
 
 std::vector<PyCamera> loadCameras(const std::string& path,
-                                  const std::optional<std::vector<std::string>>& images) {
+                                  const std::optional<std::vector<std::string>>& images,
+                                  std::optional<int> width, std::optional<int> height,
+                                  std::optional<int> gltfScene) {
+  CameraFileOptions options;
+  options.gltfScene = gltfScene;
   std::optional<CameraFile> file;
-  readingFiles({path}, [&] { file = readCameraFile(path); });
+  readingFiles({path}, [&] { file = readCameraFile(path, options); });
+  app::GltfImageSize size;
+  size.width = width;
+  size.height = height;
   std::vector<PyCamera> cameras;
   for (const CalibratedImage* image :
        app::selectImages(*file, images.value_or(std::vector<std::string>{}), "images"))
-    cameras.push_back({resolveCameraParams(app::imageParamSet(*file, *image)), image->name});
+    cameras.push_back({resolveCameraParams(app::imageParamSet(*file, *image, size)), image->name});
   return cameras;
 }
 
@@ -162,8 +169,11 @@ void bindCamera(nb::module_& m) {
       });
 
   m.def("load_cameras", &loadCameras, nb::arg("path"), nb::arg("images") = nb::none(),
-        "The cameras of a camera file (COLMAP model folder, transforms.json, OpenCV JSON/YAML), "
-        "each with .name, in the file's order or in the order `images` names them.");
+        nb::arg("width") = nb::none(), nb::arg("height") = nb::none(),
+        nb::arg("gltf_scene") = nb::none(),
+        "The cameras of a camera file (COLMAP model folder, transforms.json, OpenCV JSON/YAML, "
+        "glTF camera nodes), each with .name, in the file's order or in the order `images` "
+        "names them; width / height: the image size of glTF cameras.");
   m.def("camera_parameters", &keywordNames, "The keyword names Camera() accepts.");
   m.def("camera_types", &cameraTypeNames, "The camera models Camera(type=...) accepts.");
 }

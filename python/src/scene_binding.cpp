@@ -238,6 +238,45 @@ class PyScene {
   }
   const std::vector<std::string>& meshNames() const { return loaded_.names; }
 
+  /// Scene.ids: the names behind the instance, mesh and material ids (SceneIds).
+  nb::dict ids() const {
+    nb::dict d;
+    d["instance"] = nb::cast(loaded_.ids.instance);
+    d["mesh"] = nb::cast(loaded_.ids.mesh);
+    d["material"] = nb::cast(loaded_.ids.material);
+    return d;
+  }
+
+  /// Scene.triangles: every object's triangles in world space, (T, 3, 3) float64, objects in
+  /// scene order and each object's triangles in their loaded order (primID order: a mesh put
+  /// in spatial order is read back through Mesh::sourceTriangle).
+  nb::ndarray<nb::numpy, double, nb::shape<-1, 3, 3>> triangles() const {
+    size_t total = 0;
+    for (const SceneObject& o : loaded_.objects) total += o.mesh->triangleCount();
+    auto* out = new std::vector<double>(9 * total);
+    size_t base = 0;
+    for (const SceneObject& o : loaded_.objects) {
+      const Mesh& m = *o.mesh;
+      const size_t n = m.triangleCount();
+      std::vector<uint32_t> order(n);
+      for (size_t t = 0; t < n; ++t) order[t] = uint32_t(t);
+      std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+        return m.sourceTriangle(a) < m.sourceTriangle(b);
+      });
+      for (size_t k = 0; k < n; ++k)
+        for (int c = 0; c < 3; ++c) {
+          const size_t v = m.indices[3 * size_t(order[k]) + size_t(c)];
+          const glm::dvec3 local = m.anchor + glm::dvec3(m.positions[3 * v], m.positions[3 * v + 1],
+                                                         m.positions[3 * v + 2]);
+          const glm::dvec3 world = glm::dvec3(o.worldFromMesh * glm::dvec4(local, 1.0));
+          for (int a = 0; a < 3; ++a) (*out)[9 * (base + k) + size_t(3 * c + a)] = world[a];
+        }
+      base += n;
+    }
+    nb::capsule owner(out, [](void* p) noexcept { delete static_cast<std::vector<double>*>(p); });
+    return nb::ndarray<nb::numpy, double, nb::shape<-1, 3, 3>>(out->data(), {total, 3, 3}, owner);
+  }
+
  private:
   void load() {
     readingFiles(files_, [&] { loaded_ = app::loadSceneMeshes(spec_, true); });
@@ -357,13 +396,16 @@ void bindScene(nb::module_& m) {
   scene.def_static(
       "_from_paths",
       [](const std::vector<std::string>& meshes, bool robust, const std::string& quality,
-         bool compact, bool worldSpace, long long bvhChunk, const std::string& aovs) {
-        return std::make_unique<PyScene>(
-            meshes, sceneOptions(robust, quality, compact, worldSpace, bvhChunk),
-            aovs.empty() ? AovSet() : parseAovSet(aovs));
+         bool compact, bool worldSpace, long long bvhChunk, const std::string& aovs,
+         std::optional<int> gltfScene) {
+        app::SceneOptions options = sceneOptions(robust, quality, compact, worldSpace, bvhChunk);
+        options.gltfScene = gltfScene;
+        return std::make_unique<PyScene>(meshes, options,
+                                         aovs.empty() ? AovSet() : parseAovSet(aovs));
       },
       nb::arg("meshes"), nb::arg("robust"), nb::arg("quality"), nb::arg("compact"),
-      nb::arg("world_space"), nb::arg("bvh_chunk"), nb::arg("aovs"));
+      nb::arg("world_space"), nb::arg("bvh_chunk"), nb::arg("aovs"),
+      nb::arg("gltf_scene") = nb::none());
   bindArrayConstructor<float>(scene);
   bindArrayConstructor<double>(scene);
   scene
@@ -378,7 +420,12 @@ void bindScene(nb::module_& m) {
                    "Seconds, rays, hits, frames and Mrays/s of the last render call")
       .def_prop_ro("bounds", &PyScene::bounds, "World bounds ((x, y, z) low, (x, y, z) high)")
       .def_prop_ro("triangle_count", &PyScene::triangleCount, "Triangles in the scene")
-      .def_prop_ro("mesh_names", &PyScene::meshNames, "The meshes, as given");
+      .def_prop_ro("mesh_names", &PyScene::meshNames, "The meshes, as given")
+      .def_prop_ro("ids", &PyScene::ids,
+                   "The names behind the instance, mesh and material ids, each list indexed by "
+                   "its id")
+      .def("triangles", &PyScene::triangles,
+           "Every object's triangles in world space, (T, 3, 3) float64, in scene order");
 }
 
 }  // namespace aperture::python
