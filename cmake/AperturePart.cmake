@@ -12,13 +12,14 @@ set(APERTURE_PARTS
   "core/queries: core/engine"                        # rays and face visibility beside the frame loop
   "core/io: core/engine"                             # image, NumPy and PLY files, atomic writes
   "core/exr: core/io"                                # EXR files and their headers
+  "core/points: core/exr"                            # point clouds, range images, their writers
   "cameras/schema: core/util"                        # camera parameters, their specs, conventions
   "cameras/lenses: core/util"                        # calibrated lens models and their inverse
   "cameras/files: cameras/lenses core/io"            # COLMAP, NeRF, OpenCV camera files; points
   "cameras/geometry: core/engine"                    # the camera frame, view volumes
   "cameras/models: cameras/schema cameras/lenses cameras/geometry"  # the camera models
   "cameras/registry: cameras/models"                 # the list of models; describe, culling
-  "apps/services: cameras/registry cameras/files core/exr core/queries"  # scene set-up, one view, outputs
+  "apps/services: cameras/registry cameras/files core/points core/queries"  # scene set-up, one view, outputs
   "apps/jobs: apps/services"                         # job files
   "apps/batch: apps/jobs"                            # batches: writers, resume, shards, summaries
   "bench/measure: apps/services"                     # scaling, trade-off study, the bare-Embree baseline
