@@ -72,6 +72,10 @@ Command addScanCommand(CLI::App& app) {
   sub->add_option("--surfaces", r.options.maxSurfaces,
                   "Surfaces looked for along a ray for last, strongest and all (1..64)")
       ->capture_default_str();
+  sub->add_option("--return-separation", r.options.returnSeparation,
+                  "Metres past a surface before the next return is looked for")
+      ->capture_default_str()
+      ->type_name("M");
   sub->add_option("--property", r.options.faceProperties,
                   "Face property of the mesh carried as a uint32 field (repeatable)")
       ->type_name("NAME");

@@ -138,7 +138,8 @@ void traceChunk(const SweepContext& c, size_t first, size_t last, std::vector<Su
         ++found[local];
       }
       TraceRay r = batch[j];
-      r.tnear = std::nextafter(hits[j].t, std::numeric_limits<float>::infinity());
+      r.tnear = std::max(std::nextafter(hits[j].t, std::numeric_limits<float>::infinity()),
+                         hits[j].t + float(o.returnSeparation));
       if (r.tnear <= r.tfar) {
         next.push_back(r);
         nextRay.push_back(i);
@@ -478,6 +479,8 @@ void runScan(const ScanRequest& r) {
   if (r.sweeps > 1 && expandSweepPattern(r.out, 0) == expandSweepPattern(r.out, 1))
     throw Error(cat("--out '", r.out, "': ", r.sweeps, " sweeps need {sweep} in the path"));
   applyRangeNoise(r.options.noise, 1.0, 0, 0);  // checks σ and the dropout
+  if (!(r.options.returnSeparation >= 0))
+    throw Error(cat("--return-separation ", r.options.returnSeparation, " must be >= 0"));
   if (!r.labelField.empty() &&
       std::find(r.options.faceProperties.begin(), r.options.faceProperties.end(), r.labelField) ==
           r.options.faceProperties.end())

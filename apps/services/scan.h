@@ -35,6 +35,10 @@ struct ScanOptions {
   ScanReturns returns = ScanReturns::First;
   /// Surfaces looked for along a ray for last / strongest / all (1..64); first needs 1.
   int maxSurfaces = 4;
+  /// Metres past a surface before the next one is looked for (last / strongest / all): a
+  /// sensor's two returns are never closer, and the triangles that meet at an edge (or the two
+  /// of a quad along its diagonal) are one surface, not two.
+  double returnSeparation = 0.01;
   RangeNoise noise;
   /// Face properties carried as uint32 fields of the same name (0xFFFFFFFF where the mesh
   /// lacks them).
