@@ -52,6 +52,7 @@ struct SweepContext {
   const ScanOptions& options;
   Pose sweepStartFromWorld;
   std::vector<const MeshProperty*> reflectance;  ///< per object, or null
+  std::vector<Pose> sensorFromWorld;             ///< per pose of `rays`
 };
 
 /// The values of the surface hit `h` of ray i, or a miss when noise drops it or the range falls
@@ -60,16 +61,18 @@ Surface surfaceOf(const SweepContext& c, size_t i, const TraceHit& h, int k) {
   Surface s;
   if (!h.hit()) return s;
   double range = double(h.t) + double(c.rays.rangeOffset[i]);
-  const std::optional<double> noisy =
-      applyRangeNoise(c.options.noise, range, c.rays.sweep, noiseIndex(i, k));
-  if (!noisy) return s;
-  range = *noisy;
+  if (c.options.noise.enabled()) {
+    const std::optional<double> noisy =
+        applyRangeNoise(c.options.noise, range, c.rays.sweep, noiseIndex(i, k));
+    if (!noisy) return s;
+    range = *noisy;
+  }
   if (range < c.sensor.minRange || range > c.sensor.maxRange || range <= 0) return s;
   const double travel = range - double(c.rays.rangeOffset[i]);
   const glm::dvec3 world = c.rays.origin[i] + c.rays.direction[i] * travel;
   switch (c.options.frame) {
     case ScanFrame::Sensor:
-      s.point = c.rays.sensorPointAt(i, travel);
+      s.point = c.sensorFromWorld[c.rays.poseIndex[i]].apply(world);
       break;
     case ScanFrame::World:
       s.point = world;
@@ -99,8 +102,8 @@ Surface surfaceOf(const SweepContext& c, size_t i, const TraceHit& h, int k) {
 
 /// The surfaces of rays [first, last): slot (i − first)·perRay + j, for perRay = maxSurfaces
 /// with ScanReturns::All, else 1 (the selected one).
-void traceChunk(const SweepContext& c, size_t first, size_t last, std::vector<Surface>& out,
-                std::vector<uint8_t>& returnsOf) {
+void traceChunk(const SweepContext& c, size_t first, size_t last, Surface* out,
+                uint8_t* returnsOf) {
   const ScanOptions& o = c.options;
   const int passes = o.returns == ScanReturns::First ? 1 : o.maxSurfaces;
   const bool all = o.returns == ScanReturns::All;
@@ -137,6 +140,7 @@ void traceChunk(const SweepContext& c, size_t first, size_t last, std::vector<Su
         }
         ++found[local];
       }
+      if (k + 1 == passes) continue;
       TraceRay r = batch[j];
       r.tnear = std::max(std::nextafter(hits[j].t, std::numeric_limits<float>::infinity()),
                          hits[j].t + float(o.returnSeparation));
@@ -219,7 +223,8 @@ ScanSweep scanSweep(const Scene& scene, const LidarSensor& sensor, const LidarRa
   if (rangeImage && options.returns == ScanReturns::All)
     throw Error("a range image holds one return per ray: --returns all needs a point cloud");
   const auto t0 = Clock::now();
-  SweepContext c{scene, sensor, rays, options, rays.sweepStartPose.inverse(), {}};
+  SweepContext c{scene, sensor, rays, options, rays.sweepStartPose.inverse(), {}, {}};
+  for (const Pose& p : rays.poses) c.sensorFromWorld.push_back(p.inverse());
   for (size_t o = 0; o < scene.objectCount(); ++o)
     c.reflectance.push_back(
         scene.objectMesh(unsigned(o)).property(PropertyDomain::Face, kReflectanceProperty));
@@ -228,18 +233,25 @@ ScanSweep scanSweep(const Scene& scene, const LidarSensor& sensor, const LidarRa
   const size_t perRay = all ? size_t(options.maxSurfaces) : 1;
   std::vector<Surface> surfaces(n * perRay);
   std::vector<uint8_t> returnsOf(n);
-  parallelForChunks(n, kScanChunk, [&](size_t, size_t first, size_t last) {
-    std::vector<Surface> out((last - first) * perRay);
-    std::vector<uint8_t> counts(last - first);
-    traceChunk(c, first, last, out, counts);
-    std::copy(out.begin(), out.end(), surfaces.begin() + std::ptrdiff_t(first * perRay));
-    std::copy(counts.begin(), counts.end(), returnsOf.begin() + std::ptrdiff_t(first));
+  for (size_t i = 0; i < n; ++i)
+    if (rays.timeNs[i] < 0 || rays.timeNs[i] > int64_t(UINT32_MAX))
+      throw Error(cat(sensor.source.path, ": ray ", i, " fires ", rays.timeNs[i],
+                      " ns after the sweep's start, past the uint32 time field (4.29 s)"));
+  // Trace in fixed chunks, counting each chunk's points; then every chunk writes its points
+  // from the offset the counts before it give (the cloud is the same on any thread count).
+  const size_t chunks = (n + kScanChunk - 1) / kScanChunk;
+  std::vector<size_t> offset(chunks + 1, 0);
+  parallelForChunks(n, kScanChunk, [&](size_t chunk, size_t first, size_t last) {
+    traceChunk(c, first, last, surfaces.data() + first * perRay, returnsOf.data() + first);
+    size_t hits = 0;
+    for (size_t k = first * perRay; k < last * perRay; ++k) hits += surfaces[k].hit ? 1 : 0;
+    offset[chunk + 1] = hits;
   });
+  for (size_t k = 0; k < chunks; ++k) offset[k + 1] += offset[k];
 
   ScanSweep result;
   result.rays = n;
-  size_t points = 0;
-  for (const Surface& s : surfaces) points += s.hit ? 1 : 0;
+  const size_t points = offset[chunks];
   PointCloud& cloud = result.cloud;
   cloud.size = points;
   cloud.startSeconds = double(rays.sweepStartNs) * 1e-9;
@@ -265,34 +277,39 @@ ScanSweep scanSweep(const Scene& scene, const LidarSensor& sensor, const LidarRa
       throw Error(cat("face property '", name, "' has the name of a standard point field"));
     properties.push_back(cloud.add<uint32_t>(name, PointType::UInt32));
   }
-  for (size_t i = 0; i < n; ++i)
-    if (rays.timeNs[i] < 0 || rays.timeNs[i] > int64_t(UINT32_MAX))
-      throw Error(cat(sensor.source.path, ": ray ", i, " fires ", rays.timeNs[i],
-                      " ns after the sweep's start, past the uint32 time field (4.29 s)"));
-  size_t at = 0;
-  for (size_t i = 0; i < n; ++i)
-    for (size_t j = 0; j < perRay; ++j) {
-      const Surface& s = surfaces[i * perRay + j];
-      if (!s.hit) continue;
-      for (int a = 0; a < 3; ++a) storePosition(*xyz[a], at, s.point[a]);
-      range[at] = s.range;
-      time[at] = uint32_t(rays.timeNs[i]);
-      ring[at] = uint16_t(rays.ring[i]);
-      column[at] = rays.column[i];
-      azimuth[at] = float(double(rays.azimuthDeg[i]) * M_PI / 180.0);
-      incidence[at] = s.incidence;
-      intensity[at] = s.intensity;
-      primid[at] = s.primId;
-      geomid[at] = s.geomId;
-      instance[at] = s.instance;
-      if (all) {
-        returnNumber[at] = uint8_t(j + 1);
-        returns[at] = returnsOf[i];
+  std::vector<const MeshProperty*> propertyOf;  // object-major: [object · P + p]
+  for (size_t o = 0; o < scene.objectCount(); ++o)
+    for (const std::string& name : options.faceProperties)
+      propertyOf.push_back(scene.objectMesh(unsigned(o)).property(PropertyDomain::Face, name));
+  const size_t P = options.faceProperties.size();
+  parallelForChunks(n, kScanChunk, [&](size_t chunk, size_t first, size_t last) {
+    size_t at = offset[chunk];
+    for (size_t i = first; i < last; ++i)
+      for (size_t j = 0; j < perRay; ++j) {
+        const Surface& s = surfaces[i * perRay + j];
+        if (!s.hit) continue;
+        for (int a = 0; a < 3; ++a) storePosition(*xyz[a], at, s.point[a]);
+        range[at] = s.range;
+        time[at] = uint32_t(rays.timeNs[i]);
+        ring[at] = uint16_t(rays.ring[i]);
+        column[at] = rays.column[i];
+        azimuth[at] = float(double(rays.azimuthDeg[i]) * M_PI / 180.0);
+        incidence[at] = s.incidence;
+        intensity[at] = s.intensity;
+        primid[at] = s.primId;
+        geomid[at] = s.geomId;
+        instance[at] = s.instance;
+        if (all) {
+          returnNumber[at] = uint8_t(j + 1);
+          returns[at] = returnsOf[i];
+        }
+        for (size_t p = 0; p < P; ++p) {
+          const MeshProperty* m = propertyOf[s.object * P + p];
+          properties[p][at] = m ? m->values[s.triangle] : TraceHit::kNoHit;
+        }
+        ++at;
       }
-      for (size_t p = 0; p < properties.size(); ++p)
-        properties[p][at] = propertyValue(scene, s, options.faceProperties[p]);
-      ++at;
-    }
+  });
   result.points = points;
 
   if (rangeImage) {
