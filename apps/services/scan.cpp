@@ -481,8 +481,7 @@ LidarSensor sensorOf(const ScanRequest& r) {
 
 }  // namespace
 
-void runScan(const ScanRequest& r) {
-  // Everything that can be refused is refused before the scene loads.
+PreparedScan prepareScan(const ScanRequest& r) {
   if (r.sweeps < 1) throw Error(cat("--sweeps ", r.sweeps, " must be at least 1"));
   if (r.out.empty()) throw Error("--out is required");
   const PointFormat format = pointFormatOf(r.out);
@@ -521,11 +520,16 @@ void runScan(const ScanRequest& r) {
       throw Error(cat("--out '", path, "': the directory '", dir.string(), "' does not exist"));
     paths.push_back(path);
   }
+  return {sensor, trajectory, paths, image};
+}
 
-  const ThreadLimit threads(r.threads);
-  const Device device;
-  LoadedScene loaded = loadScene(device, scanSceneSpec(r.scene, r.options), r.quiet);
-  const Scene& scene = *loaded.scene;
+void writeScans(const Scene& scene, const ScanRequest& r, const PreparedScan& prepared,
+                const std::string& isa, int threads) {
+  const LidarSensor& sensor = prepared.sensor;
+  const Trajectory& trajectory = prepared.trajectory;
+  const std::vector<std::string>& paths = prepared.paths;
+  const bool image = prepared.image;
+  const int64_t period = sensor.periodNs();
   PointWriteOptions writeOptions{
       r.labelField,
       {cat("aperture scan: ", sensor.name, ", frame ", scanFrameName(r.options.frame), ", returns ",
@@ -558,10 +562,19 @@ void runScan(const ScanRequest& r) {
           "scan bench: %zu rays, %zu hits; scan loop %.4f s (%.2f Mpts/s), bare Embree %.4f s "
           "(%.2f Mrays/s), ratio %.3f; %d threads, isa %s, %zu triangles\n",
           traced.size(), bareHits, best, double(traced.size()) / best * 1e-6, bestBare,
-          double(traced.size()) / bestBare * 1e-6, bestBare / best, threads.threads(),
-          device.isaName().c_str(), scene.stats().triangles);
+          double(traced.size()) / bestBare * 1e-6, bestBare / best, threads, isa.c_str(),
+          scene.stats().triangles);
     }
   }
+}
+
+void runScan(const ScanRequest& r) {
+  // Everything that can be refused is refused before the scene loads.
+  const PreparedScan prepared = prepareScan(r);
+  const ThreadLimit threads(r.threads);
+  const Device device;
+  LoadedScene loaded = loadScene(device, scanSceneSpec(r.scene, r.options), r.quiet);
+  writeScans(*loaded.scene, r, prepared, device.isaName(), threads.threads());
 }
 
 }  // namespace aperture::app

@@ -84,6 +84,22 @@ struct ScanRequest {
   bool quiet = false;
 };
 
+/// What prepareScan checked and read: the sensor, the trajectory and each sweep's path.
+struct PreparedScan {
+  LidarSensor sensor;
+  Trajectory trajectory;
+  std::vector<std::string> paths;
+  bool image = false;  ///< the format is a range image
+};
+/// Checks a scan before any scene is loaded: sweeps, output pattern and format, returns,
+/// noise, label, the sensor (read), the trajectory (read) and that every sweep lies within it,
+/// and that the output directories exist. Errors name the file and the field.
+PreparedScan prepareScan(const ScanRequest& request);
+/// Traces and writes every sweep of a prepared scan through `scene` (progress on stderr unless
+/// request.quiet; with request.bench, the timing against bare Embree on stdout).
+void writeScans(const Scene& scene, const ScanRequest& request, const PreparedScan& prepared,
+                const std::string& isa, int threads);
+
 /// Checks everything (sensor, trajectory, sweep times, output pattern and format, fields)
 /// before loading the scene, then traces and writes each sweep atomically. Errors name the
 /// file and the field; nothing is written on bad input.

@@ -6,8 +6,11 @@
 // back as first, last and all returns.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <map>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
@@ -17,6 +20,7 @@
 #include "core/engine/scene.h"
 #include "core/mesh/mesh.h"
 #include "core/mesh/ply.h"
+#include "core/util/error.h"
 #include "tests/support.h"
 
 namespace aperture::app {
