@@ -98,7 +98,7 @@ Command addScanCommand(CLI::App& app) {
       ->type_name("PATH");
   sub->add_option("--threads", r.threads, "Worker threads in [0, 4096] (0 = all cores)");
   sub->add_flag("--bench", r.bench,
-                "Also time the scan loop and bare Embree on the same rays (best of 5, stdout)");
+                "Also time the scan loop and bare Embree on the same rays (best of 15, stdout)");
   sub->add_flag("--quiet", r.quiet, "No progress or log lines");
   return [args] { return runScanCommand(*args); };
 }

@@ -10,6 +10,8 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
+#include <type_traits>
 
 #include "apps/services/render_options.h"
 #include "core/mesh/ply.h"
@@ -31,13 +33,15 @@ double secondsSince(Clock::time_point t0) {
 }
 
 /// One surface along a ray, turned into a point's values.
+/// Trivial (left unwritten when allocated): traceChunk clears `hit` of each of its slots, and
+/// the rest is read only where `hit` is set.
 struct Surface {
-  bool hit = false;
-  float range = 0;        ///< metres, reported (with the beam's range offset and noise)
-  glm::dvec3 point{0.0};  ///< in the frame asked for
-  float incidence = 0, intensity = 0;
-  uint32_t geomId = TraceHit::kNoHit, primId = TraceHit::kNoHit, instance = TraceHit::kNoHit;
-  uint32_t object = 0, triangle = 0;  ///< for the face properties
+  glm::dvec3 point;  ///< in the frame asked for
+  float range;       ///< metres, reported (with the beam's range offset and noise)
+  float incidence, intensity;
+  uint32_t geomId, primId, instance;
+  uint32_t triangle;  ///< the stored triangle, for the face properties
+  bool hit;
 };
 
 /// Rays per chunk of the parallel loop (fixed: the work of a chunk does not depend on threads).
@@ -59,6 +63,7 @@ struct SweepContext {
 /// outside [minRange, maxRange].
 Surface surfaceOf(const SweepContext& c, size_t i, const TraceHit& h, int k) {
   Surface s;
+  s.hit = false;
   if (!h.hit()) return s;
   double range = double(h.t) + double(c.rays.rangeOffset[i]);
   if (c.options.noise.enabled()) {
@@ -95,7 +100,6 @@ Surface surfaceOf(const SweepContext& c, size_t i, const TraceHit& h, int k) {
   const Mesh& mesh = c.scene.objectMesh(h.geomId);
   s.instance = c.scene.objectIds(h.geomId).instance +
                (mesh.faceGroups.empty() ? 0u : mesh.faceGroups[h.meshTriangle]);
-  s.object = h.geomId;
   s.triangle = h.meshTriangle;
   return s;
 }
@@ -108,6 +112,7 @@ void traceChunk(const SweepContext& c, size_t first, size_t last, Surface* out,
   const int passes = o.returns == ScanReturns::First ? 1 : o.maxSurfaces;
   const bool all = o.returns == ScanReturns::All;
   const size_t perRay = all ? size_t(o.maxSurfaces) : 1;
+  for (size_t k = 0; k < (last - first) * perRay; ++k) out[k].hit = false;
   const glm::dvec3& renderOrigin = c.scene.renderOrigin();
   std::vector<TraceRay> batch(last - first);
   std::vector<size_t> rayOf(last - first);
@@ -167,7 +172,7 @@ void storePosition(PointField& f, size_t at, double v) {
 }
 
 uint32_t propertyValue(const Scene& scene, const Surface& s, const std::string& name) {
-  const MeshProperty* p = scene.objectMesh(s.object).property(PropertyDomain::Face, name);
+  const MeshProperty* p = scene.objectMesh(s.geomId).property(PropertyDomain::Face, name);
   return p ? p->values[s.triangle] : 0xFFFFFFFFu;
 }
 
@@ -231,7 +236,9 @@ ScanSweep scanSweep(const Scene& scene, const LidarSensor& sensor, const LidarRa
   const size_t n = rays.size();
   const bool all = options.returns == ScanReturns::All;
   const size_t perRay = all ? size_t(options.maxSurfaces) : 1;
-  std::vector<Surface> surfaces(n * perRay);
+  static_assert(std::is_trivially_default_constructible<Surface>::value, "left unwritten");
+  LargeBuffer<Surface> surfaces;
+  resizeOnHugePages(surfaces, n * perRay);
   std::vector<uint8_t> returnsOf(n);
   for (size_t i = 0; i < n; ++i)
     if (rays.timeNs[i] < 0 || rays.timeNs[i] > int64_t(UINT32_MAX))
@@ -255,27 +262,29 @@ ScanSweep scanSweep(const Scene& scene, const LidarSensor& sensor, const LidarRa
   PointCloud& cloud = result.cloud;
   cloud.size = points;
   cloud.startSeconds = double(rays.sweepStartNs) * 1e-9;
+  // Every field is written for every point below: left unwritten here.
   const PointType xyzType = positionType(options.frame);
-  PointField* xyz[3] = {&cloud.addField(pf::kX, xyzType), nullptr, nullptr};
-  xyz[1] = &cloud.addField(pf::kY, xyzType);
-  xyz[2] = &cloud.addField(pf::kZ, xyzType);
-  auto* range = cloud.add<float>(pf::kRange, PointType::Float32);
-  auto* time = cloud.add<uint32_t>(pf::kTime, PointType::UInt32);
-  auto* ring = cloud.add<uint16_t>(pf::kRing, PointType::UInt16);
-  auto* column = cloud.add<uint32_t>(pf::kColumn, PointType::UInt32);
-  auto* azimuth = cloud.add<float>(pf::kAzimuth, PointType::Float32);
-  auto* incidence = cloud.add<float>(pf::kIncidence, PointType::Float32);
-  auto* intensity = cloud.add<float>(pf::kIntensity, PointType::Float32);
-  auto* primid = cloud.add<uint32_t>(pf::kPrimId, PointType::UInt32);
-  auto* geomid = cloud.add<uint32_t>(pf::kGeomId, PointType::UInt32);
-  auto* instance = cloud.add<uint32_t>(pf::kInstance, PointType::UInt32);
-  uint8_t* returnNumber = all ? cloud.add<uint8_t>(pf::kReturnNumber, PointType::UInt8) : nullptr;
-  uint8_t* returns = all ? cloud.add<uint8_t>(pf::kReturns, PointType::UInt8) : nullptr;
+  PointField* xyz[3] = {&cloud.addField(pf::kX, xyzType, false), nullptr, nullptr};
+  xyz[1] = &cloud.addField(pf::kY, xyzType, false);
+  xyz[2] = &cloud.addField(pf::kZ, xyzType, false);
+  auto* range = cloud.add<float>(pf::kRange, PointType::Float32, false);
+  auto* time = cloud.add<uint32_t>(pf::kTime, PointType::UInt32, false);
+  auto* ring = cloud.add<uint16_t>(pf::kRing, PointType::UInt16, false);
+  auto* column = cloud.add<uint32_t>(pf::kColumn, PointType::UInt32, false);
+  auto* azimuth = cloud.add<float>(pf::kAzimuth, PointType::Float32, false);
+  auto* incidence = cloud.add<float>(pf::kIncidence, PointType::Float32, false);
+  auto* intensity = cloud.add<float>(pf::kIntensity, PointType::Float32, false);
+  auto* primid = cloud.add<uint32_t>(pf::kPrimId, PointType::UInt32, false);
+  auto* geomid = cloud.add<uint32_t>(pf::kGeomId, PointType::UInt32, false);
+  auto* instance = cloud.add<uint32_t>(pf::kInstance, PointType::UInt32, false);
+  uint8_t* returnNumber =
+      all ? cloud.add<uint8_t>(pf::kReturnNumber, PointType::UInt8, false) : nullptr;
+  uint8_t* returns = all ? cloud.add<uint8_t>(pf::kReturns, PointType::UInt8, false) : nullptr;
   std::vector<uint32_t*> properties;
   for (const std::string& name : options.faceProperties) {
     if (cloud.find(name))
       throw Error(cat("face property '", name, "' has the name of a standard point field"));
-    properties.push_back(cloud.add<uint32_t>(name, PointType::UInt32));
+    properties.push_back(cloud.add<uint32_t>(name, PointType::UInt32, false));
   }
   std::vector<const MeshProperty*> propertyOf;  // object-major: [object · P + p]
   for (size_t o = 0; o < scene.objectCount(); ++o)
@@ -304,7 +313,7 @@ ScanSweep scanSweep(const Scene& scene, const LidarSensor& sensor, const LidarRa
           returns[at] = returnsOf[i];
         }
         for (size_t p = 0; p < P; ++p) {
-          const MeshProperty* m = propertyOf[s.object * P + p];
+          const MeshProperty* m = propertyOf[s.geomId * P + p];
           properties[p][at] = m ? m->values[s.triangle] : TraceHit::kNoHit;
         }
         ++at;
@@ -554,7 +563,7 @@ void writeScans(const Scene& scene, const ScanRequest& r, const PreparedScan& pr
       firstOnly.returns = ScanReturns::First;
       double best = 1e30, bestBare = 1e30;
       size_t bareHits = 0;
-      for (int round = 0; round < 5; ++round) {
+      for (int round = 0; round < 15; ++round) {
         best = std::min(best, scanSweep(scene, sensor, rays, firstOnly, false).traceSeconds);
         bestBare = std::min(bestBare, bareEmbreeSeconds(scene, traced, &bareHits));
       }

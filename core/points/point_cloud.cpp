@@ -71,12 +71,15 @@ PointField* PointCloud::find(const std::string& name) {
   return nullptr;
 }
 
-PointField& PointCloud::addField(const std::string& name, PointType type) {
+PointField& PointCloud::addField(const std::string& name, PointType type, bool zeroed) {
   if (find(name)) throw Error(cat("point field '", name, "' is given twice"));
   PointField f;
   f.name = name;
   f.type = type;
-  f.bytes.assign(size * pointTypeSize(type), 0);
+  if (zeroed)
+    f.bytes.assign(size * pointTypeSize(type), 0);
+  else
+    resizeOnHugePages(f.bytes, size * pointTypeSize(type));
   fields.push_back(std::move(f));
   return fields.back();
 }

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "core/util/huge_pages.h"
+
 namespace aperture {
 
 /// The type of one field value.
@@ -14,11 +16,12 @@ enum class PointType { UInt8, UInt16, UInt32, Float32, Float64 };
 size_t pointTypeSize(PointType type);
 
 /// One field of a point cloud or one channel of a range image: `count` values of `type`,
-/// stored as their native bytes.
+/// stored as their native bytes (a LargeBuffer: on huge pages from 2 MB, and left unwritten by
+/// a resize, so a scan's fields are touched once, by the threads that fill them).
 struct PointField {
   std::string name;
   PointType type = PointType::Float32;
-  std::vector<unsigned char> bytes;
+  LargeBuffer<unsigned char> bytes;
 
   size_t count() const { return bytes.size() / pointTypeSize(type); }
   /// Value `i` widened to double (exact for every type here).
@@ -68,13 +71,13 @@ struct PointCloud {
   /// The field `name`, or nullptr.
   const PointField* find(const std::string& name) const;
   PointField* find(const std::string& name);
-  /// Adds a field of `size` values (zero) and returns its storage. Throws Error for a name
-  /// already there.
+  /// Adds a field of `size` values (zero, or left unwritten with `zeroed` false: the caller
+  /// writes every one) and returns its storage. Throws Error for a name already there.
   template <typename T>
-  T* add(const std::string& name, PointType type) {
-    return addField(name, type).as<T>();
+  T* add(const std::string& name, PointType type, bool zeroed = true) {
+    return addField(name, type, zeroed).as<T>();
   }
-  PointField& addField(const std::string& name, PointType type);
+  PointField& addField(const std::string& name, PointType type, bool zeroed = true);
   /// Throws Error (naming `what`) unless every field holds `size` values and names differ.
   void check(const std::string& what) const;
 };

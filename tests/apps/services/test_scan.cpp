@@ -345,7 +345,7 @@ TEST(Scan, NoiseIsTheSameOnOneAndTwoThreadsAndHasItsSigma) {
   const LidarRays rays = staticRoomRays(sensor);
   ScanOptions o;
   o.noise = {0.02, 0.0, 7};
-  std::vector<unsigned char> one, two;
+  LargeBuffer<unsigned char> one, two;
   {
     const ThreadLimit limit(1);
     one = scanSweep(*room.scene, sensor, rays, o).cloud.find(pf::kRange)->bytes;
