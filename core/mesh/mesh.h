@@ -139,11 +139,16 @@ Mesh loadMesh(const std::string& spec, const LoadOptions& options = {});
 
 /// Loaders for one format each (loadMesh dispatches). They fill positions in world space
 /// (anchor 0, no padding); finishMesh() then validates, anchors and pads. Of `options` they
-/// read only `properties` and `vertexNormals` (what to keep beyond positions and indices).
-/// OBJ: no integer properties (a request is an Error); normals from `vn` through the corners'
-/// normal indices, a vertex used with several normals split into one vertex per normal (so
-/// vertexCount may grow; triangles keep their order and so their primIDs); a face corner
-/// without a normal index in a file whose other corners have one is an Error.
+/// read only what to keep beyond positions and indices: `properties` and `vertexNormals`
+/// (PLY, OBJ), `texcoords`, `groups` and `materials` (OBJ).
+/// OBJ: no integer properties (a request is an Error); normals from `vn` and texture
+/// coordinates from `vt` (stored as (u, 1 - v): (0, 0) is the image's top-left) through the
+/// corners' indices, a vertex used with several (vt, vn) pairs split into one vertex per pair
+/// (so vertexCount may grow; triangles keep their order and so their primIDs); a face corner
+/// without a normal (texture) index in a file whose other corners have one is an Error.
+/// faceGroups: the object (`o`/`g`) of each triangle, faceMaterials: its `usemtl` material,
+/// ids in order of first appearance (see loadObjScene in scene_file.h for the names, the
+/// default object and material, and the .mtl files, which loadObj does not read).
 Mesh loadPly(const std::string& path, const LoadOptions& options = {});
 Mesh loadObj(const std::string& path, const LoadOptions& options = {});
 /// The same on a file already in memory (`size` bytes at `data`, which need not be aligned or

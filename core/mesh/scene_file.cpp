@@ -58,22 +58,12 @@ SceneFile loadSceneFile(const std::string& spec, const LoadOptions& options) {
   return singleMeshFile(spec, options);
 }
 
-// Placeholders until the glTF and OBJ scene loaders land (issue 41).
+// Placeholders until the glTF scene loader lands (issue 41). loadObjScene: core/mesh/obj.cpp.
 SceneFile loadGltf(const std::string& path, const LoadOptions&) {
   throw Error(cat(path, ": glTF is not supported yet"));
 }
 SceneFile loadGltfFromMemory(const char*, size_t, const std::string& name, const LoadOptions&) {
   throw Error(cat(name, ": glTF is not supported yet"));
-}
-SceneFile loadObjScene(const std::string& path, const LoadOptions& options) {
-  SceneFile file;
-  file.path = path;
-  file.meshes.push_back(loadObj(path, options));
-  file.fileBytes = file.meshes.back().stats.fileBytes;
-  file.instances.push_back({0, glm::dmat4(1.0), 0});
-  file.instanceNames = {stemOf(path)};
-  file.meshNames = {stemOf(path)};
-  return file;
 }
 
 }  // namespace aperture

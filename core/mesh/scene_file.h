@@ -86,8 +86,22 @@ SceneFile loadGltf(const std::string& path, const LoadOptions& options = {});
 SceneFile loadGltfFromMemory(const char* data, size_t size, const std::string& name,
                              const LoadOptions& options = {});
 /// An OBJ with its objects (o, g), materials (usemtl) and material libraries (mtllib: Kd,
-/// map_Kd relative to the .mtl).
+/// map_Kd relative to the .mtl): one mesh (as loadObj leaves it, and with the per-triangle
+/// object and material ids when LoadOptions::groups / materials ask) placed once with id 0.
+/// instanceNames: the objects in id order (faces before any o/g: an object named after the
+/// file's stem); materialNames and materials: the usemtl names in order of first appearance,
+/// then "default" (white) when faces come before any usemtl. Material::baseColor is (Kd, 1),
+/// Kd taken as linear RGB as the file writes it; (1, 1, 1, 1) for a name no library defines or
+/// an entry without Kd. A map_Kd of a used material is a texture (Repeat unless `-clamp on`,
+/// sRGB, bilinear). Errors name the file and line: an mtllib that cannot be read (the .obj's
+/// line and the path tried), a map_Kd file that does not exist or an option that changes the
+/// mapping (-s, -o, -t; the .mtl's line). The details of both formats: core/mesh/obj.cpp and
+/// core/mesh/mtl.cpp.
 SceneFile loadObjScene(const std::string& path, const LoadOptions& options = {});
+/// The same on a file in memory (`name` stands for it; mtllib paths resolve beside `name`).
+/// Used by the fuzz target.
+SceneFile loadObjSceneFromMemory(const char* data, size_t size, const std::string& name,
+                                 const LoadOptions& options = {});
 
 /// True for the extensions of files that hold scenes of several meshes (.gltf, .glb).
 bool isGltfPath(const std::string& path);
