@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/util/error.h"
+#include "core/util/parallel.h"
 
 namespace aperture {
 
@@ -12,10 +13,15 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 
-float wrapDegrees(double deg) {
-  double a = std::fmod(deg, 360.0);
+// deg in [0, 360).
+double wrap360(double deg) {
+  double a = deg >= 0 && deg < 360.0 ? deg : std::fmod(deg, 360.0);
   if (a < 0) a += 360.0;
-  const float f = float(a);
+  return a >= 360.0 ? 0.0 : a;
+}
+
+float wrapDegrees(double deg) {
+  const float f = float(wrap360(deg));
   return f >= 360.0f ? 0.0f : f;
 }
 
@@ -37,29 +43,14 @@ double noiseUniform(uint64_t seed, int sweep, uint64_t index, uint64_t dim) {
   return double(h >> 11) * (1.0 / 9007199254740992.0);
 }
 
-// One ray's geometry in the lidar frame at its column's encoder angle.
-struct LidarRay {
-  glm::dvec3 origin, direction;
-  double azimuthDeg, elevationDeg;
-};
-
-LidarRay beamRay(const LidarBeam& b, double columnDeg) {
-  const double psi = (columnDeg + b.azimuthDeg) * kDeg, phi = b.elevationDeg * kDeg;
-  const double c = std::cos(columnDeg * kDeg), s = std::sin(columnDeg * kDeg);
-  LidarRay r;
-  r.direction = {std::cos(psi) * std::cos(phi), std::sin(psi) * std::cos(phi), std::sin(phi)};
-  r.origin = {c * b.origin.x - s * b.origin.y, s * b.origin.x + c * b.origin.y, b.origin.z};
-  r.azimuthDeg = columnDeg + b.azimuthDeg;
-  r.elevationDeg = b.elevationDeg;
-  return r;
+glm::dvec3 unitDirection(double azimuthDeg, double elevationDeg) {
+  const double psi = azimuthDeg * kDeg, phi = elevationDeg * kDeg;
+  return {std::cos(psi) * std::cos(phi), std::sin(psi) * std::cos(phi), std::sin(phi)};
 }
 
-LidarRay patternRay(const PatternRay& p) {
-  const double psi = p.azimuthDeg * kDeg, phi = p.elevationDeg * kDeg;
-  return {glm::dvec3(0.0),
-          {std::cos(psi) * std::cos(phi), std::sin(psi) * std::cos(phi), std::sin(phi)},
-          p.azimuthDeg,
-          p.elevationDeg};
+// Rz(angle)·v for the angle's cosine c and sine s.
+glm::dvec3 turned(double c, double s, const glm::dvec3& v) {
+  return {c * v.x - s * v.y, s * v.x + c * v.y, v.z};
 }
 
 }  // namespace
@@ -97,50 +88,46 @@ LidarRays sweepRays(const LidarSensor& sensor, const Trajectory& trajectory, int
   out.sweepStartNs = startNs ? *startNs : trajectory.startNs() + int64_t(sweep) * out.periodNs;
   out.sensorFromLidar = sensor.sensorFromLidar;
   const Pose sensorFromLidar = Pose::fromMatrix(sensor.sensorFromLidar);
+  const bool spinning = sensor.kind == LidarKind::Spinning;
 
-  // Each ray's lidar-frame geometry and time, in firing order; then the poses.
-  std::vector<LidarRay> rays;
-  std::vector<int64_t> times;
-  std::vector<uint32_t> rings, columns;
-  std::vector<double> rangeOffsets;
-  if (sensor.kind == LidarKind::Spinning) {
+  // The firing order: spinning, (column, beam) column by column; pattern, the table's rows of
+  // the cycles that fall in this sweep (sweep k covers [k·P, (k+1)·P) of the pattern's clock,
+  // which repeats every Q).
+  std::vector<int> ids;
+  std::vector<std::pair<size_t, int64_t>> patternRays;  // (table row, time in the sweep)
+  size_t n = 0;
+  if (spinning) {
+    ids = sensor.windowColumns();
     out.rows = int(sensor.beams.size());
     out.columns = sensor.columns;
-    const std::vector<int> ids = sensor.windowColumns();
-    rays.reserve(ids.size() * sensor.beams.size());
-    for (int m : ids) {
-      const double columnDeg = sensor.columnAzimuthDeg(m);
-      const int64_t columnTime = sensor.columnTime(m);
-      for (size_t b = 0; b < sensor.beams.size(); ++b) {
-        rays.push_back(beamRay(sensor.beams[b], columnDeg));
-        times.push_back(columnTime + sensor.beams[b].timeOffsetNs);
-        rings.push_back(uint32_t(b));
-        columns.push_back(uint32_t(m));
-        rangeOffsets.push_back(sensor.beams[b].rangeOffset);
-      }
-    }
+    n = ids.size() * sensor.beams.size();
   } else {
-    // Sweep k covers [k·P, (k+1)·P) of the pattern's own clock, which repeats every Q.
-    out.rows = 1;
     const int64_t P = out.periodNs, Q = sensor.patternPeriodNs;
     const int64_t from = int64_t(sweep) * P, to = from + P;
     for (int64_t cycle = from / Q; cycle * Q < to; ++cycle)
-      for (const PatternRay& p : sensor.pattern) {
-        const int64_t g = cycle * Q + p.timeNs;
-        if (g < from || g >= to) continue;
-        rays.push_back(patternRay(p));
-        times.push_back(g - from);
-        rings.push_back(0);
-        columns.push_back(uint32_t(rays.size() - 1));
-        rangeOffsets.push_back(0);
+      for (size_t r = 0; r < sensor.pattern.size(); ++r) {
+        const int64_t g = cycle * Q + sensor.pattern[r].timeNs;
+        if (g >= from && g < to) patternRays.emplace_back(r, g - from);
       }
-    out.columns = int(rays.size());
+    out.rows = 1;
+    out.columns = int(patternRays.size());
+    n = patternRays.size();
   }
+  const size_t beams = spinning ? sensor.beams.size() : 1;
+  auto timeOf = [&](size_t i) {
+    return spinning ? sensor.columnTime(ids[i / beams]) + sensor.beams[i % beams].timeOffsetNs
+                    : patternRays[i].second;
+  };
 
-  // Every firing time inside the trajectory, before any pose is taken.
-  if (!rays.empty()) {
-    const auto [lo, hi] = std::minmax_element(times.begin(), times.end());
-    for (int64_t t : {*lo, *hi})
+  // Every firing time inside the trajectory, before any pose is taken. Times grow along the
+  // firing order except where per-beam offsets reach into the next column: test them all.
+  if (n > 0) {
+    int64_t lo = timeOf(0), hi = lo;
+    for (size_t i = 1; i < n; ++i) {
+      lo = std::min(lo, timeOf(i));
+      hi = std::max(hi, timeOf(i));
+    }
+    for (int64_t t : {lo, hi})
       if (!trajectory.covers(out.sweepStartNs + t))
         throw Error(cat(sensor.name, " sweep ", sweep, ": firing time ",
                         formatTimeNs(out.sweepStartNs + t), " s lies outside the trajectory ",
@@ -149,38 +136,90 @@ LidarRays sweepRays(const LidarSensor& sensor, const Trajectory& trajectory, int
   }
   if (trajectory.covers(out.sweepStartNs))
     out.sweepStartPose = trajectory.at(out.sweepStartNs);
-  else if (!times.empty())
-    out.sweepStartPose = trajectory.at(out.sweepStartNs + times.front());
+  else if (n > 0)
+    out.sweepStartPose = trajectory.at(out.sweepStartNs + timeOf(0));
 
-  const size_t n = rays.size();
+  // One pose per firing time: per column when every beam of a column fires at once.
+  bool perBeam = false;
+  if (spinning)
+    for (const LidarBeam& b : sensor.beams) perBeam = perBeam || b.timeOffsetNs != 0;
+  const size_t raysPerPose = spinning && !perBeam ? beams : 1;
+  const size_t poseCount = n / raysPerPose;
+  out.poses.resize(poseCount);
+  std::vector<glm::dmat3> rotations(poseCount);
+  std::vector<glm::dvec3> translations(poseCount);
+  parallelFor(poseCount, 256, [&](size_t first, size_t last) {
+    for (size_t k = first; k < last; ++k) {
+      out.poses[k] = trajectory.at(out.sweepStartNs + timeOf(k * raysPerPose));
+      const Pose worldFromLidar = out.poses[k] * sensorFromLidar;
+      rotations[k] = glm::mat3_cast(worldFromLidar.rotation);
+      translations[k] = worldFromLidar.translation;
+    }
+  });
+
+  // Each beam's direction and origin at encoder angle 0, once.
+  std::vector<glm::dvec3> beamDirection, beamOrigin;
+  for (const LidarBeam& b : sensor.beams) {
+    beamDirection.push_back(unitDirection(b.azimuthDeg, b.elevationDeg));
+    beamOrigin.push_back(b.origin);
+  }
+
   out.origin.resize(n);
   out.direction.resize(n);
+  out.timeNs.resize(n);
+  out.ring.resize(n);
+  out.column.resize(n);
   out.azimuthDeg.resize(n);
   out.elevationDeg.resize(n);
   out.rangeOffset.resize(n);
   out.tnear.resize(n);
   out.tfar.resize(n);
   out.poseIndex.resize(n);
-  out.timeNs = std::move(times);
-  out.ring = std::move(rings);
-  out.column = std::move(columns);
-  int64_t lastTime = 0;
-  Pose worldFromLidar;
-  for (size_t i = 0; i < n; ++i) {
-    if (i == 0 || out.timeNs[i] != lastTime) {
-      lastTime = out.timeNs[i];
-      out.poses.push_back(trajectory.at(out.sweepStartNs + lastTime));
-      worldFromLidar = out.poses.back() * sensorFromLidar;
+  // Every ray is a pure function of its index: the thread count changes nothing.
+  const size_t unit = spinning ? beams : 1;
+  parallelFor(n / unit, spinning ? 16 : 4096, [&](size_t first, size_t last) {
+    for (size_t u = first; u < last; ++u) {
+      double c = 1, s = 0, columnDeg = 0;
+      if (spinning) {
+        const double turn = sensor.columnAzimuthDeg(ids[u]);
+        c = std::cos(turn * kDeg);
+        s = std::sin(turn * kDeg);
+        columnDeg = wrap360(turn);
+      }
+      for (size_t b = 0; b < unit; ++b) {
+        const size_t i = u * unit + b;
+        const size_t k = i / raysPerPose;
+        glm::dvec3 d, o(0.0);
+        double azimuth, elevation, rangeOffset = 0;
+        if (spinning) {
+          const LidarBeam& beam = sensor.beams[b];
+          d = turned(c, s, beamDirection[b]);
+          o = turned(c, s, beamOrigin[b]);
+          azimuth = columnDeg + beam.azimuthDeg;
+          elevation = beam.elevationDeg;
+          rangeOffset = beam.rangeOffset;
+          out.ring[i] = uint32_t(b);
+          out.column[i] = uint32_t(ids[u]);
+        } else {
+          const PatternRay& p = sensor.pattern[patternRays[i].first];
+          d = unitDirection(p.azimuthDeg, p.elevationDeg);
+          azimuth = p.azimuthDeg;
+          elevation = p.elevationDeg;
+          out.ring[i] = 0;
+          out.column[i] = uint32_t(i);
+        }
+        out.timeNs[i] = timeOf(i);
+        out.poseIndex[i] = uint32_t(k);
+        out.origin[i] = rotations[k] * o + translations[k];
+        out.direction[i] = glm::normalize(rotations[k] * d);
+        out.azimuthDeg[i] = wrapDegrees(azimuth);
+        out.elevationDeg[i] = float(elevation);
+        out.rangeOffset[i] = float(rangeOffset);
+        out.tnear[i] = float(std::max(0.0, sensor.minRange - rangeOffset));
+        out.tfar[i] = float(std::max(0.0, sensor.maxRange - rangeOffset));
+      }
     }
-    out.poseIndex[i] = uint32_t(out.poses.size() - 1);
-    out.origin[i] = worldFromLidar.apply(rays[i].origin);
-    out.direction[i] = glm::normalize(worldFromLidar.applyDirection(rays[i].direction));
-    out.azimuthDeg[i] = wrapDegrees(rays[i].azimuthDeg);
-    out.elevationDeg[i] = float(rays[i].elevationDeg);
-    out.rangeOffset[i] = float(rangeOffsets[i]);
-    out.tnear[i] = float(std::max(0.0, sensor.minRange - rangeOffsets[i]));
-    out.tfar[i] = float(std::max(0.0, sensor.maxRange - rangeOffsets[i]));
-  }
+  });
   return out;
 }
 

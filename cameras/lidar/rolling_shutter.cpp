@@ -86,11 +86,8 @@ class RollingShutterCamera : public Camera {
 
 }  // namespace
 
-std::shared_ptr<const Camera> rollingShutterCamera(std::shared_ptr<const Camera> base,
-                                                   const Trajectory& trajectory,
-                                                   int64_t frameStartNs, double rowReadoutSeconds,
-                                                   int height, const glm::dvec3& renderOrigin) {
-  if (!base) throw Error("rolling shutter: no camera to read out");
+void checkRollingShutter(const Trajectory& trajectory, int64_t frameStartNs,
+                         double rowReadoutSeconds, int height) {
   if (!(rowReadoutSeconds >= 0) || !std::isfinite(rowReadoutSeconds))
     throw Error(cat("--rolling-shutter: the row readout time must be ≥ 0 seconds, not ",
                     rowReadoutSeconds));
@@ -103,6 +100,15 @@ std::shared_ptr<const Camera> rollingShutterCamera(std::shared_ptr<const Camera>
                       " s lies outside the trajectory ", trajectory.source(), " (",
                       formatTimeNs(trajectory.startNs()), " to ", formatTimeNs(trajectory.endNs()),
                       " s)"));
+}
+
+std::shared_ptr<const Camera> rollingShutterCamera(std::shared_ptr<const Camera> base,
+                                                   const Trajectory& trajectory,
+                                                   int64_t frameStartNs, double rowReadoutSeconds,
+                                                   int height, const glm::dvec3& renderOrigin) {
+  if (!base) throw Error("rolling shutter: no camera to read out");
+  checkRollingShutter(trajectory, frameStartNs, rowReadoutSeconds, height);
+  const int64_t rowNs = std::llround(rowReadoutSeconds * 1e9);
   const Pose start = trajectory.at(frameStartNs);
   const Pose startInverse = start.inverse();
   std::vector<RowMotion> rows(static_cast<size_t>(height));

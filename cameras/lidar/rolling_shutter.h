@@ -13,6 +13,11 @@
 
 namespace aperture {
 
+/// Throws Error for a negative or non-finite readout, a non-positive height, or a row time
+/// (frameStartNs + i·rowReadout, i < height) outside `trajectory`, naming the time.
+void checkRollingShutter(const Trajectory& trajectory, int64_t frameStartNs,
+                         double rowReadoutSeconds, int height);
+
 /// `base` read out row by row, `rowReadoutSeconds` (≥ 0) apart, starting at `frameStartNs`
 /// of `trajectory` (whose every row time must lie within it: Error naming the time
 /// otherwise, before any ray). `height` is the image's row count; `renderOrigin` the scene's

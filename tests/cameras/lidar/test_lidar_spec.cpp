@@ -19,17 +19,6 @@ std::string writeSpec(const std::string& name, const std::string& text) {
   return test::writeScratchFile(name, text);
 }
 
-// The message of the Error `f` throws ("" when it throws none).
-template <class F>
-std::string errorOf(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
-
 TEST(LidarSpec, ApertureJsonGivesItsFields) {
   const std::string path = writeSpec("tiny.json", R"({
     "name": "tiny", "sweep_rate_hz": 20, "columns": 8, "spin": "counterclockwise",
@@ -61,38 +50,38 @@ TEST(LidarSpec, ApertureJsonGivesItsFields) {
 TEST(LidarSpec, BadSpecsNameTheFileAndTheField) {
   const std::string wrongLength = writeSpec("wrong.json", R"({"sweep_rate_hz": 10, "columns": 4,
     "beams": {"elevation_deg": [-1, 0, 1], "azimuth_deg": [0, 0]}})");
-  std::string e = errorOf([&] { loadLidar(wrongLength); });
+  std::string e = test::errorOf([&] { loadLidar(wrongLength); });
   EXPECT_NE(e.find(wrongLength), std::string::npos) << e;
   EXPECT_NE(e.find("beams.azimuth_deg"), std::string::npos) << e;
   EXPECT_NE(e.find("2 entries"), std::string::npos) << e;
 
   const std::string missing = writeSpec("missing.json", R"({"columns": 4,
     "beams": {"elevation_deg": [0]}})");
-  e = errorOf([&] { loadLidar(missing); });
+  e = test::errorOf([&] { loadLidar(missing); });
   EXPECT_NE(e.find(missing), std::string::npos) << e;
   EXPECT_NE(e.find("'sweep_rate_hz' is missing"), std::string::npos) << e;
 
   const std::string zeroRate = writeSpec("zero.json", R"({"sweep_rate_hz": 0, "columns": 4,
     "beams": {"elevation_deg": [0]}})");
-  e = errorOf([&] { loadLidar(zeroRate); });
+  e = test::errorOf([&] { loadLidar(zeroRate); });
   EXPECT_NE(e.find("sweep_rate_hz"), std::string::npos) << e;
   EXPECT_NE(e.find(zeroRate), std::string::npos) << e;
 
   const std::string negColumns = writeSpec("neg.json", R"({"sweep_rate_hz": 10, "columns": -4,
     "beams": {"elevation_deg": [0]}})");
-  EXPECT_NE(errorOf([&] { loadLidar(negColumns); }).find("'columns' must be positive"),
+  EXPECT_NE(test::errorOf([&] { loadLidar(negColumns); }).find("'columns' must be positive"),
             std::string::npos);
 
   const std::string typo = writeSpec("typo.json", R"({"sweep_rate_hz": 10, "colums": 4,
     "beams": {"elevation_deg": [0]}})");
-  e = errorOf([&] { loadLidar(typo); });
+  e = test::errorOf([&] { loadLidar(typo); });
   EXPECT_NE(e.find("did you mean 'columns'"), std::string::npos) << e;
 
   const std::string badTime = writeSpec("time.json", R"({"sweep_rate_hz": 10, "columns": 4,
     "column_time_ns": 30000000, "beams": {"elevation_deg": [0]}})");
-  EXPECT_NE(errorOf([&] { loadLidar(badTime); }).find("column_time_ns"), std::string::npos);
+  EXPECT_NE(test::errorOf([&] { loadLidar(badTime); }).find("column_time_ns"), std::string::npos);
 
-  EXPECT_NE(errorOf([&] { loadLidar("no/such/spec.json"); }).find("cannot open"),
+  EXPECT_NE(test::errorOf([&] { loadLidar("no/such/spec.json"); }).find("cannot open"),
             std::string::npos);
 }
 
@@ -184,7 +173,7 @@ TEST(LidarSpec, OusterLegacyMetadataTakesTheSdkDefaults) {
 
   const std::string bad = writeSpec("bad_ouster.json", R"({"lidar_mode": "1024x10",
     "beam_altitude_angles": [2, 1, -1], "beam_azimuth_angles": [0, 0]})");
-  const std::string e = errorOf([&] { loadLidar(bad); });
+  const std::string e = test::errorOf([&] { loadLidar(bad); });
   EXPECT_NE(e.find(bad), std::string::npos) << e;
   EXPECT_NE(e.find("beam_azimuth_angles"), std::string::npos) << e;
 }
@@ -233,7 +222,7 @@ distance_resolution: 0.002
 - {laser_id: 0, rot_correction: 0, vert_correction: 0}
 - {laser_id: 0, rot_correction: 0, vert_correction: 0.1}
 )");
-  const std::string e = errorOf([&] { loadLidar(repeated); });
+  const std::string e = test::errorOf([&] { loadLidar(repeated); });
   EXPECT_NE(e.find("lasers[1].laser_id"), std::string::npos) << e;
 }
 
@@ -268,7 +257,36 @@ TEST(LidarSpec, LivoxCsvGivesTimesAndElevations) {
   EXPECT_EQ(viaSpec.pattern.size(), 3u);
 
   const std::string short_ = writeSpec("short.csv", "t,a,z\n0,1\n");
-  EXPECT_NE(errorOf([&] { loadLidar(short_); }).find("short.csv line 2"), std::string::npos);
+  EXPECT_NE(test::errorOf([&] { loadLidar(short_); }).find("short.csv line 2"), std::string::npos);
+}
+
+TEST(LidarSpec, SpecsStartFromAVendorFileAndOverrideItsFields) {
+  writeSpec("os.json", kOusterNested);
+  const std::string spec = writeSpec("mine.json", R"({"name": "os-fast", "from": "os.json",
+    "sweep_rate_hz": 20, "max_range_m": 40,
+    "beams": {"time_offset_ns": [0, 10, 20, 30]},
+    "sensor_from_lidar": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]})");
+  const LidarSensor s = loadLidar(spec);
+  EXPECT_EQ(s.name, "os-fast");
+  EXPECT_EQ(s.source.path, spec);
+  EXPECT_EQ(s.sweepRateHz, 20);
+  EXPECT_EQ(s.maxRange, 40);
+  EXPECT_EQ(s.columns, 512);               // from the metadata
+  EXPECT_EQ(s.beams[2].azimuthDeg, 1);     // from the metadata, negated
+  EXPECT_EQ(s.beams[3].timeOffsetNs, 30);  // given over it
+  EXPECT_EQ(s.sensorFromLidar, glm::dmat4(1.0));
+
+  const std::string wrongLength = writeSpec("short.json", R"({"from": "os.json",
+    "beams": {"time_offset_ns": [0, 10]}})");
+  std::string e = test::errorOf([&] { loadLidar(wrongLength); });
+  EXPECT_NE(e.find("beams.time_offset_ns"), std::string::npos) << e;
+  EXPECT_NE(e.find("the beam table 4"), std::string::npos) << e;
+
+  const std::string twoBases = writeSpec("two.json", R"({"from": "os.json",
+    "pattern": [[0, 0, 0]]})");
+  EXPECT_NE(test::errorOf([&] { loadLidar(twoBases); }).find("give one of"), std::string::npos);
+  const std::string wrongType = writeSpec("type.json", R"({"from": "os.json", "type": "pattern"})");
+  EXPECT_NE(test::errorOf([&] { loadLidar(wrongType); }).find("'type'"), std::string::npos);
 }
 
 TEST(LidarSpec, PresetsLoadWithTheirBeamCountsAndCiteTheirSources) {
@@ -298,7 +316,7 @@ TEST(LidarSpec, PresetsLoadWithTheirBeamCountsAndCiteTheirSources) {
   for (size_t i = 1; i < os.beams.size(); ++i)
     EXPECT_GT(os.beams[0].elevationDeg, os.beams[i].elevationDeg);
 
-  const std::string e = errorOf([] { loadLidar("VLP16"); });
+  const std::string e = test::errorOf([] { loadLidar("VLP16"); });
   EXPECT_NE(e.find("did you mean 'VLP-16'"), std::string::npos) << e;
 }
 

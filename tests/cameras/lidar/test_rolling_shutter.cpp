@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <functional>
 
 #include "cameras/lidar/rolling_shutter.h"
 #include "cameras/registry/registry.h"
