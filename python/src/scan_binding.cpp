@@ -175,11 +175,10 @@ void bindScan(nb::module_& m) {
                     const std::string&, bool, bool>(),
            nb::arg("meshes"), nb::arg("properties"), nb::arg("robust"), nb::arg("quality"),
            nb::arg("compact"), nb::arg("world_space"))
-      .def(nb::init<const nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig,
-                                      nb::device::cpu>&,
-                    const nb::ndarray<const uint32_t, nb::shape<-1, 3>, nb::c_contig,
-                                      nb::device::cpu>&,
-                    bool, const std::string&, bool, bool>(),
+      .def(nb::init<
+               const nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>&,
+               const nb::ndarray<const uint32_t, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>&,
+               bool, const std::string&, bool, bool>(),
            nb::arg("vertices"), nb::arg("faces"), nb::arg("robust"), nb::arg("quality"),
            nb::arg("compact"), nb::arg("world_space"))
       .def("scan", &PyScanScene::scan, nb::arg("lidar"), nb::arg("trajectory").none(),
