@@ -37,6 +37,9 @@ set(APERTURE_PART_LIBRARIES
   "Imath/: core/exr"
   "OpenImageIO/: core/io"
   "yaml-cpp/: cameras/files cameras/lidar"
+  "tiny_gltf.h: core/mesh"
+  "draco/: core/mesh"
+  "meshoptimizer.h: core/mesh"
 )
 
 # The parts `part` lists.

@@ -3,8 +3,8 @@
 # runs each for SECONDS (default 300), then replays the committed seed corpus
 # (tests/fuzz/corpus/<target>/), the regressions (tests/fuzz/regressions/<target>/) and, for
 # the mesh and job targets, the malformed corpora (tests/data/bad/, tests/data/bad_jobs/) as a
-# regression suite. Targets: ply, obj (mesh loaders), job (batch job parser), cameras (camera
-# files: COLMAP, transforms.json, OpenCV JSON and YAML).
+# regression suite. Targets: ply, obj, gltf (mesh and scene loaders), job (batch job parser),
+# cameras (camera files: COLMAP, transforms.json, OpenCV JSON and YAML).
 #   scripts/fuzz.sh [SECONDS] [TARGET...]      e.g. scripts/fuzz.sh 600 ply
 # New inputs go to build-fuzz/corpus/<target>/, crashes to build-fuzz/crashes/<target>/; a
 # crash makes the script fail (turn it into a file under tests/fuzz/regressions/<target>/).

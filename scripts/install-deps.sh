@@ -8,6 +8,7 @@ pkgs=(
   googletest libgtest-dev libbenchmark-dev
   nlohmann-json3-dev libcli11-dev
   libyaml-cpp-dev  # OpenCV FileStorage YAML camera files
+  libtinygltf-dev libdraco-dev libmeshoptimizer-dev  # glTF 2.0 scenes and their compression
   clang-format  # the Format test enforces .clang-format
   ccache  # scripts/test.sh: its `pip install .` check reuses the objects of the CMake build
   openimageio-tools  # Debian's OpenImageIO CMake config references its binaries

@@ -47,6 +47,21 @@ std::vector<AovRow> fixedRows() {
                &F::shadingNormal,
                "unit interpolated vertex normal (the geometric normal without vertex normals), "
                "world space or `--normal-frame`"),
+      uintRow("instance", kAovInstanceId, "instanceID", &F::instanceId,
+              "the object's instance id (glTF node, OBJ object; `ObjectIds`)"),
+      uintRow("mesh", kAovMeshId, "meshID", &F::meshId, "the object's mesh id (glTF mesh)"),
+      uintRow("material", kAovMaterialId, "materialID", &F::materialId,
+              "the material of the triangle shown (scene-wide id)"),
+      floatRow("barycentric", kAovBarycentric, {"bary.U", "bary.V"}, 0.0, &F::barycentric,
+               "Embree's u, v: the weights of the triangle's 2nd and 3rd vertex (index order)"),
+      floatRow("uv", kAovUv, {"uv.U", "uv.V"}, 0.0, &F::uv,
+               "texture coordinates interpolated (0 on a mesh without them)"),
+      floatRow("vertex-color", kAovVertexColor, {"Cd.R", "Cd.G", "Cd.B", "Cd.A"}, 0.0,
+               &F::vertexColor,
+               "vertex colour interpolated, linear RGBA (1 on a mesh without colours)"),
+      floatRow("albedo", kAovAlbedo, {"albedo.R", "albedo.G", "albedo.B", "albedo.A"}, 0.0,
+               &F::albedo,
+               "unlit base colour × texture × vertex colour, linear RGBA (docs/aovs.md)"),
   };
   auto row = [&](const char* name) -> AovRow& {
     for (AovRow& r : rows)
@@ -61,12 +76,22 @@ std::vector<AovRow> fixedRows() {
   row("color").absentFill = {0, 0, 0, 1};  // an EXR without A is opaque
   row("color").halfInExr = true;
   row("shading-normal").inAll = false;  // asked for by name: it loads the vertex normals
+  // Asked for by name: they read what a scene file's loader keeps only when asked (texture
+  // coordinates, colours, materials, groups), and "all" keeps its outputs.
+  for (const char* name :
+       {"instance", "mesh", "material", "barycentric", "uv", "vertex-color", "albedo"})
+    row(name).inAll = false;
   // Previews show the first of these that was rendered, in table order.
   row("color").preview = PreviewRule::Color;
   row("depth").preview = PreviewRule::Grey;
   row("normal").preview = PreviewRule::Normal;
   row("primid").preview = PreviewRule::HashedId;
   row("geomid").preview = PreviewRule::HashedId;
+  row("instance").preview = PreviewRule::HashedId;
+  row("mesh").preview = PreviewRule::HashedId;
+  row("material").preview = PreviewRule::HashedId;
+  row("albedo").preview = PreviewRule::Color;
+  row("albedo").previewFirst = true;  // asked for, the unlit colours are the picture
   return rows;
 }
 

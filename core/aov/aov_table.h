@@ -14,8 +14,9 @@ namespace aperture {
 
 enum class AovType { Float32, UInt32 };
 
-/// How a preview (core/io/image.h) paints an AOV. A preview shows the first row of the table,
-/// in table order, that has a rule and was rendered.
+/// How a preview (core/io/image.h) paints an AOV. A preview shows the first row of the table
+/// that has a rule and was rendered, the rows with AovRow::previewFirst (albedo) before the
+/// others, each group in table order.
 enum class PreviewRule {
   None,      ///< not previewable
   Color,     ///< RGB over the background by coverage A, sRGB-encoded (4 channels)
@@ -37,6 +38,9 @@ struct AovRow {
   std::vector<double> absentFill;
   bool halfInExr = false;  ///< written as half with ExrOptions::halfColor (--half)
   PreviewRule preview = PreviewRule::None;
+  /// Previews prefer it to the rows without it (albedo before color: asked for, it is what a
+  /// look at the frame wants to see).
+  bool previewFirst = false;
   std::string meaning;  ///< the docs' "frame" column (Markdown)
   /// Its pixels: a member of Framebuffer for the fixed rows (the frame loop stores into them by
   /// name); both null for a registered row, whose pixels are in Framebuffer::registered.

@@ -58,8 +58,8 @@ struct AovSet {
   }
 };
 
-/// Parses "color,depth,normal" (fixed names: color depth distance normal position primid
-/// geomid shading-normal, or "all" for every fixed one) and "face.NAME" / "vertex.NAME".
+/// Parses "color,depth,normal" (fixed names: the rows of aovTable(), or "all" for every row in
+/// "all") and "face.NAME" / "vertex.NAME".
 /// Throws Error naming the bad name, listing the valid ones and suggesting the nearest.
 AovSet parseAovSet(const std::string& list);
 /// parseAovSet for callers that accept fixed AOVs only; a property name is an error.
@@ -87,6 +87,13 @@ struct Framebuffer {
   std::vector<uint32_t> primId;             ///< kInvalidId on a miss
   std::vector<uint32_t> geomId;             ///< kInvalidId on a miss
   std::vector<float> shadingNormal;         ///< 3 per pixel, 0 on a miss
+  std::vector<uint32_t> instanceId;         ///< kInvalidId on a miss
+  std::vector<uint32_t> meshId;             ///< kInvalidId on a miss
+  std::vector<uint32_t> materialId;         ///< kInvalidId on a miss
+  std::vector<float> barycentric;           ///< 2 per pixel (Embree's u, v), 0 on a miss
+  std::vector<float> uv;                    ///< 2 per pixel, 0 on a miss
+  std::vector<float> vertexColor;           ///< 4 per pixel (linear RGBA), 0 on a miss
+  std::vector<float> albedo;                ///< 4 per pixel (linear RGBA), 0 on a miss
   std::vector<PropertyChannel> properties;  ///< in AovSet::properties order
   /// Layered hits, layer-major: value of layer k at pixel p is at [k * pixelCount() + p].
   /// Layer 0 is the first surface (equal to Z, T, primID, geomID). Misses as above.

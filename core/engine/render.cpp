@@ -91,6 +91,73 @@ std::vector<std::vector<const uint32_t*>> propertyTables(const Scene& scene,
   return tables;
 }
 
+/// The surface AOVs of `fb` (instance, mesh, material, barycentric, uv, vertex-color, albedo).
+constexpr AovMask kSurfaceAovs = kAovInstanceId | kAovMeshId | kAovMaterialId | kAovBarycentric |
+                                 kAovUv | kAovVertexColor | kAovAlbedo;
+
+/// Checks, before anything is rendered, that the scene holds what the surface AOVs of `fb`
+/// read, and returns the looks the albedo AOV reads (null without albedo). Throws Error when
+/// uv is asked of a scene where no object's mesh has texture coordinates, vertex-color where
+/// none has colours, and albedo without the scene's looks, with a material an unsupported
+/// extension leaves unknown, with a material id beyond the looks' materials, or with a textured
+/// material on a mesh without texture coordinates. Objects without texture coordinates or
+/// colours where others have them read 0 and (1, 1, 1, 1).
+const SurfaceLooks* surfaceLooksFor(const Scene& scene, const Framebuffer& fb) {
+  const auto anyMesh = [&](auto&& has) {
+    for (size_t object = 0; object < scene.objectCount(); ++object)
+      if (has(scene.objectMesh(unsigned(object)))) return true;
+    return false;
+  };
+  if (fb.has(kAovUv) && !anyMesh([](const Mesh& m) { return !m.texcoords.empty(); }))
+    throw Error(
+        "AOV 'uv': no mesh of the scene has texture coordinates (glTF TEXCOORD_0, OBJ vt; "
+        "loaded only when asked: LoadOptions::texcoords)");
+  if (fb.has(kAovVertexColor) && !anyMesh([](const Mesh& m) { return !m.vertexColors.empty(); }))
+    throw Error(
+        "AOV 'vertex-color': no mesh of the scene has vertex colours (glTF COLOR_0; loaded only "
+        "when asked: LoadOptions::vertexColors)");
+  if (!fb.has(kAovAlbedo)) return nullptr;
+  const SurfaceLooks* looks = scene.looks();
+  if (!looks)
+    throw Error(
+        "AOV 'albedo': the scene has no materials (a glTF or OBJ scene file gives them; "
+        "Scene::setLooks)");
+  const std::vector<Material>& materials = looks->materials;
+  for (size_t m = 0; m < materials.size(); ++m) {
+    if (!materials[m].unsupported.empty())
+      throw Error(cat("AOV 'albedo': material '", materials[m].name, "' (", m,
+                      ") needs the extension ", materials[m].unsupported,
+                      ", which aperture does not support, so its base colour is unknown"));
+    if (materials[m].baseColorTexture >= 0 && !looks->textures)
+      throw Error(cat("AOV 'albedo': material '", materials[m].name, "' (", m,
+                      ") has a texture, but the scene's looks have no texture sampler"));
+  }
+  // Each mesh once per material base: the materials its triangles use.
+  std::vector<std::pair<const Mesh*, uint32_t>> seen;
+  for (size_t object = 0; object < scene.objectCount(); ++object) {
+    const Mesh& mesh = scene.objectMesh(unsigned(object));
+    const uint32_t base = scene.objectIds(unsigned(object)).materialBase;
+    if (std::find(seen.begin(), seen.end(), std::pair(&mesh, base)) != seen.end()) continue;
+    seen.emplace_back(&mesh, base);
+    std::vector<bool> used(materials.size(), false);
+    const auto use = [&](uint32_t local) {
+      const uint64_t id = uint64_t(base) + local;
+      if (id >= materials.size())
+        throw Error(cat("AOV 'albedo': mesh '", mesh.name, "' (object ", object, ") uses material ",
+                        id, ", but the scene has ", materials.size(), " materials"));
+      if (used[size_t(id)]) return;
+      used[size_t(id)] = true;
+      if (materials[size_t(id)].baseColorTexture >= 0 && mesh.texcoords.empty())
+        throw Error(cat("AOV 'albedo': mesh '", mesh.name, "' (object ", object,
+                        ") has no texture coordinates, but its material '",
+                        materials[size_t(id)].name, "' (", id, ") has a texture"));
+    };
+    if (mesh.faceMaterials.empty()) use(0);
+    for (uint32_t local : mesh.faceMaterials) use(local);
+  }
+  return looks;
+}
+
 /// The box the frame loop's scene-box test uses for `camera`: the scene's, or null when the
 /// test is off (RenderSettings::sceneBoxTest), the scene has no box, or every ray of the
 /// camera starts inside the box at tnear 0 (Camera::sharedRayOrigin), so none can miss it.
@@ -170,8 +237,11 @@ struct ImagePlan {
   glm::dvec3 origin;              // world position of the render-space origin
   bool color, depth, distance, normal, position, primId, geomId;
   bool shadingNormal;
-  bool rotateNormals;        // normalFrame is not World: normals go through frameFromWorld
-  glm::mat3 frameFromWorld;  // normalFrameFromWorld(settings.normalFrame, camera)
+  bool instanceId, meshId, materialId, barycentric, uv, vertexColor, albedo;
+  bool surface;               // any of the seven above (kSurfaceAovs)
+  const SurfaceLooks* looks;  // the albedo AOV's materials and textures (surfaceLooksFor)
+  bool rotateNormals;         // normalFrame is not World: normals go through frameFromWorld
+  glm::mat3 frameFromWorld;   // normalFrameFromWorld(settings.normalFrame, camera)
   /// Per requested property (fb.properties order), per object: the mesh's values.
   std::vector<std::vector<const uint32_t*>> propertyValues;
   /// Anything of the mesh data pass (storeMeshDataLane): decided once, so a frame without
@@ -225,15 +295,24 @@ ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSet
       primId(fb_.has(kAovPrimId)),
       geomId(fb_.has(kAovGeomId)),
       shadingNormal(fb_.has(kAovShadingNormal)),
+      instanceId(fb_.has(kAovInstanceId)),
+      meshId(fb_.has(kAovMeshId)),
+      materialId(fb_.has(kAovMaterialId)),
+      barycentric(fb_.has(kAovBarycentric)),
+      uv(fb_.has(kAovUv)),
+      vertexColor(fb_.has(kAovVertexColor)),
+      albedo(fb_.has(kAovAlbedo)),
+      surface((fb_.aovs & kSurfaceAovs) != 0),
+      looks(surfaceLooksFor(scene_, fb_)),
       rotateNormals(settings_.normalFrame != NormalFrame::World),
       frameFromWorld(normalFrameFromWorld(settings_.normalFrame, description)),
       propertyValues(propertyTables(scene_, fb_)),
-      meshData(shadingNormal || !fb_.properties.empty() || (normal && rotateNormals)),
+      meshData(shadingNormal || !fb_.properties.empty() || (normal && rotateNormals) || surface),
       layers(fb_.layers > 0
                  ? std::optional<LayerPlan>(std::in_place, scene_, camera_, fb_, eye, axis)
                  : std::nullopt),
       anyGeometry(depth || distance || normal || position || primId || geomId || shadingNormal ||
-                  !fb_.properties.empty() || layers),
+                  surface || !fb_.properties.empty() || layers),
       instanced(scene_.instanceCount() > 0),
       remapPrimIds(scene_.remapsPrimIds()),
       coverage(coverageFor(scene_, camera_, settings_)),
@@ -596,8 +675,53 @@ inline glm::vec3 unitOr(const glm::vec3& n, const glm::vec3& fallback) {
   return len2 > 0.0f ? n / std::sqrt(len2) : fallback;
 }
 
+/// `n` values per vertex of `data` at the triangle's `corner`s weighted by `w`, into `out`.
+template <int kN>
+inline void interpolateCorners(const float* data, const uint32_t* corner, const float (&w)[3],
+                               float* out) {
+  for (int a = 0; a < kN; ++a)
+    out[a] = w[0] * data[kN * size_t(corner[0]) + size_t(a)] +
+             w[1] * data[kN * size_t(corner[1]) + size_t(a)] +
+             w[2] * data[kN * size_t(corner[2]) + size_t(a)];
+}
+
+/// Stores the surface AOVs (kSurfaceAovs) of a hit on triangle `prim` of object `object`
+/// (barycentrics u, v) at pixel px: the ids, Embree's u, v, and the texture coordinates,
+/// vertex colour and albedo interpolated with (1 − u − v, u, v) over the corners in
+/// index-buffer order. Albedo = base colour × texture at the uv (when the material has one) ×
+/// vertex colour (when the mesh has colours).
+inline void storeSurfaceLane(const ImagePlan& plan, unsigned object, uint32_t prim,
+                             const Mesh& mesh, const uint32_t* corner, float u, float v,
+                             size_t px) {
+  Framebuffer& fb = plan.fb;
+  const ObjectIds& ids = plan.scene.objectIds(object);
+  if (plan.instanceId)
+    fb.instanceId[px] = ids.instance + (mesh.faceGroups.empty() ? 0u : mesh.faceGroups[prim]);
+  if (plan.meshId) fb.meshId[px] = ids.mesh;
+  const uint32_t material =
+      ids.materialBase + (mesh.faceMaterials.empty() ? 0u : mesh.faceMaterials[prim]);
+  if (plan.materialId) fb.materialId[px] = material;
+  if (plan.barycentric) fb.barycentric[2 * px] = u, fb.barycentric[2 * px + 1] = v;
+  if (!plan.uv && !plan.vertexColor && !plan.albedo) return;
+  const float w[3] = {1.0f - u - v, u, v};
+  float st[2] = {0.0f, 0.0f}, cd[4] = {1.0f, 1.0f, 1.0f, 1.0f};
+  if (!mesh.texcoords.empty()) interpolateCorners<2>(mesh.texcoords.data(), corner, w, st);
+  if (!mesh.vertexColors.empty()) interpolateCorners<4>(mesh.vertexColors.data(), corner, w, cd);
+  if (plan.uv) fb.uv[2 * px] = st[0], fb.uv[2 * px + 1] = st[1];
+  if (plan.vertexColor)
+    for (int c = 0; c < 4; ++c) fb.vertexColor[4 * px + size_t(c)] = cd[c];
+  if (plan.albedo) {
+    const Material& m = plan.looks->materials[material];
+    glm::vec4 a = m.baseColor * glm::vec4(cd[0], cd[1], cd[2], cd[3]);
+    if (m.baseColorTexture >= 0)
+      a *= plan.looks->textures->sample(m.baseColorTexture, st[0], st[1]);
+    for (int c = 0; c < 4; ++c) fb.albedo[4 * px + size_t(c)] = a[c];
+  }
+}
+
 /// Stores the AOVs read from the hit mesh's data for hit lane k at pixel px: the shading
-/// normal, the property channels, and the normal (and shading normal) in the plan's frame.
+/// normal, the property channels, the surface AOVs (storeSurfaceLane), and the normal (and
+/// shading normal) in the plan's frame.
 /// Shading normal: the triangle's vertex normals interpolated with Embree's u, v, through the
 /// instance's normal matrix, normalised; the geometric normal for a mesh without vertex
 /// normals (or where the interpolated normal vanishes).
@@ -639,6 +763,7 @@ void storeMeshDataLane(const ImagePlan& plan, const PacketState<N>& st, const Pa
                                       ? values[prim]
                                       : values[corner[nearestCorner(u, v)]];
   }
+  if (plan.surface) storeSurfaceLane(plan, object, prim, mesh, corner, u, v, px);
 }
 
 /// Stores the mesh data AOVs (storeMeshDataLane) of every hit lane of the packet of `req`.

@@ -177,16 +177,27 @@ AovMask previewableAovMask() {
   return mask;
 }
 
+namespace {
+/// The previewable rows in order of preference: AovRow::previewFirst ones, then the others,
+/// each in table order.
+std::vector<const AovRow*> previewRows() {
+  std::vector<const AovRow*> rows;
+  for (bool first : {true, false})
+    for (const AovRow& row : aovTable())
+      if (row.preview != PreviewRule::None && row.previewFirst == first) rows.push_back(&row);
+  return rows;
+}
+}  // namespace
+
 Aov previewAov(AovMask aovs) {
-  for (const AovRow& row : aovTable())
-    if (row.preview != PreviewRule::None && (aovs & row.bit) != 0) return Aov(row.bit);
+  for (const AovRow* row : previewRows())
+    if ((aovs & row->bit) != 0) return Aov(row->bit);
   return Aov(0);
 }
 
 std::string previewableAovText() {
   std::vector<std::string> names;
-  for (const AovRow& row : aovTable())
-    if (row.preview != PreviewRule::None) names.push_back(row.name);
+  for (const AovRow* row : previewRows()) names.push_back(row->name);
   std::string text = names.empty() ? "" : names.front();
   for (size_t k = 1; k < names.size(); ++k)
     text += (k == 1 ? ", else " : k + 1 == names.size() ? " or " : ", ") + names[k];

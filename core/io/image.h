@@ -24,15 +24,17 @@ struct PreviewOptions {
 inline constexpr std::array<uint8_t, 3> kPreviewBackground = {38, 50, 72};
 
 /// The AOVs a preview can show: the rows of the AOV table with a PreviewRule
-/// (core/aov/aov_table.h), in order of preference: color, depth, normal, primID, geomID.
+/// (core/aov/aov_table.h), in order of preference: albedo, color, depth, normal, primid,
+/// geomid, instance, mesh, material (previewableAovText).
 AovMask previewableAovMask();
 
 /// The requested AOVs a preview could show (`aovs & previewableAovMask()`); 0 means a preview
 /// of such a framebuffer cannot be written, which callers check before rendering.
 inline AovMask previewableAovs(AovMask aovs) { return aovs & previewableAovMask(); }
 
-/// The one AOV a preview of a framebuffer with `aovs` shows: the first previewable AOV in table
-/// order, or 0 when there is none.
+/// The one AOV a preview of a framebuffer with `aovs` shows: the first previewable AOV in order
+/// of preference (AovRow::previewFirst rows, then the others, in table order), or 0 when there
+/// is none.
 Aov previewAov(AovMask aovs);
 
 /// "color, else depth, normal, primid or geomid": the previewable AOVs in order, for help texts.

@@ -5,6 +5,8 @@
 // OpenImageIO brings 261 shared libraries (DICOM, HEIF, OpenCV, FFmpeg, ...); linked into the
 // program they cost every process 0.22 s and 130 MB before main(), so `aperture --version`, a
 // render to EXR and `import aperture` would pay for codecs they never call.
+#include <cstddef>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -41,6 +43,29 @@ struct SampleDifference {
   double rms = 0, max = 0, mean = 0;
 };
 
+/// How a texture repeats outside [0, 1] (OpenImageIO's periodic, clamp and mirror wraps).
+enum class TextureWrapMode { Periodic, Clamp, Mirror };
+
+/// A texture to open for sampling: a file, or an encoded image in memory.
+struct TextureToOpen {
+  std::string path;                      ///< the file; empty for an image in memory
+  const unsigned char* bytes = nullptr;  ///< the encoded image in memory (PNG, JPEG, ...)
+  size_t size = 0;
+  std::string extension;  ///< the in-memory image's format as an extension (".png"), a hint
+  TextureWrapMode wrapS = TextureWrapMode::Periodic, wrapT = TextureWrapMode::Periodic;
+  bool nearest = false;  ///< closest texel; else bilinear
+  bool srgb = true;      ///< colour samples sRGB-encoded: decoded to linear before filtering
+};
+
+/// Opened textures. `sample` is safe from any number of threads at once.
+class TextureSet {
+ public:
+  virtual ~TextureSet() = default;
+  /// Linear RGBA of texture `texture` at (s, t), (0, 0) the image's top-left corner; nothing
+  /// but (0, 0, 0, 0) for an index out of range.
+  virtual void sample(int texture, float s, float t, float rgba[4]) const = 0;
+};
+
 /// What aperture asks of OpenImageIO. Every call reports failure by returning false with
 /// `error` set (no exception crosses the plugin boundary).
 class ImageCodec {
@@ -60,11 +85,16 @@ class ImageCodec {
   /// Compares two float images of width x height pixels of `channels` samples.
   virtual bool compare(int width, int height, int channels, const float* a, const float* b,
                        SampleDifference& difference, std::string& error) const = 0;
+  /// Decodes `textures` (all of them, now) for sampling through OpenImageIO's TextureSystem.
+  /// On failure, `failed` is the index of the texture that did not open.
+  virtual bool openTextures(const std::vector<TextureToOpen>& textures,
+                            std::unique_ptr<TextureSet>& opened, size_t& failed,
+                            std::string& error) const = 0;
 };
 
 /// The plugin's entry point, extern "C" in libaperture_oiio.so (declared below the
 /// namespace); the version in its name changes with any change to ImageCodec.
-#define APERTURE_IMAGE_CODEC_ENTRY aperture_image_codec_v2
+#define APERTURE_IMAGE_CODEC_ENTRY aperture_image_codec_v3
 #define APERTURE_IMAGE_CODEC_NAME_OF(entry) #entry
 #define APERTURE_IMAGE_CODEC_NAME(entry) APERTURE_IMAGE_CODEC_NAME_OF(entry)
 inline constexpr const char* kImageCodecEntry =

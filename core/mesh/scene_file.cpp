@@ -58,12 +58,6 @@ SceneFile loadSceneFile(const std::string& spec, const LoadOptions& options) {
   return singleMeshFile(spec, options);
 }
 
-// Placeholders until the glTF scene loader lands (issue 41). loadObjScene: core/mesh/obj.cpp.
-SceneFile loadGltf(const std::string& path, const LoadOptions&) {
-  throw Error(cat(path, ": glTF is not supported yet"));
-}
-SceneFile loadGltfFromMemory(const char*, size_t, const std::string& name, const LoadOptions&) {
-  throw Error(cat(name, ": glTF is not supported yet"));
-}
+// loadGltf and loadGltfFromMemory: core/mesh/gltf.cpp. loadObjScene: core/mesh/obj.cpp.
 
 }  // namespace aperture

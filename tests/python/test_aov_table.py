@@ -20,8 +20,13 @@ def expected_shape(row: dict, frames: int | None) -> tuple[int, ...]:
     return shape if frames is None else (frames, *shape)
 
 
+# Rows that read what a procedural mesh does not have (texture coordinates, colours,
+# materials): refused on SCENE, before rendering (docs/aovs.md, "Surface AOVs").
+NEED_SCENE_DATA = {"uv": "texture coordinates", "vertex-color": "vertex colours", "albedo": "no materials"}
+
+
 def test_every_row_has_its_dtype_shape_and_miss() -> None:
-    rows = _aperture._aov_table()
+    rows = [r for r in _aperture._aov_table() if r["name"] not in NEED_SCENE_DATA]
     assert [r["name"] for r in rows][:3] == ["color", "depth", "distance"]
     names = [r["name"] for r in rows]
     for frames, cameras in ((None, CAMERA), (2, [CAMERA, CAMERA])):
@@ -35,8 +40,20 @@ def test_every_row_has_its_dtype_shape_and_miss() -> None:
             assert np.all(corner == np.array(row["miss"], dtype=a.dtype)), row["name"]
 
 
+def test_surface_rows_on_a_plain_mesh() -> None:
+    out = SCENE.render(CAMERA, aovs="instance,mesh,material,barycentric")
+    # One object with default ids: 0 where the sphere is hit.
+    for name in ("instance", "mesh", "material"):
+        assert out[name].dtype == np.uint32 and out[name][5, 6] == 0, name
+    bary = out["barycentric"][5, 6]
+    assert bary.shape == (2,) and bary.min() >= 0 and bary.sum() <= 1
+    for name, message in NEED_SCENE_DATA.items():
+        with pytest.raises(ValueError, match=message):
+            SCENE.render(CAMERA, aovs=name)
+
+
 def test_a_registered_row_appears_in_the_arrays(tmp_path) -> None:
-    with _aperture._AovRegistration("test-uv", ["uv.U", "uv.V"], "float32", -1.0):
+    with _aperture._AovRegistration("test-uv", ["tuv.U", "tuv.V"], "float32", -1.0):
         row = next(r for r in _aperture._aov_table() if r["name"] == "test-uv")
         assert row["channels"] == 2 and row["dtype"] == "float32"
         out = SCENE.render([CAMERA, CAMERA, CAMERA], aovs="depth,test-uv")

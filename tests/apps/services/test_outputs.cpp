@@ -114,7 +114,8 @@ TEST(Outputs, PreviewRangesAndPreviewableAovs) {
   const std::string message =
       errorOf([] { checkPreviewable("--preview", "p.png", kAovPosition | kAovDistance); });
   EXPECT_NE(message.find("--preview: 'p.png': none of the AOVs distance,position can be "
-                         "previewed (previewable: color,depth,normal,primid,geomid)"),
+                         "previewed (previewable: color,depth,normal,primid,geomid,instance,mesh,"
+                         "material,albedo)"),
             std::string::npos)
       << message;
   EXPECT_EQ(errorOf([] { checkPreviewable("--preview", "p.png", kAovPosition | kAovGeomId); }), "");

@@ -21,6 +21,9 @@ using namespace aperture;
 
 namespace {
 
+/// The rows of the Aov enum (core/aov/framebuffer.h): color .. albedo.
+constexpr size_t kFixedAovRows = 15;
+
 TEST(AovTable, DocsHoldTheGeneratedTable) {
   const std::string table = aovMarkdownTable();
   for (const char* file : {"/../docs/aovs.md", "/../README.md"}) {
@@ -33,15 +36,16 @@ TEST(AovTable, DocsHoldTheGeneratedTable) {
 
 TEST(AovTable, FixedRowsAreTheEnumBitsInOrder) {
   const std::vector<AovRow>& rows = aovTable();
-  ASSERT_GE(rows.size(), 8u);
+  ASSERT_GE(rows.size(), kFixedAovRows);
   AovMask seen = 0;
-  for (size_t k = 0; k < 8; ++k) {
+  for (size_t k = 0; k < kFixedAovRows; ++k) {
     EXPECT_EQ(rows[k].bit, AovMask(1u << k)) << rows[k].name;
     EXPECT_TRUE(rows[k].f32 || rows[k].u32) << rows[k].name << " has no framebuffer member";
     EXPECT_EQ(rows[k].f32 != nullptr, rows[k].isFloat()) << rows[k].name;
     seen |= rows[k].bit;
   }
-  EXPECT_EQ(seen, AovMask(0xff));
+  EXPECT_EQ(seen, AovMask((1u << kFixedAovRows) - 1));
+  EXPECT_EQ(rows[kFixedAovRows - 1].bit, AovMask(kAovAlbedo)) << "the last enum bit";
 }
 
 // The layered hits are the columns of the four rows the layer tracer fills, as docs/layers.md
@@ -66,13 +70,13 @@ TEST(AovTable, LayeredRowsGiveTheHitChannels) {
   EXPECT_EQ(framebufferBytesPerPixel(set), 12u + 2u * 16u);
 }
 
-/// A test-only AOV: two float channels "uv.U", "uv.V", -1 on a miss.
+/// A test-only AOV: two float channels "tuv.U", "tuv.V", -1 on a miss.
 AovRow uvRow() {
   AovRow row;
   row.name = "test-uv";
   row.inAll = false;
   row.type = AovType::Float32;
-  row.exrChannels = {"uv.U", "uv.V"};
+  row.exrChannels = {"tuv.U", "tuv.V"};
   row.miss = -1.0;
   return row;
 }
@@ -88,7 +92,7 @@ TEST(AovTable, ARegisteredRowIsAllocatedParsedAndListed) {
   const AovRegistration registration(uvRow());
   const AovRow& row = *findAovRow("test-uv");
   EXPECT_EQ(row.bit, registration.bit());
-  EXPECT_EQ(registration.bit(), AovMask(1u << 8)) << "the lowest bit no fixed row uses";
+  EXPECT_EQ(registration.bit(), AovMask(1u << kFixedAovRows)) << "the lowest bit no fixed row uses";
 
   const AovSet set = parseAovSet("depth,test-uv");
   EXPECT_EQ(set.mask, AovMask(kAovDepth) | registration.bit());
@@ -108,7 +112,7 @@ TEST(AovTable, ARegisteredRowIsAllocatedParsedAndListed) {
   EXPECT_EQ(view.f32, floatPixels(fb, row).data());
   EXPECT_EQ(view.u32, nullptr);
   EXPECT_EQ(framebufferBytesPerPixel(set), 4u + 8u);
-  EXPECT_EQ(exrChannelNames(set, {}), (std::vector<std::string>{"Z", "uv.U", "uv.V"}));
+  EXPECT_EQ(exrChannelNames(set, {}), (std::vector<std::string>{"Z", "tuv.U", "tuv.V"}));
 }
 
 TEST(AovTable, ARegisteredRowRoundTripsThroughTheExrWriterAndReader) {
@@ -122,7 +126,7 @@ TEST(AovTable, ARegisteredRowRoundTripsThroughTheExrWriterAndReader) {
     written = floatPixels(fb, row);
     writeExr(path, fb, ExrMetadata{});
     const std::vector<std::string> channels = readExrHeader(path).channels;
-    EXPECT_EQ(channels, (std::vector<std::string>{"Z", "uv.U", "uv.V"}));
+    EXPECT_EQ(channels, (std::vector<std::string>{"Z", "tuv.U", "tuv.V"}));
 
     const Framebuffer back = readExr(path);
     EXPECT_EQ(back.aovs, fb.aovs);
@@ -179,9 +183,9 @@ TEST(AovTable, RegistrationRefusesTakenNamesAndChannels) {
   taken.name = "depth";
   EXPECT_NE(test::errorOf([&] { AovRegistration r(taken); }).find("already"), std::string::npos);
   AovRow channel = uvRow();
-  channel.exrChannels = {"uv.U", "N.X"};
+  channel.exrChannels = {"tuv.U", "N.X"};
   EXPECT_NE(test::errorOf([&] { AovRegistration r(channel); }).find("'N.X'"), std::string::npos);
-  EXPECT_EQ(aovTable().size(), 8u) << "a refused row is not left in the table";
+  EXPECT_EQ(aovTable().size(), kFixedAovRows) << "a refused row is not left in the table";
 }
 
 }  // namespace

@@ -271,7 +271,8 @@ TEST(Preview, FormatsAreOneList) {
   const std::string batch = test::readFile(std::string(APERTURE_TESTS_DIR) + "/../docs/batch.md");
   EXPECT_NE(batch.find("showing " + previewableAovText()), std::string::npos)
       << "docs/batch.md lacks 'showing " << previewableAovText() << "'";
-  EXPECT_EQ(previewableAovText(), "color, else depth, normal, primid or geomid");
+  EXPECT_EQ(previewableAovText(),
+            "albedo, else color, depth, normal, primid, geomid, instance, mesh or material");
   const std::string dir = test::scratchDir();
   for (const char* bad : {"/p.gif", "/p.exr", "/p"}) {
     const std::string error =
