@@ -12,6 +12,7 @@ set(APERTURE_PARTS
   "core/queries: core/engine"                        # rays and face visibility beside the frame loop
   "core/io: core/engine"                             # image, NumPy and PLY files, atomic writes
   "core/exr: core/io"                                # EXR files and their headers
+  "core/points: core/exr"                            # point clouds, range images, their writers
   "cameras/schema: core/util"                        # camera parameters, their specs, conventions
   "cameras/lenses: core/util"                        # calibrated lens models and their inverse
   "cameras/files: cameras/lenses core/io"            # COLMAP, NeRF, OpenCV camera files; points
@@ -19,7 +20,7 @@ set(APERTURE_PARTS
   "cameras/models: cameras/schema cameras/lenses cameras/geometry"  # the camera models
   "cameras/registry: cameras/models"                 # the list of models; describe, culling
   "cameras/lidar: cameras/geometry core/queries"     # LiDAR sensors, trajectories, rolling shutter
-  "apps/services: cameras/registry cameras/files cameras/lidar core/exr core/queries"  # scene set-up, one view, outputs
+  "apps/services: cameras/registry cameras/files cameras/lidar core/points core/queries"  # scene set-up, one view, outputs, scans
   "apps/jobs: apps/services"                         # job files
   "apps/batch: apps/jobs"                            # batches: writers, resume, shards, summaries
   "bench/measure: apps/services"                     # scaling, trade-off study, the bare-Embree baseline

@@ -13,3 +13,11 @@ if ! .venv/bin/python -c 'import nanobind, scikit_build_core, numpy, pytest, pyc
   .venv/bin/python -m pip install -q --disable-pip-version-check nanobind scikit-build-core numpy pytest \
     'pycolmap>=4.2' trimesh
 fi
+# The LiDAR formats' own readers (tests/python/test_scan_formats.py): laspy, pypcd4 and
+# ouster-sdk. ouster-sdk pins nanobind 2.9.2 among its requirements although its wheel carries
+# its own compiled bindings, so the nanobind the module is built with is put back after it.
+if ! .venv/bin/python -c 'import laspy, pypcd4, ouster.sdk' 2>/dev/null; then
+  nanobind_version=$(.venv/bin/python -c 'import nanobind; print(nanobind.__version__)')
+  .venv/bin/python -m pip install -q --disable-pip-version-check laspy pypcd4 ouster-sdk
+  .venv/bin/python -m pip install -q --disable-pip-version-check "nanobind==${nanobind_version}"
+fi

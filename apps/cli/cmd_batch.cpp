@@ -468,6 +468,9 @@ void renderScenes(BatchPlan& plan, const BatchArgs& a, const Device& device, Bat
     }
     recordLoadedScene(report, *s.loaded);
     run.renderSeconds += renderBatchImages(plan, images, *s.loaded, a, run.threads, progress);
+    // The job's LiDAR sensors scan the same scene once its images are rendered.
+    for (const JobLidar& lidar : plan.jobs.scenes[images.scene].lidars)
+      writeScans(*s.loaded->scene, lidar.request, lidar.prepared, device.isaName(), run.threads);
   };
   pipelineScenes(pending.size(), load, render);
   run.elapsedSeconds = start ? secondsSince(*start) : 0;

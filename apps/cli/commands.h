@@ -13,5 +13,6 @@ Command addCameraCommand(CLI::App& app);
 Command addBatchCommand(CLI::App& app);
 Command addTradeoffCommand(CLI::App& app);
 Command addVisibilityCommand(CLI::App& app);
+Command addScanCommand(CLI::App& app);
 
 }  // namespace aperture::app

@@ -36,8 +36,9 @@ using Commands = std::vector<std::pair<CLI::App*, aperture::app::Command>>;
 Commands addCommands(CLI::App& app) {
   using namespace aperture::app;
   Commands commands;
-  for (Command (*make)(CLI::App&) : {addRenderCommand, addBenchCommand, addBatchCommand,
-                                     addCameraCommand, addTradeoffCommand, addVisibilityCommand}) {
+  for (Command (*make)(CLI::App&) :
+       {addRenderCommand, addBenchCommand, addBatchCommand, addCameraCommand, addTradeoffCommand,
+        addVisibilityCommand, addScanCommand}) {
     const size_t before = app.get_subcommands({}).size();
     Command run = make(app);
     commands.emplace_back(app.get_subcommands({})[before], std::move(run));

@@ -573,7 +573,7 @@ const std::vector<std::string>& jobKeys() {
       "scene",        "cameras",   "aovs",        "size",    "spp",
       "output",       "outputs",   "depth_scale", "preview", "preview_range",
       "compression",  "half",      "performance", "preset",  "camera_files",
-      "normal_frame", "id_counts", "layers",      "deep"};
+      "normal_frame", "id_counts", "layers",      "deep",    "lidars"};
   return keys;
 }
 
@@ -607,6 +607,7 @@ Job parseJobJson(const json& root, const std::string& name, const std::string& b
   job.cameraFiles = top.boolean("camera_files", top.required("cameras").is_object());
   readMeshDataKeys(top, job);
   checkOutputs(top, baseDir, job);
+  job.lidars = readJobLidars(top, baseDir);
   return job;
 }
 

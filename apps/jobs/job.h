@@ -1,6 +1,7 @@
 #pragma once
 // Batch job files: a JSON description of one scene and many camera views, or of several such
 // scenes sharing their settings ("scenes", docs/batch.md).
+#include <algorithm>
 #include <cstddef>
 #include <glm/glm.hpp>
 #include <optional>
@@ -9,6 +10,7 @@
 
 #include "apps/jobs/camera_paths.h"
 #include "apps/jobs/job_camera.h"
+#include "apps/jobs/job_lidar.h"
 #include "apps/services/scene_setup.h"
 #include "apps/services/view.h"
 #include "cameras/schema/params.h"
@@ -71,8 +73,14 @@ struct Job {
     spec.build = build;
     spec.cull = cull;
     spec.gltfScene = gltfScene;
-    return withAovNeeds(spec, aovs);
+    spec = withAovNeeds(spec, aovs);
+    for (const PropertyAov& p : lidarProperties(lidars))
+      if (std::find(spec.properties.begin(), spec.properties.end(), p) == spec.properties.end())
+        spec.properties.push_back(p);
+    return spec;
   }
+  /// "lidars": LiDAR sensors scanned through the job's scene after its images (job_lidar.h).
+  std::vector<JobLidar> lidars;
   /// "id_counts": summary.json reports per image the pixel count of each id of the property
   /// AOVs and geomid (batchIdCounts).
   bool idCounts = false;

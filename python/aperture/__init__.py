@@ -27,6 +27,8 @@ from ._aperture import (
     Camera,
     __version__,
     _Scene,
+    _ScanScene,
+    _is_standard_scan_field,
     _write,
     camera_parameters,
     camera_types,
@@ -156,6 +158,7 @@ class Scene:
             v, f = _mesh_arrays(vertices, faces)
             self._scene = _Scene._from_arrays(v, f, name="arrays", **options)
             self._arrays = (v, f)
+            self._scan_source = ("arrays", options)
             return
         if path is None:
             paths: list[str] = []
@@ -164,6 +167,7 @@ class Scene:
         else:
             paths = [os.fspath(p) for p in path]
         self._scene = _Scene._from_paths(paths, aovs=_aov_list(aovs), gltf_scene=gltf_scene, **options)
+        self._scan_source = (paths, options)
 
     @property
     def bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
@@ -295,6 +299,68 @@ class Scene:
         if p.ndim != 2 or p.shape[1] != 3:
             raise ValueError(f"point_visibility: points must have shape (N, 3), not {p.shape}")
         return self._scene._point_visibility(p, _camera_list(cameras), tol, threads)
+
+    def scan(
+        self,
+        lidar: str | os.PathLike[str],
+        trajectory: str | os.PathLike[str] | None = None,
+        sweeps: int = 1,
+        fields: Iterable[str] | None = None,
+        *,
+        trajectory_times: str | os.PathLike[str] | None = None,
+        start: float | None = None,
+        frame: str = "sensor",
+        returns: str = "first",
+        surfaces: int = 4,
+        noise_sigma: float = 0.0,
+        dropout: float = 0.0,
+        seed: int = 0,
+        threads: int = 0,
+    ) -> dict[str, np.ndarray]:
+        """LiDAR sweeps of the scene (``aperture scan``; docs/lidar.md): ``lidar`` a sensor spec
+        (aperture JSON, Ouster metadata JSON, Velodyne YAML, Livox CSV) or a preset name,
+        ``trajectory`` TUM or KITTI poses (with ``trajectory_times``; None: a static sensor at
+        the origin). Returns a dict of 1-D NumPy arrays, one per field, the hits of every
+        sweep in firing order: x y z (in ``frame``: sensor, world, sweep-start), range (m),
+        time (ns from the sweep's start), ring, column, azimuth (rad), incidence, intensity,
+        primid, geomid, instance, return_number and returns (``returns="all"``), the face
+        properties named in ``fields``, and sweep. ``fields`` keeps only the named ones (a name
+        that is no standard field is a face property of the mesh, loaded for the scan).
+        The scan traces a BVH of its own, built at the first scan that asks for these face
+        properties. The GIL is released while it loads and traces."""
+        wanted = None if fields is None else [str(f) for f in fields]
+        properties = sorted({f for f in (wanted or []) if not _is_standard_scan_field(f)})
+        cache = self.__dict__.setdefault("_scan_scenes", {})
+        key = tuple(properties)
+        if key not in cache:
+            source, options = self._scan_source
+            scan_options = {k: v for k, v in options.items() if k != "bvh_chunk"}
+            if source == "arrays":
+                if properties:
+                    raise ValueError(f"Scene.scan: a scene of arrays has no face properties {properties}")
+                v, f = self._arrays
+                cache[key] = _ScanScene(
+                    np.ascontiguousarray(v, dtype=np.float64),
+                    np.ascontiguousarray(f, dtype=np.uint32),
+                    **scan_options,
+                )
+            else:
+                cache[key] = _ScanScene(source, properties, **scan_options)
+        return cache[key].scan(
+            os.fspath(lidar),
+            None if trajectory is None else os.fspath(trajectory),
+            "" if trajectory_times is None else os.fspath(trajectory_times),
+            sweeps,
+            start,
+            frame,
+            returns,
+            surfaces,
+            wanted,
+            noise_sigma,
+            dropout,
+            seed,
+            threads,
+        )
 
     def __repr__(self) -> str:
         return f"Scene({self._scene.mesh_names!r}, triangles={self.triangle_count})"

@@ -119,6 +119,24 @@ class Scene:
         threads: int = 0,
     ) -> dict[str, np.ndarray]:
         """Per point: the cameras that see it, as CSR index arrays (GIL released)."""
+    def scan(
+        self,
+        lidar: _PathLike,
+        trajectory: _PathLike | None = None,
+        sweeps: int = 1,
+        fields: Iterable[str] | None = None,
+        *,
+        trajectory_times: _PathLike | None = None,
+        start: float | None = None,
+        frame: str = "sensor",
+        returns: str = "first",
+        surfaces: int = 4,
+        noise_sigma: float = 0.0,
+        dropout: float = 0.0,
+        seed: int = 0,
+        threads: int = 0,
+    ) -> dict[str, np.ndarray]:
+        """LiDAR sweeps: one 1-D array per point field (docs/lidar.md; GIL released)."""
 
 def load_cameras(
     path: _PathLike,

@@ -24,5 +24,6 @@ void bindCamera(nb::module_& m);    ///< Camera, load_cameras
 void bindScene(nb::module_& m);     ///< Scene, Scene.render
 void bindImageIo(nb::module_& m);   ///< read_exr, write, read
 void bindAovTable(nb::module_& m);  ///< _aov_table, _AovRegistration (for the tests)
+void bindScan(nb::module_& m);      ///< _ScanScene: Scene.scan (LiDAR sweeps)
 
 }  // namespace aperture::python

@@ -13,6 +13,8 @@ namespace nb = nanobind;
 namespace {
 
 nb::dlpack::dtype dtypeOf(const NpzArray& a) {
+  if (a.descr == "|u1") return nb::dtype<uint8_t>();
+  if (a.descr == "<u2") return nb::dtype<uint16_t>();
   if (a.descr == "<u4") return nb::dtype<uint32_t>();
   if (a.descr == "<u8") return nb::dtype<uint64_t>();
   if (a.descr == "<i4") return nb::dtype<int32_t>();

@@ -11,8 +11,8 @@
 
 namespace aperture::python {
 
-/// name -> NumPy array of each of `arrays` (dtypes '<u4', '<u8', '<i4', '<f4', '<f8'),
-/// pointing into the object `owner` holds, which a capsule keeps alive until the last array
+/// name -> NumPy array of each of `arrays` (dtypes '|u1', '<u2', '<u4', '<u8', '<i4', '<f4',
+/// '<f8'), pointing into the object `owner` holds, which a capsule keeps alive until the last array
 /// is gone. Throws Error for another dtype.
 nanobind::dict namedArrays(std::shared_ptr<const void> owner, const std::vector<NpzArray>& arrays);
 
