@@ -18,7 +18,8 @@ set(APERTURE_PARTS
   "cameras/geometry: core/engine"                    # the camera frame, view volumes
   "cameras/models: cameras/schema cameras/lenses cameras/geometry"  # the camera models
   "cameras/registry: cameras/models"                 # the list of models; describe, culling
-  "apps/services: cameras/registry cameras/files core/exr core/queries"  # scene set-up, one view, outputs
+  "cameras/lidar: cameras/geometry core/queries"     # LiDAR sensors, trajectories, rolling shutter
+  "apps/services: cameras/registry cameras/files cameras/lidar core/exr core/queries"  # scene set-up, one view, outputs
   "apps/jobs: apps/services"                         # job files
   "apps/batch: apps/jobs"                            # batches: writers, resume, shards, summaries
   "bench/measure: apps/services"                     # scaling, trade-off study, the bare-Embree baseline
@@ -34,7 +35,7 @@ set(APERTURE_PART_LIBRARIES
   "OpenEXR/: core/exr"
   "Imath/: core/exr"
   "OpenImageIO/: core/io"
-  "yaml-cpp/: cameras/files"
+  "yaml-cpp/: cameras/files cameras/lidar"
 )
 
 # The parts `part` lists.

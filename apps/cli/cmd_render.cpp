@@ -1,5 +1,6 @@
 // `aperture render`: one frame of a mesh from one camera into a multi-channel EXR, or one AOV
 // into a dataset file (16-bit PNG depth, PFM, NPY, float TIFF) when --out has that extension.
+#include <cmath>
 #include <cstdio>
 #include <vector>
 
@@ -12,6 +13,8 @@
 #include "apps/services/render_options.h"
 #include "apps/services/scene_setup.h"
 #include "apps/services/view.h"
+#include "cameras/lidar/rolling_shutter.h"
+#include "cameras/lidar/trajectory.h"
 #include "cameras/registry/registry.h"
 #include "core/engine/layers.h"
 #include "core/exr/exr.h"
@@ -32,7 +35,30 @@ struct RenderArgs {
   bool half = false, quiet = false, cameraSidecar = false;
   bool deep = false;  ///< --deep: the layers to <out stem>.deep.exr
   double depthScale = 1000.0;
+  double rollingShutter = 0;  ///< --rolling-shutter: seconds between rows' readouts
+  std::string trajectory, trajectoryTimes, frameTime;
 };
+
+/// --rolling-shutter with --trajectory (and --trajectory-times, --time), read and checked
+/// before the mesh loads: the camera wrap renderView applies, or none without the flag.
+CameraWrap rollingShutterOf(const RenderArgs& a, int height) {
+  if (a.rollingShutter == 0 && a.trajectory.empty()) return {};
+  if (!(a.rollingShutter >= 0) || !std::isfinite(a.rollingShutter))
+    throw Error(
+        cat("--rolling-shutter: ", a.rollingShutter, " is not a readout time in seconds (≥ 0)"));
+  if (a.trajectory.empty())
+    throw Error("--rolling-shutter: needs --trajectory (the poses the rows are read along)");
+  auto trajectory = std::make_shared<Trajectory>(loadTrajectory(a.trajectory, a.trajectoryTimes));
+  const int64_t start =
+      a.frameTime.empty() ? trajectory->startNs() : parseTimeNs(a.frameTime, "--time");
+  const double readout = a.rollingShutter;
+  checkRollingShutter(*trajectory, start, readout, height);
+  return [trajectory, start, readout, height](std::shared_ptr<const Camera> camera,
+                                              const glm::dvec3& renderOrigin) {
+    return rollingShutterCamera(std::move(camera), *trajectory, start, readout, height,
+                                renderOrigin);
+  };
+}
 
 /// --out with a dataset extension: the one AOV requested, written alone in that format.
 /// Refuses several AOVs, and an AOV the format cannot hold, before anything is rendered.
@@ -87,6 +113,7 @@ int runRender(const RenderArgs& a) {
                     imageCodec, {unframed});
   if (imageCodec) aperture::imageCodec();  // a missing plugin fails before the mesh loads
   const PreviewOptions preview = checkRenderOutputs(a, aovs);
+  const CameraWrap rollingShutter = rollingShutterOf(a, unframed.height);
   if (given.has("eye") || unframed.sourceCameraFromWorld || unframed.worldFromSourceCamera)
     makeCamera(unframed);
 
@@ -97,7 +124,7 @@ int runRender(const RenderArgs& a) {
   LoadedScene loaded =
       loadSceneForCamera(device, sceneOptions, given, a.camera.defaults(), a.quiet, params);
 
-  const RenderedView view = renderView(*loaded.scene, params, settings, aovs);
+  const RenderedView view = renderView(*loaded.scene, params, settings, aovs, rollingShutter);
   const Framebuffer& fb = view.fb;
   if (!a.quiet)
     std::fprintf(stderr,
@@ -153,6 +180,18 @@ Command addRenderCommand(CLI::App& app) {
                 "Also write the camera as calibrated JSON (K, distortion, world-to-camera in "
                 "OpenCV and OpenGL axes) beside --out: NAME.camera.json (perspective and "
                 "calibrated cameras)");
+  sub->add_option("--rolling-shutter", args->rollingShutter,
+                  "SECONDS between the readouts of consecutive rows (a rolling shutter): row i "
+                  "is read at --time + i*SECONDS and moves with --trajectory since --time; 0 "
+                  "renders the global-shutter image bit for bit");
+  sub->add_option("--trajectory", args->trajectory,
+                  "Poses of the camera's motion: TUM rows (t tx ty tz qx qy qz qw) or KITTI rows "
+                  "with --trajectory-times (docs/lidar.md)");
+  sub->add_option("--trajectory-times", args->trajectoryTimes,
+                  "Times (seconds, one per line) of KITTI --trajectory rows");
+  sub->add_option("--time", args->frameTime,
+                  "Trajectory time (seconds) of the first row's readout (default: the "
+                  "trajectory's first time)");
   sub->add_flag("--quiet", args->quiet, "No log lines");
   addPresetOption(*sub, args->preset);
   return [args, sub] {

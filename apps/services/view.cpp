@@ -13,8 +13,10 @@
 namespace aperture::app {
 
 RenderedView renderView(const Scene& scene, const CameraParams& params,
-                        const RenderSettings& settings, const AovSet& aovs) {
-  const auto camera = makeCamera(params, scene.renderOrigin());
+                        const RenderSettings& settings, const AovSet& aovs,
+                        const CameraWrap& wrap) {
+  std::shared_ptr<const Camera> camera = makeCamera(params, scene.renderOrigin());
+  if (wrap) camera = wrap(std::move(camera), scene.renderOrigin());
   RenderedView view;
   view.fb = Framebuffer(params.width, params.height, aovs);
   RenderSettings forCamera = settings;

@@ -1,6 +1,8 @@
 #pragma once
 // The one-view path shared by `aperture render` and `aperture batch`, so that a batch frame
 // equals a render with the same camera, bit for bit.
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -23,10 +25,18 @@ struct RenderedView {
   NormalFrame normalFrame = NormalFrame::World;  ///< of normal and shading-normal
 };
 
-/// Builds the camera of `params` in the scene's render space and renders it into a fresh
-/// framebuffer of the requested AOVs. Throws Error for a bad camera or settings.
+/// What turns the camera of `params` into the one rendered (a rolling shutter,
+/// cameras/lidar/rolling_shutter.h), given it and the scene's render origin; empty: the camera
+/// itself.
+using CameraWrap = std::function<std::shared_ptr<const Camera>(std::shared_ptr<const Camera>,
+                                                               const glm::dvec3& renderOrigin)>;
+
+/// Builds the camera of `params` in the scene's render space (through `wrap` when given) and
+/// renders it into a fresh framebuffer of the requested AOVs. Throws Error for a bad camera or
+/// settings.
 RenderedView renderView(const Scene& scene, const CameraParams& params,
-                        const RenderSettings& settings, const AovSet& aovs);
+                        const RenderSettings& settings, const AovSet& aovs,
+                        const CameraWrap& wrap = {});
 
 /// The header of a rendered view: camera, render time, meshes, AOVs, BVH quality and
 /// traversal mode (robust or not), placement, and the normal frame when it holds normals.
