@@ -184,8 +184,11 @@ std::vector<uint32_t> flaggedIndices(const std::vector<uint8_t>& flags) {
 
 /// Sets seen[f] for the faces of projected[first, last) that `image` sees (conditions 2 and 3
 /// of the header; condition 1 made them projected): packets of up to 16, one centre ray each.
+/// With FaceRays::needed, a lane whose ray meets the face from behind under frontOnly is left
+/// idle: condition 3 fails whatever the ray hits.
 void markSeenFaces(const Scene& scene, const Mesh& mesh, const CameraImage& image, bool frontOnly,
-                   const ProjectedItem* projected, size_t count, std::vector<uint8_t>& seen) {
+                   FaceRays rays, const ProjectedItem* projected, size_t count,
+                   std::vector<uint8_t>& seen) {
   PacketBuffers<kLanes> p;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
@@ -201,8 +204,11 @@ void markSeenFaces(const Scene& scene, const Mesh& mesh, const CameraImage& imag
       glm::dvec3 org, dir;
       if (!image.camera.centreRayAt(item.raster.x, item.raster.y, org, dir)) continue;
       if (!finite(org) || !finite(dir)) continue;
+      if (frontOnly) {
+        facing[k] = glm::dot(dir, worldTriangle(mesh, item.index).windingNormal());
+        if (rays == FaceRays::needed && !(facing[k] < 0)) continue;
+      }
       setLane(p.lanes, k, org, dir, std::numeric_limits<float>::infinity());
-      if (frontOnly) facing[k] = glm::dot(dir, worldTriangle(mesh, item.index).windingNormal());
       p.valid[k] = -1;
       ++active;
     }
@@ -221,12 +227,12 @@ void markSeenFaces(const Scene& scene, const Mesh& mesh, const CameraImage& imag
 /// Every face `image` sees, ascending: centroids projected and ordered by tile, traced in
 /// parallel tasks of consecutive tile-ordered faces.
 std::vector<uint32_t> seenFaces(const Scene& scene, const Mesh& mesh, const CameraImage& image,
-                                bool frontOnly) {
+                                bool frontOnly, FaceRays rays) {
   const std::vector<ProjectedItem> projected = projectedByTile(
       image, mesh.triangleCount(), [&](size_t f) { return worldTriangle(mesh, f).centroid(); });
   std::vector<uint8_t> seen(mesh.triangleCount(), 0);
   forEachTask(projected.size(), [&](size_t, size_t begin, size_t end) {
-    markSeenFaces(scene, mesh, image, frontOnly, projected.data() + begin, end - begin, seen);
+    markSeenFaces(scene, mesh, image, frontOnly, rays, projected.data() + begin, end - begin, seen);
   });
   return flaggedIndices(seen);
 }
@@ -483,7 +489,8 @@ FaceVisibility faceVisibility(const Scene& scene, const std::vector<const Camera
   for (size_t g = 0; g + 1 < starts.size(); ++g) {
     countFacePixels(scene, cameras, images, starts[g], starts[g + 1], options.render, out.pixels);
     for (size_t c = starts[g]; c < starts[g + 1]; ++c) {
-      const std::vector<uint32_t> seen = seenFaces(scene, mesh, images[c], options.frontOnly);
+      const std::vector<uint32_t> seen =
+          seenFaces(scene, mesh, images[c], options.frontOnly, options.rays);
       recordSeenFaces(mesh, *cameras[c], uint32_t(c), seen, out, bestArea);
       appendRow(out.cameraFaces, seen);
       if (options.progress) options.progress(c + 1, cameras.size());

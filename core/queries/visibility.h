@@ -41,8 +41,19 @@ struct SparseRows {
 /// rows of `rows` that hold c, ascending. Throws Error for an index >= columns.
 SparseRows transposeRows(const SparseRows& rows, size_t columns);
 
+/// Which centre rays faceVisibility traces (docs/visibility.md, "Speed"). Both give the same
+/// arrays; `all` is the reference `needed` is tested against.
+enum class FaceRays {
+  /// Only the rays whose hit can change the answer: with frontOnly, a face the ray meets from
+  /// its back is not seen whatever the ray hits, so its ray is not traced.
+  needed,
+  /// One ray per face whose centroid projects inside the image (the definition, traced).
+  all,
+};
+
 struct FaceVisibilityOptions {
-  bool frontOnly = false;  ///< count a camera only on the side the CCW winding faces
+  bool frontOnly = false;            ///< count a camera only on the side the CCW winding faces
+  FaceRays rays = FaceRays::needed;  ///< which centre rays are traced (the same result)
   /// Packet width and tile size of the primID renders that count face pixels (the frame
   /// loop's; spp and the normal frame do not matter to primID from the centre ray).
   RenderSettings render;

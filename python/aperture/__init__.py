@@ -267,7 +267,11 @@ class Scene:
             del out
 
     def face_visibility(
-        self, cameras: Camera | Iterable[Camera], front_only: bool = False, threads: int = 0
+        self,
+        cameras: Camera | Iterable[Camera],
+        front_only: bool = False,
+        threads: int = 0,
+        method: str = "needed-rays",
     ) -> dict[str, np.ndarray]:
         """Which faces of the scene's one mesh each camera sees, with the GIL released; the
         arrays of ``aperture visibility``'s .npz (docs/visibility.md), camera k being the k-th
@@ -280,8 +284,13 @@ class Scene:
         rays over all cameras whose first hit is the face, the bincount of the primid renders),
         ``best_view`` (int32: the camera seeing the face with the largest projected area in
         pixels, -1 if none) and scipy-style CSR index arrays ``camera_faces_indptr`` /
-        ``camera_faces_indices`` and ``face_cameras_indptr`` / ``face_cameras_indices``."""
-        return self._scene._face_visibility(_camera_list(cameras), front_only, threads)
+        ``camera_faces_indices`` and ``face_cameras_indptr`` / ``face_cameras_indices``.
+
+        ``method`` only changes which centre rays are traced, never the result:
+        ``"needed-rays"`` (default) skips the rays that cannot change it (with ``front_only``,
+        those meeting a face from behind); ``"all-rays"`` traces one per face whose centroid
+        projects inside the image, the reference the first is tested against."""
+        return self._scene._face_visibility(_camera_list(cameras), front_only, threads, method)
 
     def point_visibility(
         self,

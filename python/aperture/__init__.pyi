@@ -2,7 +2,7 @@
 
 import os
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -107,9 +107,14 @@ class Scene:
     ) -> Iterator[tuple[Camera, dict[str, np.ndarray]]]:
         """Yields (camera, name -> (H, W[, C]) array), batch cameras at a time."""
     def face_visibility(
-        self, cameras: Camera | Iterable[Camera], front_only: bool = False, threads: int = 0
+        self,
+        cameras: Camera | Iterable[Camera],
+        front_only: bool = False,
+        threads: int = 0,
+        method: Literal["needed-rays", "all-rays"] = "needed-rays",
     ) -> dict[str, np.ndarray]:
-        """Per face: view count, pixels, best view; CSR camera <-> face lists (GIL released)."""
+        """Per face: view count, pixels, best view; CSR camera <-> face lists (GIL released).
+        method: which centre rays are traced ("all-rays": every one); the same arrays."""
 
     def point_visibility(
         self,

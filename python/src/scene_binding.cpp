@@ -186,11 +186,20 @@ class PyScene {
 
   /// Scene.face_visibility: faceVisibility (core/queries/visibility.h) with the GIL released, as
   /// the arrays of the command's .npz (apps/services/visibility_arrays.h).
-  nb::dict faceVisibility(nb::handle cameras, bool frontOnly, int threads) {
-    const std::vector<std::unique_ptr<Camera>> owned =
-        camerasOf(cameraParamsOf(cameras, "Scene.face_visibility"));
+  nb::dict faceVisibility(nb::handle cameras, bool frontOnly, int threads,
+                          const std::string& method) {
     FaceVisibilityOptions options;
     options.frontOnly = frontOnly;
+    if (method == "needed-rays")
+      options.rays = FaceRays::needed;
+    else if (method == "all-rays")
+      options.rays = FaceRays::all;
+    else
+      throw nb::value_error(
+          cat("Scene.face_visibility: method '", method, "' is not 'needed-rays' or 'all-rays'")
+              .c_str());
+    const std::vector<std::unique_ptr<Camera>> owned =
+        camerasOf(cameraParamsOf(cameras, "Scene.face_visibility"));
     auto result = std::make_shared<FaceVisibility>();
     withoutGil(threads, [&] {
       *result = aperture::faceVisibility(*loaded_.scene, pointersOf(owned), options);
@@ -413,7 +422,7 @@ void bindScene(nb::module_& m) {
            nb::arg("layers"), nb::arg("normal_frame"), nb::arg("threads"),
            nb::arg("progress").none(), nb::arg("packet"), nb::arg("tile"))
       .def("_face_visibility", &PyScene::faceVisibility, nb::arg("cameras"), nb::arg("front_only"),
-           nb::arg("threads"))
+           nb::arg("threads"), nb::arg("method"))
       .def("_point_visibility", &PyScene::pointVisibility, nb::arg("points"), nb::arg("cameras"),
            nb::arg("tolerance"), nb::arg("threads"))
       .def_prop_ro("last_render", &PyScene::lastRender,

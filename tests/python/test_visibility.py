@@ -118,6 +118,24 @@ def test_face_pixels_equal_the_bincount_of_the_primid_renders(full_bunny: Path, 
     assert (vis["face_view_count"][seen] >= 1).all()
 
 
+def test_the_ray_methods_give_the_same_arrays(full_bunny: Path, model: Path) -> None:
+    # The default traces only the rays that can change the answer (front_only: not those that
+    # meet a face from behind); "all-rays" traces one per projected face. Same arrays, both
+    # sides, on the distorted calibrated cameras.
+    scene = aperture.Scene(full_bunny)
+    cams = aperture.load_cameras(model)
+    for front_only in (False, True):
+        needed = scene.face_visibility(cams, front_only=front_only)
+        every = scene.face_visibility(cams, front_only=front_only, method="all-rays")
+        assert needed.keys() == every.keys()
+        for key in needed:
+            assert needed[key].dtype == every[key].dtype
+            np.testing.assert_array_equal(needed[key], every[key], err_msg=key)
+        assert needed["face_view_count"].sum() > 1000
+    with pytest.raises(ValueError, match="'rays'.*'needed-rays' or 'all-rays'"):
+        scene.face_visibility(cams, method="rays")
+
+
 def test_csr_pairs_are_transposes_and_counts_agree(full_bunny: Path, model: Path) -> None:
     scene = aperture.Scene(full_bunny)
     cams = aperture.load_cameras(model)
