@@ -5,6 +5,7 @@
 
 #include "core/mesh/gltf.h"
 #include "core/util/error.h"
+#include "core/util/parallel.h"
 
 namespace aperture::gltf {
 
@@ -246,12 +247,19 @@ std::vector<uint32_t> readIndices(const tinygltf::Model& model, int index,
   const size_t bytes = componentBytes(t);
   const Elements e = elements(model, index, file, bytes);
   std::vector<uint32_t> out(a.count);
-  for (size_t i = 0; i < a.count; ++i) {
-    const unsigned char* p = e.data + i * e.stride;
-    out[i] = t == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE    ? load<uint8_t>(p)
-             : t == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ? load<uint16_t>(p)
-                                                           : load<uint32_t>(p);
-  }
+  // In parallel: the index list of a large mesh is the largest array of the file.
+  parallelForChunks(out.size(), size_t(1) << 18, [&](size_t, size_t b, size_t end) {
+    if (t == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT && e.stride == 4) {
+      std::memcpy(out.data() + b, e.data + 4 * b, 4 * (end - b));
+      return;
+    }
+    for (size_t i = b; i < end; ++i) {
+      const unsigned char* p = e.data + i * e.stride;
+      out[i] = t == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE    ? load<uint8_t>(p)
+               : t == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ? load<uint16_t>(p)
+                                                             : load<uint32_t>(p);
+    }
+  });
   return out;
 }
 

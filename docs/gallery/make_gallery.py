@@ -32,6 +32,8 @@ SIZE = '480,360'
 def lecture_shots(shared):
     dragon = f'{shared}/meshes/stanford/dragon_vrip.ply'
     bath = f'{shared}/meshes/scenes/contemporary-bathroom_flat.ply'
+    crown = f'{shared}/meshes/scenes/crown_flat.ply'
+    tilt = ['--eye', '0,5.5,24', '--at', '0,11,-10', '--fov', '50']
     look = ['--eye', '0,0.12,0.45', '--at', '0,0.12,0', '--up', '0,1,0']
     inside = ['--eye', '0.00724,0.9124,-0.22758', '--dir', '-0.751879,0.015471,-0.659119',
               '--up', '0.0116337,0.99988,0.0101985']
@@ -41,6 +43,10 @@ def lecture_shots(shared):
             '--mesh', dragon, *look, '--fov', '30', *normal]),
         ('shifted', 'perspective with a lens shift (0.25, 0): the dragon moves left, no rotation', [
             '--mesh', dragon, *look, '--fov', '30', '--shift', '0.25,0', *normal]),
+        ('tilted', 'the crown, camera tilted up: converging verticals', [
+            '--mesh', crown, *tilt, *normal]),
+        ('architectural', '`--architectural`: the tilt becomes a lens shift, verticals stay parallel', [
+            '--mesh', crown, *tilt, '--architectural', *normal]),
         ('orthographic', 'orthographic, viewport 0.3 × 0.225', [
             '--mesh', dragon, '--camera', 'orthographic', *look, '--viewport', '0.3,0.225',
             *normal]),
@@ -117,10 +123,10 @@ def run(aperture, args, env=None):
     return cmd
 
 
-def shown(cmd, out, shared):
+def shown(cmd, out, shared, work):
     """The command as a reader types it: paths relative to the project, no --quiet."""
-    words = [c.replace(shared, '../shared').replace(out, 'docs/gallery')
-             .replace(tempfile.gettempdir(), '/tmp') for c in cmd if c != '--quiet']
+    words = [c.replace(shared, '../shared').replace(out, 'docs/gallery').replace(work, '/tmp/gallery')
+             for c in cmd if c != '--quiet']
     words[0] = 'aperture'
     return shlex.join(words)
 
@@ -142,7 +148,7 @@ def main():
     for name, caption, flags in lecture_shots(shared):
         cmd = run(args.aperture, [*flags, '--out', f'{work}/{name}.exr',
                                   '--preview', f'{out}/{name}.png'])
-        cells.append(f'![]({name}.png)<br>{caption}<br>`{shown(cmd, out, shared)}`')
+        cells.append(f'![]({name}.png)<br>{caption}<br>`{shown(cmd, out, shared, work)}`')
     for k in range(0, len(cells), 2):
         pair = cells[k:k + 2] + [''] * (2 - len(cells[k:k + 2]))
         lines.append(f'| {pair[0]} | {pair[1]} |')
@@ -165,7 +171,7 @@ def main():
         else:
             cmd = run(args.aperture, [*view, '--aov', aov, '--out', f'{work}/{aov}.exr',
                                       '--preview', f'{out}/glb_{aov}.png'])
-        cells.append(f'![](glb_{aov}.png)<br>{aov}<br>`{shown(cmd, out, shared)}`')
+        cells.append(f'![](glb_{aov}.png)<br>{aov}<br>`{shown(cmd, out, shared, work)}`')
     for k in range(0, len(cells), 3):
         lines.append('| ' + ' | '.join(cells[k:k + 3]) + ' |')
     with open(f'{out}/README.md', 'w') as f:
