@@ -226,7 +226,7 @@ glm::dmat4 localFromNode(const tinygltf::Node& node) {
 }
 
 /// The triangles of a primitive's vertex sequence `order` (its indices, or 0..n-1) in `mode`.
-void triangulate(int mode, const std::vector<uint32_t>& order, std::vector<uint32_t>& out) {
+void triangulate(int mode, const LargeBuffer<uint32_t>& order, LargeBuffer<uint32_t>& out) {
   const size_t n = order.size();
   if (mode == TINYGLTF_MODE_TRIANGLES) {
     out.insert(out.end(), order.begin(), order.begin() + std::ptrdiff_t(n - n % 3));
@@ -260,7 +260,7 @@ void parallelCopy(const T* from, size_t n, T* to) {
 }
 
 /// The position of the first index >= `vertices`, or indices.size() when none is (in parallel).
-size_t firstIndexOutOfRange(const std::vector<uint32_t>& indices, size_t vertices) {
+size_t firstIndexOutOfRange(const LargeBuffer<uint32_t>& indices, size_t vertices) {
   std::atomic<size_t> first{indices.size()};
   parallelForChunks(indices.size(), kCopyChunk, [&](size_t, size_t b, size_t e) {
     for (size_t i = b; i < e; ++i)
@@ -294,7 +294,7 @@ struct Builder {
       fail(file, cat("/accessors/", position->second, "/type"), "POSITION must be VEC3");
     d.vertexCount = d.positions.size() / 3;
     auto attribute = [&](const char* name, int want3, int want4, bool normalize) {
-      std::vector<float> values;
+      LargeBuffer<float> values;
       const auto it = prim.attributes.find(name);
       if (it == prim.attributes.end()) return values;
       values = readFloats(model, it->second, file, components, normalize);
@@ -328,7 +328,7 @@ struct Builder {
     Mesh mesh;
     mesh.name = cat(file, "#/meshes/", m);
     std::vector<PrimitiveData> prims;
-    std::vector<std::vector<uint32_t>> triangles;
+    std::vector<LargeBuffer<uint32_t>> triangles;
     std::vector<uint32_t> materials;
     size_t vertices = 0, indices = 0;
     bool anyNormals = false, anyUv = false, anyColors = false;
@@ -341,12 +341,12 @@ struct Builder {
       }
       if (prim.mode > 6 || prim.mode < 0) fail(file, pp + "/mode", cat("unknown mode ", prim.mode));
       PrimitiveData d = readPrimitive(prim, pp);
-      std::vector<uint32_t> order = std::move(d.indices);
+      LargeBuffer<uint32_t> order = std::move(d.indices);
       if (!d.indexed) {
         order.resize(d.vertexCount);
         for (size_t i = 0; i < order.size(); ++i) order[i] = uint32_t(i);
       }
-      std::vector<uint32_t> tri;
+      LargeBuffer<uint32_t> tri;
       if (prim.mode == TINYGLTF_MODE_TRIANGLES) {  // the list itself: no copy
         order.resize(order.size() - order.size() % 3);
         tri = std::move(order);
@@ -371,8 +371,15 @@ struct Builder {
       triangles.push_back(std::move(tri));
     }
     mesh.vertexCount = vertices;
-    resizeOnHugePages(mesh.positions, 3 * vertices);
-    resizeOnHugePages(mesh.indices, indices);
+    if (prims.size() == 1) {
+      // One primitive (the large meshes): its arrays become the mesh's, uncopied.
+      mesh.positions = std::move(prims[0].positions);
+      mesh.indices = std::move(triangles[0]);
+    } else {
+      resizeOnHugePages(mesh.positions, 3 * vertices);
+      resizeOnHugePages(mesh.indices, indices);
+    }
+    const bool moved = prims.size() == 1;
     if (anyNormals) mesh.vertexNormals.assign(3 * vertices, 0.0f);
     if (anyUv) mesh.texcoords.assign(2 * vertices, 0.0f);
     if (anyColors) mesh.vertexColors.assign(4 * vertices, 1.0f);
@@ -380,7 +387,7 @@ struct Builder {
     size_t v = 0, t = 0;
     for (size_t k = 0; k < prims.size(); ++k) {
       const PrimitiveData& d = prims[k];
-      parallelCopy(d.positions.data(), d.positions.size(), &mesh.positions[3 * v]);
+      if (!moved) parallelCopy(d.positions.data(), d.positions.size(), &mesh.positions[3 * v]);
       if (!d.normals.empty())
         std::copy(d.normals.begin(), d.normals.end(),
                   mesh.vertexNormals.begin() + std::ptrdiff_t(3 * v));
@@ -390,13 +397,14 @@ struct Builder {
       if (!d.colors.empty())
         std::copy(d.colors.begin(), d.colors.end(),
                   mesh.vertexColors.begin() + std::ptrdiff_t(4 * v));
-      parallelCopy(triangles[k].data(), triangles[k].size(), &mesh.indices[t]);
+      const size_t corners = moved ? indices : triangles[k].size();  // moved: now the mesh's
+      if (!moved) parallelCopy(triangles[k].data(), corners, &mesh.indices[t]);
       if (options.materials)
-        mesh.faceMaterials.insert(mesh.faceMaterials.end(), triangles[k].size() / 3, materials[k]);
+        mesh.faceMaterials.insert(mesh.faceMaterials.end(), corners / 3, materials[k]);
       v += d.vertexCount;
-      t += triangles[k].size();
+      t += corners;
       prims[k] = PrimitiveData();  // each primitive's arrays go as soon as they are copied
-      triangles[k] = std::vector<uint32_t>();
+      triangles[k] = LargeBuffer<uint32_t>();
     }
     mesh.stats.sourceFaces = indices / 3;
     return mesh;

@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include "core/util/huge_pages.h"
+
 namespace aperture::gltf {
 
 /// Throws Error("<file>: <pointer>: <what>"); an empty pointer (the whole document) is left out.
@@ -69,10 +71,10 @@ ViewBytes viewBytes(const tinygltf::Model& model, int view, const std::string& f
 /// Normalized integers go through the glTF formulas (c / 255, max(c / 127, -1), ...); other
 /// integers (KHR_mesh_quantization) keep their value, unless `normalizeIntegers` (colours).
 /// Sparse accessors are applied over their base view or zeros.
-std::vector<float> readFloats(const tinygltf::Model& model, int index, const std::string& file,
+LargeBuffer<float> readFloats(const tinygltf::Model& model, int index, const std::string& file,
                               int& components, bool normalizeIntegers = false);
 /// Reads accessor `index` as vertex indices (SCALAR unsigned byte, short or int).
-std::vector<uint32_t> readIndices(const tinygltf::Model& model, int index, const std::string& file);
+LargeBuffer<uint32_t> readIndices(const tinygltf::Model& model, int index, const std::string& file);
 
 /// Replaces every EXT_meshopt_compression buffer view by its decoded bytes (a new buffer
 /// appended to model.buffers), so that accessors read them as any other view.
@@ -81,11 +83,13 @@ void decodeMeshoptViews(tinygltf::Model& model, const std::string& file);
 /// The vertex data of one primitive, as the mesh builder takes it.
 struct PrimitiveData {
   size_t vertexCount = 0;
-  std::vector<float> positions;   ///< 3 per vertex
-  std::vector<float> normals;     ///< 3 per vertex or empty
-  std::vector<float> texcoords;   ///< 2 per vertex or empty
-  std::vector<float> colors;      ///< 4 per vertex (linear RGBA) or empty
-  std::vector<uint32_t> indices;  ///< empty: not indexed
+  // LargeBuffers, as the mesh's own: a primitive's positions and indices become the mesh's
+  // when it has only one, and large ones are read without a zero-fill first.
+  LargeBuffer<float> positions;   ///< 3 per vertex
+  LargeBuffer<float> normals;     ///< 3 per vertex or empty
+  LargeBuffer<float> texcoords;   ///< 2 per vertex or empty
+  LargeBuffer<float> colors;      ///< 4 per vertex (linear RGBA) or empty
+  LargeBuffer<uint32_t> indices;  ///< empty: not indexed
   bool indexed = false;
 };
 /// Decodes a KHR_draco_mesh_compression primitive (`pointer` names it). Reads only the
@@ -95,6 +99,6 @@ PrimitiveData decodeDraco(const tinygltf::Model& model, const tinygltf::Primitiv
                           bool texcoords, bool colors);
 
 /// Expands 3- or 4-component colours to linear RGBA (A = 1 for RGB).
-std::vector<float> rgba(const std::vector<float>& values, int components);
+LargeBuffer<float> rgba(const LargeBuffer<float>& values, int components);
 
 }  // namespace aperture::gltf

@@ -5,6 +5,7 @@
 
 #include "core/mesh/gltf.h"
 #include "core/util/error.h"
+#include "core/util/huge_pages.h"
 #include "core/util/parallel.h"
 
 namespace aperture::gltf {
@@ -201,7 +202,7 @@ ViewBytes viewBytes(const tinygltf::Model& model, int view, const std::string& f
   return {model.buffers[size_t(v.buffer)].data.data() + v.byteOffset, v.byteLength};
 }
 
-std::vector<float> readFloats(const tinygltf::Model& model, int index, const std::string& file,
+LargeBuffer<float> readFloats(const tinygltf::Model& model, int index, const std::string& file,
                               int& components, bool normalizeIntegers) {
   if (index < 0 || size_t(index) >= model.accessors.size())
     fail(file, accessorPointer(index),
@@ -217,7 +218,8 @@ std::vector<float> readFloats(const tinygltf::Model& model, int index, const std
   const Elements e = elements(model, index, file, elementSize);
   const bool normalized =
       a.normalized || (normalizeIntegers && a.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT);
-  std::vector<float> out(a.count * size_t(components));
+  LargeBuffer<float> out;
+  resizeOnHugePages(out, a.count * size_t(components));
   if (a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT && e.stride == elementSize) {
     if (!out.empty()) std::memcpy(out.data(), e.data, out.size() * sizeof(float));
     return out;
@@ -231,7 +233,7 @@ std::vector<float> readFloats(const tinygltf::Model& model, int index, const std
   return out;
 }
 
-std::vector<uint32_t> readIndices(const tinygltf::Model& model, int index,
+LargeBuffer<uint32_t> readIndices(const tinygltf::Model& model, int index,
                                   const std::string& file) {
   if (index < 0 || size_t(index) >= model.accessors.size())
     fail(file, accessorPointer(index),
@@ -246,7 +248,8 @@ std::vector<uint32_t> readIndices(const tinygltf::Model& model, int index,
          cat("indices of componentType ", t, " (expected 5121, 5123 or 5125)"));
   const size_t bytes = componentBytes(t);
   const Elements e = elements(model, index, file, bytes);
-  std::vector<uint32_t> out(a.count);
+  LargeBuffer<uint32_t> out;
+  resizeOnHugePages(out, a.count);
   // In parallel: the index list of a large mesh is the largest array of the file.
   parallelForChunks(out.size(), size_t(1) << 18, [&](size_t, size_t b, size_t end) {
     if (t == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT && e.stride == 4) {
@@ -263,10 +266,10 @@ std::vector<uint32_t> readIndices(const tinygltf::Model& model, int index,
   return out;
 }
 
-std::vector<float> rgba(const std::vector<float>& values, int components) {
+LargeBuffer<float> rgba(const LargeBuffer<float>& values, int components) {
   if (components == 4) return values;
   const size_t n = values.size() / size_t(components);
-  std::vector<float> out(4 * n, 1.0f);
+  LargeBuffer<float> out(4 * n, 1.0f);
   for (size_t i = 0; i < n; ++i)
     for (size_t c = 0; c < 3; ++c) out[4 * i + c] = values[3 * i + c];
   return out;

@@ -126,7 +126,7 @@ PrimitiveData decodeDraco(const tinygltf::Model& model, const tinygltf::Primitiv
   const tinygltf::Value& ids = member(ext, "attributes");
   // Reads attribute `name` (its unique id in the extension) as `want` floats per point.
   auto read = [&](const char* name, int want, int alt) {
-    std::vector<float> out;
+    LargeBuffer<float> out;
     const tinygltf::Value& id = member(ids, name);
     if (!id.IsNumber() && !id.IsInt()) return out;
     const draco::PointAttribute* a = mesh->GetAttributeByUniqueId(uint32_t(id.GetNumberAsInt()));
