@@ -11,6 +11,7 @@
 #include <cstring>
 #include <functional>
 #include <glm/glm.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -45,6 +46,17 @@ struct GltfNode {
   std::optional<glm::dquat> rotation;  ///< written as (x, y, z, w)
   std::optional<glm::dvec3> scale;
 };
+
+/// A node's local transform as glTF 2.0 defines it (its matrix, else T · R · S), composed with
+/// glm's own functions: the tests' reference, independent of the loader.
+inline glm::dmat4 gltfLocalMatrix(const GltfNode& n) {
+  if (n.matrix) return *n.matrix;
+  glm::dmat4 m(1.0);
+  if (n.translation) m = glm::translate(m, *n.translation);
+  if (n.rotation) m = m * glm::mat4_cast(*n.rotation);
+  if (n.scale) m = glm::scale(m, *n.scale);
+  return m;
+}
 
 struct GltfMaterial {
   std::string name;  ///< "" leaves `name` out

@@ -53,26 +53,26 @@ size_t meshBufferBytes(const Mesh& mesh) {
   return bytes;
 }
 
-Mesh loadMesh(const std::string& spec, const LoadOptions& options) {
-  auto start = std::chrono::steady_clock::now();
-  Mesh mesh;
+Mesh loadUnfinishedMesh(const std::string& spec, const LoadOptions& options) {
   if (spec.rfind("procedural:", 0) == 0) {
     if (!options.properties.empty())
       throw Error(cat(spec, ": AOV '", options.properties.front().aovName(),
                       "': a procedural mesh has no integer face or vertex properties (PLY "
                       "files do)"));
-    mesh = makeProcedural(spec);  // no vertex normals: shading normals fall back to Ng
-  } else {
-    std::string ext = lowerExtension(spec);
-    if (ext == ".ply") {
-      mesh = loadPly(spec, options);
-    } else if (ext == ".obj") {
-      mesh = loadObj(spec, options);
-    } else {
-      throw Error(cat(spec, ": unknown mesh file extension '", ext,
-                      "' (expected .ply, .obj or procedural:NAME)"));
-    }
+    return makeProcedural(spec);  // no vertex normals: shading normals fall back to Ng
   }
+  const std::string ext = lowerExtension(spec);
+  if (ext == ".ply") return loadPly(spec, options);
+  if (ext == ".obj") return loadObj(spec, options);
+  if (ext == ".gltf" || ext == ".glb")
+    throw Error(cat(spec, ": a glTF file holds a scene of meshes: load it with loadSceneFile"));
+  throw Error(cat(spec, ": unknown mesh file extension '", ext,
+                  "' (expected .ply, .obj, .gltf, .glb or procedural:NAME)"));
+}
+
+Mesh loadMesh(const std::string& spec, const LoadOptions& options) {
+  auto start = std::chrono::steady_clock::now();
+  Mesh mesh = loadUnfinishedMesh(spec, options);
   finishMesh(mesh, options);
   mesh.stats.loadSeconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -136,6 +136,9 @@ struct LoadOptions {
 /// (see procedural.cpp for the names). Throws Error naming the file and the problem: unreadable,
 /// truncated, bad number, counts larger than the file, an index out of range.
 Mesh loadMesh(const std::string& spec, const LoadOptions& options = {});
+/// The loader's mesh of `spec` (PLY, OBJ as one mesh, procedural) before finishMesh: what
+/// loadMesh finishes and a scene file of one mesh places (core/mesh/scene_file.h).
+Mesh loadUnfinishedMesh(const std::string& spec, const LoadOptions& options = {});
 
 /// Loaders for one format each (loadMesh dispatches). They fill positions in world space
 /// (anchor 0, no padding); finishMesh() then validates, anchors and pads. Of `options` they

@@ -26,19 +26,7 @@ std::string stemOf(const std::string& spec) {
 SceneFile singleMeshFile(const std::string& spec, const LoadOptions& options) {
   SceneFile file;
   file.path = spec;
-  Mesh mesh;
-  if (spec.rfind("procedural:", 0) == 0) {
-    if (!options.properties.empty())
-      throw Error(cat(spec, ": AOV '", options.properties.front().aovName(),
-                      "': a procedural mesh has no integer face or vertex properties (PLY "
-                      "files do)"));
-    mesh = makeProcedural(spec);
-  } else if (lowerExtension(spec) == ".ply") {
-    mesh = loadPly(spec, options);
-  } else {
-    throw Error(cat(spec, ": unknown mesh file extension '", lowerExtension(spec),
-                    "' (expected .ply, .obj, .gltf, .glb or procedural:NAME)"));
-  }
+  Mesh mesh = loadUnfinishedMesh(spec, options);
   file.fileBytes = mesh.stats.fileBytes;
   const std::string name = spec.rfind("procedural:", 0) == 0 ? spec : stemOf(spec);
   file.meshes.push_back(std::move(mesh));

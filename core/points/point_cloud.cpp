@@ -6,6 +6,22 @@
 
 namespace aperture {
 
+const char* npyDescrOf(PointType type) {
+  switch (type) {
+    case PointType::UInt8:
+      return "|u1";
+    case PointType::UInt16:
+      return "<u2";
+    case PointType::UInt32:
+      return "<u4";
+    case PointType::Float32:
+      return "<f4";
+    case PointType::Float64:
+      return "<f8";
+  }
+  return "<f4";
+}
+
 size_t pointTypeSize(PointType type) {
   switch (type) {
     case PointType::UInt8:

@@ -13,6 +13,8 @@ namespace aperture {
 
 /// The type of one field value.
 enum class PointType { UInt8, UInt16, UInt32, Float32, Float64 };
+/// The NumPy dtype string of `type` ("|u1", "<u2", "<u4", "<f4", "<f8").
+const char* npyDescrOf(PointType type);
 size_t pointTypeSize(PointType type);
 
 /// One field of a point cloud or one channel of a range image: `count` values of `type`,

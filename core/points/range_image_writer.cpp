@@ -13,22 +13,6 @@ namespace aperture {
 
 namespace {
 
-const char* npyDescr(PointType type) {
-  switch (type) {
-    case PointType::UInt8:
-      return "|u1";
-    case PointType::UInt16:
-      return "<u2";
-    case PointType::UInt32:
-      return "<u4";
-    case PointType::Float32:
-      return "<f4";
-    case PointType::Float64:
-      return "<f8";
-  }
-  return "<f4";
-}
-
 void checkImage(const std::string& path, const RangeImage& image) {
   if (image.rows <= 0 || image.columns <= 0)
     throw Error(
@@ -64,7 +48,7 @@ void writeRangeImageNpz(const std::string& path, const RangeImage& image) {
   std::vector<NpzArray> arrays;
   const std::vector<uint64_t> shape = {uint64_t(image.rows), uint64_t(image.columns)};
   for (const PointField& c : channels)
-    arrays.push_back({c.name, npyDescr(c.type), shape, c.bytes.data(), c.bytes.size()});
+    arrays.push_back({c.name, npyDescrOf(c.type), shape, c.bytes.data(), c.bytes.size()});
   std::vector<int32_t> shifts(image.pixelShiftByRow.begin(), image.pixelShiftByRow.end());
   if (!shifts.empty())
     arrays.push_back(

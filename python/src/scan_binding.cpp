@@ -22,22 +22,6 @@ namespace aperture::python {
 
 namespace {
 
-const char* descrOf(PointType type) {
-  switch (type) {
-    case PointType::UInt8:
-      return "|u1";
-    case PointType::UInt16:
-      return "<u2";
-    case PointType::UInt32:
-      return "<u4";
-    case PointType::Float32:
-      return "<f4";
-    case PointType::Float64:
-      return "<f8";
-  }
-  return "<f4";
-}
-
 /// The standard fields a scan fills (for `fields` checks and the face properties' names).
 bool isStandardField(const std::string& name) {
   namespace pf = point_fields;
@@ -153,7 +137,7 @@ class PyScanScene {
         throw Error(cat("Scene.scan: no field '", name, "' (known: ", join(known, ", "), ")"));
       }
       arrays.push_back({f->name,
-                        descrOf(f->type),
+                        npyDescrOf(f->type),
                         {uint64_t(cloud->size)},
                         f->bytes.data(),
                         uint64_t(f->bytes.size())});

@@ -33,20 +33,10 @@ struct WorldTriangle {
   uint32_t node, mesh, material, prim;
 };
 
-/// A node's local transform as glTF 2.0 defines it: its matrix, else T · R · S.
-glm::dmat4 localOf(const test::GltfNode& n) {
-  if (n.matrix) return *n.matrix;
-  glm::dmat4 m(1.0);
-  if (n.translation) m = glm::translate(m, *n.translation);
-  if (n.rotation) m = m * glm::mat4_cast(*n.rotation);
-  if (n.scale) m = glm::scale(m, *n.scale);
-  return m;
-}
-
 void addNodeTriangles(const test::GltfScene& s, int node, const glm::dmat4& parent,
                       std::vector<WorldTriangle>& out) {
   const test::GltfNode& n = s.nodes[size_t(node)];
-  const glm::dmat4 world = parent * localOf(n);
+  const glm::dmat4 world = parent * test::gltfLocalMatrix(n);
   if (n.mesh >= 0) {
     uint32_t prim = 0;
     for (const test::GltfPrimitive& p : s.meshes[size_t(n.mesh)].primitives) {

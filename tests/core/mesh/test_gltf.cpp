@@ -25,16 +25,6 @@ LoadOptions gltfEverything() {
   return o;
 }
 
-/// The local matrix of a writer node, composed with glm's own functions.
-glm::dmat4 gltfLocal(const test::GltfNode& n) {
-  if (n.matrix) return *n.matrix;
-  glm::dmat4 m(1.0);
-  if (n.translation) m = glm::translate(m, *n.translation);
-  if (n.rotation) m = m * glm::mat4_cast(*n.rotation);
-  if (n.scale) m = glm::scale(m, *n.scale);
-  return m;
-}
-
 void expectGltfMatrix(const glm::dmat4& a, const glm::dmat4& b) {
   for (int c = 0; c < 4; ++c)
     for (int r = 0; r < 4; ++r)
@@ -48,13 +38,13 @@ TEST(Gltf, Issue41SceneTransformsAndInstancing) {
   ASSERT_EQ(f.meshes.size(), 2u);
   ASSERT_EQ(f.instances.size(), 4u);
   // Depth first in node order: quad_a (1), quad_b (2), quad_c (4), tri (5).
-  const glm::dmat4 root = gltfLocal(s.nodes[0]);
-  const glm::dmat4 group = root * gltfLocal(s.nodes[3]);
+  const glm::dmat4 root = test::gltfLocalMatrix(s.nodes[0]);
+  const glm::dmat4 group = root * test::gltfLocalMatrix(s.nodes[3]);
   const std::vector<std::pair<uint32_t, glm::dmat4>> expected = {
-      {1, root * gltfLocal(s.nodes[1])},
-      {2, root * gltfLocal(s.nodes[2])},
-      {4, group * gltfLocal(s.nodes[4])},
-      {5, group * gltfLocal(s.nodes[5])}};
+      {1, root * test::gltfLocalMatrix(s.nodes[1])},
+      {2, root * test::gltfLocalMatrix(s.nodes[2])},
+      {4, group * test::gltfLocalMatrix(s.nodes[4])},
+      {5, group * test::gltfLocalMatrix(s.nodes[5])}};
   for (size_t i = 0; i < expected.size(); ++i) {
     SCOPED_TRACE(i);
     EXPECT_EQ(f.instances[i].id, expected[i].first);
@@ -73,7 +63,7 @@ TEST(Gltf, Issue41SceneTransformsAndInstancing) {
   EXPECT_EQ(f.cameras[0].aspectRatio, std::optional<double>(1.5));
   EXPECT_DOUBLE_EQ(f.cameras[0].znear, 0.1);
   EXPECT_EQ(f.cameras[0].zfar, std::optional<double>(100));
-  expectGltfMatrix(f.cameras[0].worldFromCamera, gltfLocal(s.nodes[6]));
+  expectGltfMatrix(f.cameras[0].worldFromCamera, test::gltfLocalMatrix(s.nodes[6]));
   EXPECT_EQ(f.skippedPrimitives, 0u);
 }
 
