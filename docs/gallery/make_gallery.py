@@ -142,7 +142,8 @@ def main():
     work = tempfile.mkdtemp(prefix='aperture_gallery_')
     lines = ['# Gallery', '',
              'Made by `docs/gallery/make_gallery.py` from the current build; the command under each '
-             'picture made it (`--out` is where its EXR went).', '', '## Cameras and lenses', '',
+             'picture made it (`--out` is where its EXR went; `/tmp/gallery` stands for the script\'s '
+             'working folder, where it also writes the GLB).', '', '## Cameras and lenses', '',
              '| | |', '|---|---|']
     cells = []
     for name, caption, flags in lecture_shots(shared):
