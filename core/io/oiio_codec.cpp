@@ -151,16 +151,20 @@ OIIO::TextureOpt::Wrap wrapOf(TextureWrapMode mode) {
   return OIIO::TextureOpt::WrapPeriodic;
 }
 
-/// Textures in a private TextureSystem, each an image in memory (MemoryInput) it samples at
-/// its finest level with zero-width footprints.
+/// Textures in OpenImageIO's shared TextureSystem, each an image in memory (MemoryInput) under
+/// a name of this set's own, sampled at its finest level with zero-width footprints. Not a
+/// private TextureSystem: OpenImageIO 2.4's TextureSystem::destroy frees a private one with a
+/// delete of another size than its create allocated (AddressSanitizer's
+/// new-delete-type-mismatch, inside libOpenImageIO); the shared one lives as long as the
+/// process, and a set drops its files from it when it goes.
 class OiioTextureSet final : public TextureSet {
  public:
-  OiioTextureSet() : system_(OIIO::TextureSystem::create(/*shared=*/false)) {
+  OiioTextureSet() : system_(OIIO::TextureSystem::create(/*shared=*/true)) {
     static std::atomic<uint64_t> sets{0};
     prefix_ = "aperture-texture-" + std::to_string(sets++) + "-";
   }
   ~OiioTextureSet() override {
-    OIIO::TextureSystem::destroy(system_);
+    for (const Entry& e : entries_) system_->invalidate(e.name, /*force=*/true);
     const std::lock_guard<std::mutex> lock(memoryTexturesMutex);
     for (const Entry& e : entries_) memoryTextures.erase(e.name.string());
   }
