@@ -264,9 +264,9 @@ ScanSweep scanSweep(const Scene& scene, const LidarSensor& sensor, const LidarRa
   cloud.startSeconds = double(rays.sweepStartNs) * 1e-9;
   // Every field is written for every point below: left unwritten here.
   const PointType xyzType = positionType(options.frame);
-  PointField* xyz[3] = {&cloud.addField(pf::kX, xyzType, false), nullptr, nullptr};
-  xyz[1] = &cloud.addField(pf::kY, xyzType, false);
-  xyz[2] = &cloud.addField(pf::kZ, xyzType, false);
+  cloud.addField(pf::kX, xyzType, false);
+  cloud.addField(pf::kY, xyzType, false);
+  cloud.addField(pf::kZ, xyzType, false);
   auto* range = cloud.add<float>(pf::kRange, PointType::Float32, false);
   auto* time = cloud.add<uint32_t>(pf::kTime, PointType::UInt32, false);
   auto* ring = cloud.add<uint16_t>(pf::kRing, PointType::UInt16, false);
@@ -286,6 +286,9 @@ ScanSweep scanSweep(const Scene& scene, const LidarSensor& sensor, const LidarRa
       throw Error(cat("face property '", name, "' has the name of a standard point field"));
     properties.push_back(cloud.add<uint32_t>(name, PointType::UInt32, false));
   }
+  // The fields themselves are taken once every field is added: adding one may move the others
+  // (their values stay where they are, which the pointers above hold).
+  PointField* xyz[3] = {cloud.find(pf::kX), cloud.find(pf::kY), cloud.find(pf::kZ)};
   std::vector<const MeshProperty*> propertyOf;  // object-major: [object · P + p]
   for (size_t o = 0; o < scene.objectCount(); ++o)
     for (const std::string& name : options.faceProperties)
