@@ -132,6 +132,11 @@ PrimitiveData decodeDraco(const tinygltf::Model& model, const tinygltf::Primitiv
     const draco::PointAttribute* a = mesh->GetAttributeByUniqueId(uint32_t(id.GetNumberAsInt()));
     if (!a)
       fail(file, cat(p, "/attributes/", name), cat("no Draco attribute ", id.GetNumberAsInt()));
+    // glTF's attributes are numbers: a bool (or untyped) attribute is refused before draco's
+    // conversion reads its bytes as bool, which any byte but 0 and 1 makes undefined.
+    const draco::DataType type = a->data_type();
+    if (type == draco::DT_BOOL || type == draco::DT_INVALID || type >= draco::DT_TYPES_COUNT)
+      fail(file, cat(p, "/attributes/", name), "a Draco attribute of a type that is no number");
     const int n = a->num_components();
     if (n != want && n != alt)
       fail(file, cat(p, "/attributes/", name), cat("a Draco attribute of ", n, " components"));
