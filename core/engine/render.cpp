@@ -740,12 +740,9 @@ void storeMeshDataLane(const ImagePlan& plan, const PacketState<N>& st, const Pa
   if (plan.shadingNormal) {
     glm::vec3 ns = geometricNormal();
     if (!mesh.vertexNormals.empty()) {
-      const float* vn = mesh.vertexNormals.data();
       const float w[3] = {1.0f - u - v, u, v};
-      glm::vec3 sum(0.0f);
-      for (int c = 0; c < 3; ++c)
-        sum += w[c] * glm::vec3(vn[3 * size_t(corner[c])], vn[3 * size_t(corner[c]) + 1],
-                                vn[3 * size_t(corner[c]) + 2]);
+      glm::vec3 sum;
+      interpolateCorners<3>(mesh.vertexNormals.data(), corner, w, &sum.x);
       if (st.hits.instID[k] != RTC_INVALID_GEOMETRY_ID)
         sum = plan.scene.normalFromMesh(st.hits.instID[k]) * sum;
       ns = unitOr(sum, geometricNormal());
