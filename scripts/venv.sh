@@ -21,3 +21,14 @@ if ! .venv/bin/python -c 'import laspy, pypcd4, ouster.sdk' 2>/dev/null; then
   .venv/bin/python -m pip install -q --disable-pip-version-check laspy pypcd4 ouster-sdk
   .venv/bin/python -m pip install -q --disable-pip-version-check "nanobind==${nanobind_version}"
 fi
+# The peers and clusters of issues 43 and 44: Open3D (open3d-cpu: its RaycastingScene is the
+# reference the point queries and the Python render are compared with), Dask with its
+# distributed scheduler and Ray (aperture.distributed's LocalCluster and ray.init tests).
+# Ray publishes wheels for x86-64 Linux; where it cannot be installed its tests skip.
+if ! .venv/bin/python -c 'import open3d, dask, distributed' 2>/dev/null; then
+  .venv/bin/python -m pip install -q --disable-pip-version-check open3d-cpu 'dask[distributed]'
+fi
+if ! .venv/bin/python -c 'import ray' 2>/dev/null; then
+  .venv/bin/python -m pip install -q --disable-pip-version-check 'ray[data]' ||
+    echo "venv: ray could not be installed; the Ray tests will skip"
+fi

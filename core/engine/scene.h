@@ -201,6 +201,9 @@ class Scene {
   void setLooks(std::shared_ptr<const SurfaceLooks> looks) { looks_ = std::move(looks); }
   /// Number of objects (top-level geomIDs 0 .. objectCount() - 1).
   size_t objectCount() const { return objectMeshes_.size(); }
+  /// The objects as given (object k is top-level geomID k): their meshes and placements, for
+  /// queries that read the triangles themselves (core/queries: closest points, winding numbers).
+  const std::vector<SceneObject>& objects() const { return objects_; }
   /// Render-space box that holds everything a ray can hit, padded (core/engine/scene_box.h);
   /// nullopt when Embree's bounds are empty or not finite.
   const std::optional<SceneBox>& box() const { return box_; }
