@@ -21,11 +21,12 @@ set(APERTURE_PARTS
   "cameras/registry: cameras/models"                 # the list of models; describe, culling
   "cameras/lidar: cameras/geometry core/queries"     # LiDAR sensors, trajectories, rolling shutter
   "apps/services: cameras/registry cameras/files cameras/lidar core/points core/queries"  # scene set-up, one view, outputs, scans
+  "apps/queries: core/queries core/io"               # point queries: what --what asks, their arrays
   "apps/jobs: apps/services"                         # job files
   "apps/batch: apps/jobs"                            # batches: writers, resume, shards, summaries
   "bench/measure: apps/services"                     # scaling, trade-off study, the bare-Embree baseline
-  "apps/cli: apps/batch bench/measure"               # the aperture command line
-  "python/src: apps/jobs"                            # the Python module (links no CLI part)
+  "apps/cli: apps/batch bench/measure apps/queries"  # the aperture command line
+  "python/src: apps/jobs apps/queries"               # the Python module (links no CLI part)
 )
 
 # Library headers and the part that owns each: only that part, and the parts that may include

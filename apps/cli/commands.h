@@ -14,5 +14,6 @@ Command addBatchCommand(CLI::App& app);
 Command addTradeoffCommand(CLI::App& app);
 Command addVisibilityCommand(CLI::App& app);
 Command addScanCommand(CLI::App& app);
+Command addQueryCommand(CLI::App& app);
 
 }  // namespace aperture::app

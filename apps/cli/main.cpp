@@ -38,7 +38,7 @@ Commands addCommands(CLI::App& app) {
   Commands commands;
   for (Command (*make)(CLI::App&) :
        {addRenderCommand, addBenchCommand, addBatchCommand, addCameraCommand, addTradeoffCommand,
-        addVisibilityCommand, addScanCommand}) {
+        addVisibilityCommand, addScanCommand, addQueryCommand}) {
     const size_t before = app.get_subcommands({}).size();
     Command run = make(app);
     commands.emplace_back(app.get_subcommands({})[before], std::move(run));

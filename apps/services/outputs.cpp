@@ -56,6 +56,7 @@ void extendDepthRange(const WorldView& c, const glm::dvec3& boxLo, const glm::dv
 const std::vector<std::string>& supportedExtensions(OutputKind kind) {
   static const std::vector<std::string> exr = {".exr"};
   static const std::vector<std::string> visibility = {".npz", ".ply"};
+  static const std::vector<std::string> query = {".npz"};
   switch (kind) {
     case OutputKind::Exr:
       return exr;
@@ -63,6 +64,8 @@ const std::vector<std::string>& supportedExtensions(OutputKind kind) {
       return previewExtensions();
     case OutputKind::Visibility:
       return visibility;
+    case OutputKind::Query:
+      return query;
     case OutputKind::Dataset:
       break;
   }

@@ -21,12 +21,13 @@ enum class OutputKind {
   Preview,     ///< the 8-bit preview (`--preview`, the job's "preview")
   Dataset,     ///< one AOV in a dataset format (`--out x.png` with one AOV, the job's "outputs")
   Visibility,  ///< `aperture visibility --out`: the arrays (.npz) or the mesh with them (.ply)
+  Query,       ///< `aperture query --out`: the arrays (.npz)
 };
 
 /// The extensions (lower case, with the dot) a kind of output may end in; checks ignore case.
 /// Exr: .exr. Preview: previewExtensions() of core/io/image.h (8-bit RGB). Dataset:
 /// datasetExtensions() of core/io/dataset_image.h (.png is a 16-bit depth file there, an 8-bit
-/// picture as a preview). Visibility: .npz .ply.
+/// picture as a preview). Visibility: .npz .ply. Query: .npz.
 const std::vector<std::string>& supportedExtensions(OutputKind kind);
 
 /// Checks the name of the output file `path`, given as `name` (a flag such as "--out" or a job

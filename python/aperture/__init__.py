@@ -371,8 +371,171 @@ class Scene:
             threads,
         )
 
+    def closest_points(self, points: Any, threads: int = 0) -> dict[str, np.ndarray]:
+        """The closest surface point to each of ``points`` ((N, 3) float32 or float64, world
+        coordinates; docs/queries.md). Returns ``points`` (N, 3) float64 (the closest points),
+        ``distance`` (N) float64, ``primid`` (N) uint32 (the triangle as loaded),
+        ``barycentric`` (N, 3) float64 (the weights of its three corners), ``geomid`` (N)
+        uint32 (the object) and ``instance`` (N) uint32 (the instance id). Computed in double on
+        every core (``threads``: 0 = all), the GIL released. A point that is not finite gets NaN
+        and ids 0xFFFFFFFF (a RuntimeWarning counts them)."""
+        arrays, _ = self._point_queries("closest_points", points, "closest,distance", None, 1, threads)
+        return arrays
+
+    def distance(self, points: Any, threads: int = 0) -> np.ndarray:
+        """The unsigned distance from each of ``points`` ((N, 3)) to the surface, (N) float64."""
+        arrays, _ = self._point_queries("distance", points, "distance", None, 1, threads)
+        return arrays["distance"]
+
+    def signed_distance(
+        self, points: Any, method: str | None = None, parity_directions: int = 1, threads: int = 0
+    ) -> np.ndarray:
+        """The distance to the surface, negative inside, (N) float64 (docs/queries.md).
+        ``method``: how inside is decided: ``"parity"`` (ray crossings; ``parity_directions``
+        odd: the majority over that many fixed directions), ``"winding"`` (generalized winding
+        number) or None (parity for a closed mesh, else winding). The method that ran is
+        ``scene.last_query["method"]``."""
+        arrays, _ = self._point_queries("signed_distance", points, "sign", method, parity_directions, threads)
+        return arrays["signed_distance"]
+
+    def occupancy(
+        self, points: Any, method: str | None = None, parity_directions: int = 1, threads: int = 0
+    ) -> np.ndarray:
+        """1 where a point of ``points`` is inside the surface, else 0, (N) uint8; ``method`` as
+        signed_distance's, the one that ran in ``scene.last_query["method"]``. A point that is
+        not finite gets 0."""
+        arrays, _ = self._point_queries("occupancy", points, "occupancy", method, parity_directions, threads)
+        return arrays["occupancy"]
+
+    @property
+    def last_query(self) -> dict[str, Any]:
+        """What the last point query of this scene did: ``what`` (the method called),
+        ``points``, ``non_finite`` (points that got NaN) and ``method`` (the inside method that
+        ran, ``"parity"`` or ``"winding"``; None for queries without a sign)."""
+        return dict(self.__dict__.get("_last_query", {}))
+
+    def count_intersections(self, origins: Any, directions: Any, threads: int = 0) -> np.ndarray:
+        """The number of surfaces each ray crosses, (N) uint32: rays from ``origins`` along
+        ``directions`` (both (N, 3), float32 or float64, world; directions need not be unit),
+        from t = 0 on. A triangle counts once; triangles met at exactly the same float t count
+        once (a ray through a shared edge). A ray that is not finite counts 0."""
+        o, d = self._rays("count_intersections", origins, directions)
+        counts, non_finite = self._scene._count_intersections(o, d, threads)
+        _warn_non_finite("count_intersections", non_finite, len(o), "rays")
+        return counts
+
+    def list_intersections(self, origins: Any, directions: Any, threads: int = 0) -> dict[str, np.ndarray]:
+        """Every surface along each ray, nearest first, as count_intersections counts them:
+        ``ray_splits`` (N + 1) uint64 (ray k's hits are [ray_splits[k], ray_splits[k + 1])),
+        ``ray_ids`` uint32, ``t`` float64 (in units of |direction|), ``primid`` and ``geomid``
+        uint32."""
+        o, d = self._rays("list_intersections", origins, directions)
+        arrays, non_finite = self._scene._list_intersections(o, d, threads)
+        _warn_non_finite("list_intersections", non_finite, len(o), "rays")
+        return arrays
+
+    def signed_distance_grid(
+        self,
+        bounds: Any,
+        resolution: int | Sequence[int],
+        path: str | os.PathLike[str] | None = None,
+        method: str | None = None,
+        threads: int = 0,
+    ) -> np.ndarray:
+        """Signed distances on a regular grid, (Z, Y, X) float32: ``bounds`` ((x0, y0, z0),
+        (x1, y1, z1)), ``resolution`` the samples per axis (one int, or (nx, ny, nz), each >=
+        2), sample (i, j, k) at (x0 + k (x1 - x0) / (nx - 1), y0 + j ..., z0 + i ...): both
+        bounds are samples. Computed as signed_distance, one z slab at a time; ``path``: also
+        written there as .npy (atomically)."""
+        lo, hi = _grid_bounds(bounds)
+        n = _grid_resolution(resolution)
+        if path is not None and not os.fspath(path).lower().endswith(".npy"):
+            raise ValueError(f"signed_distance_grid: path '{os.fspath(path)}' must end in .npy")
+        xs, ys, zs = (np.linspace(lo[a], hi[a], n[a]) for a in range(3))
+        out = np.empty((n[2], n[1], n[0]), dtype=np.float32)
+        gy, gx = np.meshgrid(ys, xs, indexing="ij")
+        slab = np.empty((n[1] * n[0], 3), dtype=np.float64)
+        slab[:, 0], slab[:, 1] = gx.ravel(), gy.ravel()
+        methods = set()
+        for i, z in enumerate(zs):
+            slab[:, 2] = z
+            out[i] = self.signed_distance(slab, method, threads=threads).reshape(n[1], n[0])
+            methods.add(self.last_query["method"])
+        self._last_query = {"what": "signed_distance_grid", "points": out.size,
+                            "non_finite": 0, "method": methods.pop() if methods else None}
+        if path is not None:
+            _save_npy_atomically(os.fspath(path), out)
+        return out
+
+    def _point_queries(
+        self, fn: str, points: Any, what: str, method: str | None, parity_directions: int, threads: int
+    ) -> tuple[dict[str, np.ndarray], str]:
+        p = _query_points(fn, "points", points)
+        arrays, non_finite, used = self._scene._point_queries(
+            p, what, "automatic" if method is None else method, parity_directions, threads
+        )
+        _warn_non_finite(fn, non_finite, len(p), "points")
+        self._last_query = {"what": fn, "points": len(p), "non_finite": non_finite, "method": used or None}
+        return arrays, used
+
+    @staticmethod
+    def _rays(fn: str, origins: Any, directions: Any) -> tuple[np.ndarray, np.ndarray]:
+        o = _query_points(fn, "origins", origins)
+        d = _query_points(fn, "directions", directions)
+        if len(o) != len(d):
+            raise ValueError(f"{fn}: origins has {len(o)} rows, directions {len(d)}")
+        return o, d
+
     def __repr__(self) -> str:
         return f"Scene({self._scene.mesh_names!r}, triangles={self.triangle_count})"
+
+
+def _query_points(fn: str, name: str, values: Any) -> np.ndarray:
+    """``values`` as C-contiguous float64 (N, 3); ValueError naming ``fn`` and ``name`` for
+    another dtype or shape."""
+    a = np.asarray(values)
+    if a.dtype not in (np.float32, np.float64):
+        raise ValueError(f"{fn}: {name} must be float32 or float64, not {a.dtype}")
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise ValueError(f"{fn}: {name} must have shape (N, 3), not {a.shape}")
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def _warn_non_finite(fn: str, count: int, total: int, what: str) -> None:
+    if count:
+        warnings.warn(
+            f"{fn}: {count} of {total} {what} are not finite (or beyond float range): their results are NaN",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+
+
+def _grid_bounds(bounds: Any) -> tuple[np.ndarray, np.ndarray]:
+    b = np.asarray(bounds, dtype=np.float64)
+    if b.shape != (2, 3) or not np.all(np.isfinite(b)) or not np.all(b[1] > b[0]):
+        raise ValueError(f"signed_distance_grid: bounds must be ((x0, y0, z0), (x1, y1, z1)) with x1 > x0 ..., not {bounds!r}")
+    return b[0], b[1]
+
+
+def _grid_resolution(resolution: int | Sequence[int]) -> tuple[int, int, int]:
+    r = [resolution] * 3 if np.isscalar(resolution) else list(resolution)
+    if len(r) != 3 or any(int(v) != v or v < 2 for v in r):
+        raise ValueError(f"signed_distance_grid: resolution must be an int >= 2 or three of them, not {resolution!r}")
+    return int(r[0]), int(r[1]), int(r[2])
+
+
+def _save_npy_atomically(path: str, array: np.ndarray) -> None:
+    """np.save to a temporary file beside ``path``, then renamed over it: no partial file."""
+    directory = os.path.dirname(os.path.abspath(path))
+    tmp = os.path.join(directory, f".{os.path.basename(path)}.{os.getpid()}.tmp")
+    try:
+        with open(tmp, "wb") as f:
+            np.save(f, array)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
 
 
 def _mesh_arrays(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray]:

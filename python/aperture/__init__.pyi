@@ -124,6 +124,35 @@ class Scene:
         threads: int = 0,
     ) -> dict[str, np.ndarray]:
         """Per point: the cameras that see it, as CSR index arrays (GIL released)."""
+    def closest_points(self, points: Any, threads: int = 0) -> dict[str, np.ndarray]:
+        """Per point: the closest surface point, distance, primid, barycentric, geomid,
+        instance (docs/queries.md; GIL released)."""
+    def distance(self, points: Any, threads: int = 0) -> np.ndarray:
+        """Per point: the unsigned distance to the surface, (N) float64."""
+    def signed_distance(
+        self, points: Any, method: str | None = None, parity_directions: int = 1, threads: int = 0
+    ) -> np.ndarray:
+        """Per point: the distance, negative inside; the method in last_query["method"]."""
+    def occupancy(
+        self, points: Any, method: str | None = None, parity_directions: int = 1, threads: int = 0
+    ) -> np.ndarray:
+        """Per point: 1 inside, else 0, (N) uint8; the method in last_query["method"]."""
+    @property
+    def last_query(self) -> dict[str, Any]:
+        """what, points, non_finite and method of the last point query."""
+    def count_intersections(self, origins: Any, directions: Any, threads: int = 0) -> np.ndarray:
+        """Per ray: the surfaces it crosses, (N) uint32."""
+    def list_intersections(self, origins: Any, directions: Any, threads: int = 0) -> dict[str, np.ndarray]:
+        """Every hit along each ray: ray_splits, ray_ids, t, primid, geomid."""
+    def signed_distance_grid(
+        self,
+        bounds: Any,
+        resolution: int | Sequence[int],
+        path: str | os.PathLike[str] | None = None,
+        method: str | None = None,
+        threads: int = 0,
+    ) -> np.ndarray:
+        """Signed distances on a grid with both bounds sampled, (Z, Y, X) float32; .npy at path."""
     def scan(
         self,
         lidar: _PathLike,

@@ -26,6 +26,7 @@
 #include "core/util/error.h"
 #include "file_errors.h"
 #include "named_arrays.h"
+#include "query_binding.h"
 
 namespace aperture::python {
 
@@ -246,6 +247,8 @@ class PyScene {
     return n;
   }
   const std::vector<std::string>& meshNames() const { return loaded_.names; }
+  /// The built scene (the point and ray queries, query_binding.h).
+  const Scene& scene() const { return *loaded_.scene; }
 
   /// Scene.ids: the names behind the instance, mesh and material ids (SceneIds).
   nb::dict ids() const {
@@ -435,6 +438,7 @@ void bindScene(nb::module_& m) {
                    "its id")
       .def("triangles", &PyScene::triangles,
            "Every object's triangles in world space, (T, 3, 3) float64, in scene order");
+  bindSceneQueries(scene);
 }
 
 }  // namespace aperture::python
