@@ -128,6 +128,21 @@ struct QueryState {
     const double r = (std::sqrt(d2) + slack) * (1 + 1e-6);
     return std::nextafter(float(r), std::numeric_limits<float>::infinity());
   }
+  /// Makes triangle `prim` of `object` the best so far if it is closer (or as close and first
+  /// in (object, primId) order); true when it did.
+  bool consider(unsigned obj, uint32_t pr) {
+    const uint32_t tri = qs->scene->meshTriangle(obj, pr);
+    const dvec3 a = qs->corner(obj, tri, 0), b = qs->corner(obj, tri, 1),
+                c = qs->corner(obj, tri, 2);
+    const double pp[3] = {p.x, p.y, p.z};
+    const double va[3] = {a.x, a.y, a.z}, vb[3] = {b.x, b.y, b.z}, vc[3] = {c.x, c.y, c.z};
+    const TrianglePoint q = closestPointOnTriangle(pp, va, vb, vc);
+    const dvec3 d = p - dvec3(q.x, q.y, q.z);
+    const double d2 = glm::dot(d, d);
+    if (d2 > bestD2 || (d2 == bestD2 && !winsTie(obj, pr))) return false;
+    bestD2 = d2, object = obj, prim = pr, point = q;
+    return true;
+  }
   /// Whether (object, prim) comes before the best so far among triangles at the same distance.
   bool winsTie(unsigned obj, uint32_t pr) const {
     const Scene& s = *qs->scene;
@@ -138,23 +153,13 @@ struct QueryState {
 
 bool onCandidate(RTCPointQueryFunctionArguments* args) {
   auto* st = static_cast<QueryState*>(args->userPtr);
-  const QueryScene& qs = *st->qs;
+  const Scene& scene = *st->qs->scene;
   unsigned geom = args->geomID, prim = args->primID;
   unsigned inst =
       args->context->instStackSize > 0 ? args->context->instID[0] : RTC_INVALID_GEOMETRY_ID;
-  if (qs.scene->hasChunks()) qs.scene->resolveChunkHits(&geom, &prim, &inst, 1);
-  const unsigned object = inst == RTC_INVALID_GEOMETRY_ID ? geom : inst;
-  const uint32_t tri = qs.scene->meshTriangle(object, prim);
-  const dvec3 a = qs.corner(object, tri, 0), b = qs.corner(object, tri, 1),
-              c = qs.corner(object, tri, 2);
-  const double p[3] = {st->p.x, st->p.y, st->p.z};
-  const double va[3] = {a.x, a.y, a.z}, vb[3] = {b.x, b.y, b.z}, vc[3] = {c.x, c.y, c.z};
-  const TrianglePoint q = closestPointOnTriangle(p, va, vb, vc);
-  const dvec3 d = st->p - dvec3(q.x, q.y, q.z);
-  const double d2 = glm::dot(d, d);
-  if (d2 > st->bestD2 || (d2 == st->bestD2 && !st->winsTie(object, prim))) return false;
-  st->bestD2 = d2, st->object = object, st->prim = prim, st->point = q;
-  const float r = st->radiusFor(d2);
+  if (scene.hasChunks()) scene.resolveChunkHits(&geom, &prim, &inst, 1);
+  if (!st->consider(inst == RTC_INVALID_GEOMETRY_ID ? geom : inst, prim)) return false;
+  const float r = st->radiusFor(st->bestD2);
   if (!(r < args->query->radius)) return false;
   args->query->radius = r;
   return true;
@@ -200,9 +205,16 @@ void storeFound(const Scene& scene, const QueryState& st, ClosestPoints& out, si
       scene.objectIds(st.object).instance + (mesh.faceGroups.empty() ? 0u : mesh.faceGroups[tri]);
 }
 
-/// Searches query k; false when its point cannot be queried (not finite, or beyond Embree's
-/// float range in render space).
-bool searchOne(const QueryScene& qs, const double* world, QueryState& st) {
+/// The answer of a nearby query, whose triangle starts the next search: its distance bounds
+/// the search radius from the start, so Embree culls most of the BVH at once.
+struct Seed {
+  unsigned object = RTC_INVALID_GEOMETRY_ID;
+  uint32_t prim = 0;
+};
+
+/// Searches query k, starting from `seed`'s triangle when it has one; false when its point
+/// cannot be queried (not finite, or beyond Embree's float range in render space).
+bool searchOne(const QueryScene& qs, const double* world, const Seed& seed, QueryState& st) {
   const dvec3 p = load(world);
   const dvec3 render = p - qs.origin;
   const float fx = float(render.x), fy = float(render.y), fz = float(render.z);
@@ -216,15 +228,64 @@ bool searchOne(const QueryScene& qs, const double* world, QueryState& st) {
   query.x = fx, query.y = fy, query.z = fz;
   query.time = 0.0f;
   query.radius = std::numeric_limits<float>::infinity();
+  if (seed.object != RTC_INVALID_GEOMETRY_ID && st.consider(seed.object, seed.prim))
+    query.radius = st.radiusFor(st.bestD2);
   RTCPointQueryContext context;
   rtcInitPointQueryContext(&context);
   rtcPointQuery(qs.scene->handle(), &query, &context, onCandidate, &st);
   return st.object != RTC_INVALID_GEOMETRY_ID;
 }
 
+/// Cells per axis of the grid spatialOrder sorts by.
+constexpr uint32_t kOrderGrid = 64;
+
+/// Bit k of v moved to bit 3k: one axis of a Morton code.
+uint32_t spreadBits(uint32_t v) {
+  uint32_t out = 0;
+  for (int k = 0; k < 6; ++k) out |= ((v >> k) & 1u) << (3 * k);
+  return out;
+}
+
+/// The indices of the `count` points ordered by the Morton code of their cell of a 64³ grid on
+/// the finite points' box (one counting-sort pass; points that are not finite go first), so
+/// that consecutive queries are neighbours.
+std::vector<uint32_t> spatialOrder(const double* points, size_t count) {
+  dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
+  for (size_t k = 0; k < count; ++k) {
+    const dvec3 p = load(points + 3 * k);
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))
+      lo = glm::min(lo, p), hi = glm::max(hi, p);
+  }
+  const dvec3 scale = double(kOrderGrid) / glm::max(hi - lo, dvec3(1e-300));
+  std::vector<uint32_t> cell(count);
+  parallelFor(count, 1 << 14, [&](size_t first, size_t last) {
+    for (size_t k = first; k < last; ++k) {
+      const dvec3 g = (load(points + 3 * k) - lo) * scale;
+      uint32_t code = 0;
+      for (int a = 0; a < 3; ++a) {
+        const double v = g[a];
+        if (!(v >= 0 && v < 1e9)) {  // NaN, or not finite
+          code = 0;
+          break;
+        }
+        code |= spreadBits(std::min(uint32_t(v), kOrderGrid - 1)) << a;
+      }
+      cell[k] = code;
+    }
+  });
+  std::vector<uint32_t> start(kOrderGrid * kOrderGrid * kOrderGrid + 1, 0);
+  for (uint32_t c : cell) ++start[c + 1];
+  for (size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
+  std::vector<uint32_t> order(count);
+  for (size_t k = 0; k < count; ++k) order[start[cell[k]]++] = uint32_t(k);
+  return order;
+}
+
 }  // namespace
 
 ClosestPoints closestPoints(const Scene& scene, const double* points, size_t count) {
+  if (count >= size_t(UINT32_MAX))
+    throw Error(cat("closest points: ", count, " points; at most ", UINT32_MAX - 1, " at once"));
   const QueryScene qs = queryScene(scene);
   ClosestPoints out;
   out.points.resize(3 * count);
@@ -233,13 +294,19 @@ ClosestPoints closestPoints(const Scene& scene, const double* points, size_t cou
   out.primId.resize(count);
   out.geomId.resize(count);
   out.instance.resize(count);
+  // Queries run in spatial order (spatialOrder), each seeded with the answer of the one before
+  // it in its chunk.
+  const std::vector<uint32_t> order = spatialOrder(points, count);
   constexpr size_t kChunk = 1024;
   std::vector<size_t> skipped((count + kChunk - 1) / kChunk, 0);
   parallelForChunks(count, kChunk, [&](size_t c, size_t first, size_t last) {
-    for (size_t k = first; k < last; ++k) {
+    Seed seed;
+    for (size_t i = first; i < last; ++i) {
+      const size_t k = order[i];
       QueryState st{&qs, dvec3(0.0), 0.0};
-      if (searchOne(qs, points + 3 * k, st)) {
+      if (searchOne(qs, points + 3 * k, seed, st)) {
         storeFound(scene, st, out, k);
+        seed = {st.object, st.prim};
       } else {
         storeNothing(out, k);
         ++skipped[c];
