@@ -12,6 +12,7 @@
 // otherwise.
 #include <cstddef>
 #include <cstdint>
+#include <glm/glm.hpp>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,16 @@ struct ClosedCheck {
 };
 ClosedCheck checkClosed(const Scene& scene);
 
+/// Parity's fixed directions: kParityDirectionCount unit vectors spread over the sphere (a
+/// spherical Fibonacci set with irrational offsets, none along an axis or in a coordinate
+/// plane), taken in order. A ray that meets the surface ambiguously (InsideResult::discardedRays)
+/// is replaced by the next one.
+inline constexpr int kParityDirectionCount = 32;
+/// The largest InsideOptions::parityDirections.
+inline constexpr int kMaxParityDirections = 15;
+/// Direction k (0 <= k < kParityDirectionCount) as traced (float, unit length).
+glm::vec3 parityDirection(int k);
+
 struct InsideOptions {
   InsideMethod method = InsideMethod::Automatic;
   /// Parity: the number of fixed directions voted over (1, 3, 5, ...; odd).
@@ -54,8 +65,25 @@ struct InsideResult {
   InsideMethod method = InsideMethod::Parity;  ///< the method that ran (never Automatic)
   std::vector<uint8_t> inside;
   std::vector<double> winding;  ///< empty unless method == Winding
+  /// Winding: the bound on each point's truncation error (winding_number.h); 0 where the
+  /// sum was exact, NaN where the point is not finite. Empty unless method == Winding.
+  std::vector<double> windingErrorBound;
   size_t nonFinite = 0;
+  /// Parity: rays replaced by the next fixed direction because they met the surface where
+  /// a crossing cannot be counted with certainty: closer to an edge or a vertex than
+  /// kParityEdgeTolerance · (t + L) (t the hit's distance, L the scene box's diagonal), at a
+  /// grazing angle (|cos| < kParityGrazingCosine), or closer to their origin than
+  /// kParitySurfaceBand · L.
+  size_t discardedRays = 0;
+  /// Parity: points for which every fixed direction was discarded: points on the surface,
+  /// whose every ray starts on it. They get inside = 0.
+  size_t undecided = 0;
 };
+
+/// Parity's thresholds of an ambiguous hit (InsideResult::discardedRays).
+inline constexpr float kParityEdgeTolerance = 1e-6f;
+inline constexpr float kParityGrazingCosine = 1e-5f;
+inline constexpr float kParitySurfaceBand = 1e-6f;
 
 /// `points` holds 3 * count world coordinates (x, y, z per point). Every core is used; throws
 /// Error for an empty scene.
