@@ -7,8 +7,8 @@
 
 #include "apps/cli/commands.h"
 #include "apps/cli/scene_flags.h"
-#include "apps/services/outputs.h"
 #include "apps/queries/point_queries.h"
+#include "apps/services/outputs.h"
 #include "apps/services/render_options.h"
 #include "apps/services/scene_setup.h"
 #include "cameras/files/points_file.h"
@@ -31,8 +31,10 @@ struct QueryArgs {
 PointQueryRequest checkedRequest(const QueryArgs& a) {
   PointQueryRequest r = parsePointQueries(a.what, "--what");
   r.inside.method = parseInsideMethod(a.method);
-  if (a.parityDirections < 1 || a.parityDirections % 2 == 0 || a.parityDirections > 99)
-    throw Error(cat("--parity-directions ", a.parityDirections, " must be odd, in [1, 99]"));
+  if (a.parityDirections < 1 || a.parityDirections % 2 == 0 ||
+      a.parityDirections > kMaxParityDirections)
+    throw Error(cat("--parity-directions ", a.parityDirections, " must be odd, in [1, ",
+                    kMaxParityDirections, "]"));
   r.inside.parityDirections = a.parityDirections;
   checkOutputPath("--out", a.out, OutputKind::Query);
   if (a.threads < 0 || a.threads > 4096)

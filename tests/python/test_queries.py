@@ -13,7 +13,7 @@ import pytest
 
 import aperture
 
-from conftest import cli_error, run_cli
+from conftest import cli_error, count_during, run_cli
 
 SPHERE = "procedural:sphere?radius=1.5&segments=32&rings=16&cx=10&cy=-2"
 
@@ -211,3 +211,117 @@ def test_query_command_errors_leave_no_file(cli: Path, tmp_path: Path):
     assert list(tmp_path.iterdir()) == [tmp_path / "p.npy"]
     done = run_cli(cli, "query", "--help")
     assert done.returncode == 0 and "--what" in done.stdout and "--sign-method" in done.stdout
+
+
+def test_queries_release_the_gil():
+    scene = aperture.Scene("procedural:sphere?radius=1&segments=256&rings=128")
+    p = random_points(scene, 300000, 8)
+    rays = np.tile([[0.0, 0.0, 5.0]], (200000, 1))
+    dirs = np.tile([[0.0, 0.0, -1.0]], (200000, 1))
+    for name, call in [("closest_points", lambda: scene.closest_points(p)),
+                       ("count_intersections", lambda: scene.count_intersections(rays, dirs))]:
+        seconds, during = count_during(call)
+        assert seconds > 0.05, f"{name} too short ({seconds:.3f} s) to show anything"
+        assert during > 10000, f"{name}: the counter advanced only {during} times in {seconds:.2f} s"
+
+
+# ---- signed distance and occupancy: the sign is core/queries/inside.h's (tests there); these
+# check that the Python and command-line outputs carry it, against a winding number computed
+# here.
+
+CUBE_VERTICES = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
+# Two counter-clockwise (outward) triangles per face of [-1, 1]^3, vertex k = (x, y, z) bits 4, 2, 1.
+CUBE_FACES = np.array([
+    [0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5],  # x = -1, x = +1
+    [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6],  # y = -1, y = +1
+    [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3],  # z = -1, z = +1
+], dtype=np.uint32)
+
+
+def winding_numbers(triangles: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The exact generalized winding number: the sum of the triangles' signed solid angles
+    (Van Oosterom and Strackee) over 4 pi."""
+    out = np.empty(len(points))
+    for k, p in enumerate(points):
+        a, b, c = (triangles[:, i] - p for i in range(3))
+        la, lb, lc = (np.linalg.norm(v, axis=1) for v in (a, b, c))
+        det = np.einsum("ij,ij->i", a, np.cross(b, c))
+        div = la * lb * lc + np.einsum("ij,ij->i", a, b) * lc + np.einsum("ij,ij->i", b, c) * la \
+            + np.einsum("ij,ij->i", c, a) * lb
+        out[k] = 2 * np.arctan2(det, div).sum() / (4 * np.pi)
+    return out
+
+
+def grid_off_the_surface(faces: np.ndarray) -> np.ndarray:
+    """Points of a grid through the cube's face planes, edges and vertices (coordinates in
+    -1.5, -1, ..., 1.5), without those on its surface."""
+    v = np.array([-1.5, -1.0, -0.5, 0.0, 0.25, 1.0, 1.5])
+    p = np.stack(np.meshgrid(v, v, v, indexing="ij"), axis=-1).reshape(-1, 3)
+    tris = CUBE_VERTICES[faces]
+    on_surface = brute_force_distance(tris, p) == 0
+    return p[~on_surface]
+
+
+def test_signed_distance_and_occupancy_on_a_closed_cube():
+    scene = aperture.Scene(vertices=CUBE_VERTICES, faces=CUBE_FACES)
+    p = grid_off_the_surface(CUBE_FACES)
+    inside = winding_numbers(CUBE_VERTICES[CUBE_FACES], p) > 0.5
+    assert 0 < inside.sum() < len(p)
+    sd = scene.signed_distance(p)
+    assert scene.last_query["method"] == "parity"
+    np.testing.assert_array_equal(sd < 0, inside)
+    np.testing.assert_allclose(np.abs(sd), scene.distance(p), rtol=0, atol=0)
+    occ = scene.occupancy(p)
+    assert occ.dtype == np.uint8
+    np.testing.assert_array_equal(occ, inside)
+    np.testing.assert_array_equal(scene.occupancy(p, method="winding"), inside)
+    assert scene.last_query["method"] == "winding"
+    with pytest.raises(ValueError, match="unknown inside method 'windng'.*did you mean 'winding'"):
+        scene.occupancy(p, method="windng")
+
+
+def test_an_open_cube_defaults_to_the_winding_number():
+    faces = CUBE_FACES[:10]  # without its top (z = +1)
+    scene = aperture.Scene(vertices=CUBE_VERTICES, faces=faces)
+    p = grid_off_the_surface(faces)
+    w = winding_numbers(CUBE_VERTICES[faces], p)
+    clear = np.abs(w - 0.5) > 0.05
+    occ = scene.occupancy(p)
+    assert scene.last_query["method"] == "winding"
+    np.testing.assert_array_equal(occ[clear], (w > 0.5)[clear])
+
+
+def test_query_command_stores_the_sign_method(cli: Path, tmp_path: Path):
+    scene = aperture.Scene(SPHERE)
+    p = random_points(scene, 200, 9)
+    np.save(tmp_path / "p.npy", p)
+    out = tmp_path / "q.npz"
+    done = run_cli(cli, "query", "--mesh", SPHERE, "--points", str(tmp_path / "p.npy"),
+                   "--what", "sign,occupancy", "--sign-method", "winding", "--out", str(out), "--quiet")
+    assert done.returncode == 0, done.stderr
+    with np.load(out) as q:
+        assert str(q["sign_method"]) == "winding"
+        np.testing.assert_array_equal(q["signed_distance"], scene.signed_distance(p, method="winding"))
+        np.testing.assert_array_equal(q["occupancy"], q["signed_distance"] < 0)
+        assert "winding_number" in q.files
+
+
+def test_signed_distance_against_open3d_on_a_closed_sphere(o3d):
+    """Open3D's compute_signed_distance on the same closed mesh: equal magnitudes to float
+    precision; where the signs differ, aperture's is the exact winding number's."""
+    scene = aperture.Scene(SPHERE)
+    p = random_points(scene, 2000, 10).astype(np.float32).astype(np.float64)
+    tris = scene.triangles().reshape(-1, 3)
+    rs = o3d.t.geometry.RaycastingScene()
+    rs.add_triangles(o3d.core.Tensor(tris.astype(np.float32)),
+                     o3d.core.Tensor(np.arange(len(tris), dtype=np.uint32).reshape(-1, 3)))
+    theirs = rs.compute_signed_distance(o3d.core.Tensor(p.astype(np.float32))).numpy()
+    ours = scene.signed_distance(p)
+    assert scene.last_query["method"] == "parity"
+    np.testing.assert_allclose(np.abs(ours), np.abs(theirs), rtol=2e-5, atol=2e-5)
+    differ = np.flatnonzero((ours < 0) != (theirs < 0))
+    if len(differ):
+        w = winding_numbers(scene.triangles(), p[differ])
+        np.testing.assert_array_equal(ours[differ] < 0, w > 0.5)
+    inside = winding_numbers(scene.triangles(), p) > 0.5
+    np.testing.assert_array_equal(ours < 0, inside)
