@@ -130,7 +130,7 @@ def main() -> None:
         ray.data.from_items(rows).map_batches(
             Renderer,
             fn_constructor_kwargs=dict(scene=scene, aovs="depth", outputs=f"{out}/{{name}}.png", threads=1),
-            concurrency=2, num_cpus=1, batch_size=per_task,
+            compute=ray.data.ActorPoolStrategy(size=2), num_cpus=1, batch_size=per_task,
         ).materialize()
         return time.perf_counter() - start, builds_since(mark)
 

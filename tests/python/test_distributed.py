@@ -312,7 +312,7 @@ class TestRay:
         return dataset.map_batches(
             distributed.Renderer,
             fn_constructor_kwargs=dict(scene=scene, aovs=AOVS, outputs=patterns(root), threads=1, **options),
-            concurrency=2,
+            compute=ray.data.ActorPoolStrategy(size=2),  # 2 actors (concurrency=2 before Ray 2.51)
             batch_size=4,
             num_cpus=1,
         ).take_all()

@@ -82,6 +82,16 @@ def test_a_pickled_array_scene_renders_the_same_bits(dtype: type) -> None:
     same_bits(out, again.render(views(), aovs=AOVS))
 
 
+def test_a_scene_copies() -> None:
+    """copy.copy and copy.deepcopy go through the specification too: a second, independent scene."""
+    import copy
+
+    scene = aperture.Scene("procedural:default", world_space=True)
+    for other in (copy.copy(scene), copy.deepcopy(scene)):
+        assert other._scene is not scene._scene
+        same_bits(scene.render(views(), aovs=AOVS), other.render(views(), aovs=AOVS))
+
+
 def test_a_pickled_file_scene_is_found_from_another_directory(
     tmp_path: Path, bunny: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
