@@ -248,8 +248,7 @@ class Renderer:
         self._fail_once = _fail_once
         self._spec = scene._spec
         self._key = uuid.uuid4().hex
-        self._scene: Scene | None = scene
-        _remember(self._key, scene)
+        self._scene: Scene | None = scene  # kept by this object only: the cache is for workers
 
     def __getstate__(self) -> dict[str, Any]:
         state = dict(self.__dict__)
