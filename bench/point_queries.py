@@ -71,6 +71,8 @@ def main() -> None:
     ap.add_argument("--nsamples", default="1,5", help="Open3D's nsamples for signed distance and occupancy")
     ap.add_argument("--trimesh-points", type=int, default=20000,
                     help="points for trimesh's closest_point and signed_distance (0: skip)")
+    ap.add_argument("--sign-method", default=None,
+                    help="aperture's method for signed distance and occupancy (parity, winding; default: automatic)")
     ap.add_argument("--no-open3d", action="store_true")
     args = ap.parse_args()
     o3d = None
@@ -91,8 +93,8 @@ def main() -> None:
             ours = {
                 "closest": lambda: scene.closest_points(p64, threads=args.threads),
                 "distance": lambda: scene.distance(p64, threads=args.threads),
-                "signed": lambda: scene.signed_distance(p64, threads=args.threads),
-                "occupancy": lambda: scene.occupancy(p64, threads=args.threads),
+                "signed": lambda: scene.signed_distance(p64, args.sign_method, threads=args.threads),
+                "occupancy": lambda: scene.occupancy(p64, args.sign_method, threads=args.threads),
             }
             peers = {
                 "closest": [("open3d compute_closest_points", lambda: rs.compute_closest_points(t3, nthreads=args.threads))],
@@ -123,10 +125,10 @@ def main() -> None:
                           f"{peer_rate:.2f} | {ours_rate / peer_rate:.2f} |", flush=True)
             del p32, p64, t3
         if args.trimesh_points:
-            trimesh_rows(scene, name, args.trimesh_points, signs, args.threads)
+            trimesh_rows(scene, name, args.trimesh_points, signs, args.threads, args.sign_method)
 
 
-def trimesh_rows(scene: aperture.Scene, name: str, n: int, signs: bool, threads: int) -> None:
+def trimesh_rows(scene: aperture.Scene, name: str, n: int, signs: bool, threads: int, method: str | None) -> None:
     import trimesh  # noqa: PLC0415
 
     tris = scene.triangles()
@@ -136,9 +138,11 @@ def trimesh_rows(scene: aperture.Scene, name: str, n: int, signs: bool, threads:
              lambda: scene.closest_points(p, threads=threads))]
     if signs:
         rows.append(("signed", "trimesh proximity.signed_distance", lambda: trimesh.proximity.signed_distance(mesh, p),
-                     lambda: scene.signed_distance(p, threads=threads)))
+                     lambda: scene.signed_distance(p, method, threads=threads)))
     for q, label, peer, ours in rows:
         tp, to = timed(peer), timed(ours)
+        if q == "signed":
+            label += f" (ours: {scene.last_query['method']})"
         print(f"| {name} | {scene.triangle_count} | {n:.0e} | {q} | {n / to / 1e6:.2f} | {label} | "
               f"{n / tp / 1e6:.4f} | {tp / to:.0f} |", flush=True)
 

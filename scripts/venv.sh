@@ -28,6 +28,11 @@ fi
 if ! .venv/bin/python -c 'import open3d, dask, distributed' 2>/dev/null; then
   .venv/bin/python -m pip install -q --disable-pip-version-check open3d-cpu 'dask[distributed]'
 fi
+# rtree: trimesh's proximity queries (closest_point, signed_distance) need it; bench/point_queries.py
+# compares with them.
+if ! .venv/bin/python -c 'import rtree' 2>/dev/null; then
+  .venv/bin/python -m pip install -q --disable-pip-version-check rtree
+fi
 if ! .venv/bin/python -c 'import ray' 2>/dev/null; then
   .venv/bin/python -m pip install -q --disable-pip-version-check 'ray[data]' ||
     echo "venv: ray could not be installed; the Ray tests will skip"
