@@ -28,10 +28,10 @@ fi
 if ! .venv/bin/python -c 'import open3d, dask, distributed' 2>/dev/null; then
   .venv/bin/python -m pip install -q --disable-pip-version-check open3d-cpu 'dask[distributed]'
 fi
-# rtree: trimesh's proximity queries (closest_point, signed_distance) need it; bench/point_queries.py
-# compares with them.
-if ! .venv/bin/python -c 'import rtree' 2>/dev/null; then
-  .venv/bin/python -m pip install -q --disable-pip-version-check rtree
+# rtree and scipy: trimesh's proximity queries (closest_point, signed_distance) need them;
+# bench/point_queries.py compares with them.
+if ! .venv/bin/python -c 'import rtree, scipy' 2>/dev/null; then
+  .venv/bin/python -m pip install -q --disable-pip-version-check rtree scipy
 fi
 if ! .venv/bin/python -c 'import ray' 2>/dev/null; then
   .venv/bin/python -m pip install -q --disable-pip-version-check 'ray[data]' ||
