@@ -53,8 +53,10 @@ def main() -> int:
     ap.add_argument("--size", default="1280x720")
     ap.add_argument("--aovs", default="depth,normal,primid")
     ap.add_argument("--rounds", type=int, default=7)
+    ap.add_argument("--modes", default="fresh,out", help="fresh,out or fresh alone (a module without out=)")
     ap.add_argument("--no-open3d", action="store_true", help="time aperture only")
     a = ap.parse_args()
+    modes = a.modes.split(",")
     width, height = (int(x) for x in a.size.lower().split("x"))
 
     import aperture
@@ -76,9 +78,12 @@ def main() -> int:
     wall: dict[str, list[float]] = {"fresh": [], "out": [], "open3d": []}
     inner: dict[str, list[float]] = {"fresh": [], "out": []}
     for _ in range(a.rounds):
-        for mode in ("fresh", "out"):
+        for mode in modes:
             t0 = time.perf_counter()
-            result = scene.render(cameras, aovs=a.aovs, out=out if mode == "out" else None)
+            if mode == "out":
+                result = scene.render(cameras, aovs=a.aovs, out=out)
+            else:
+                result = scene.render(cameras, aovs=a.aovs)
             wall[mode].append(time.perf_counter() - t0)
             inner[mode].append(scene.last_render["seconds"])
             if mode == "out":
@@ -94,7 +99,7 @@ def main() -> int:
           f"load {' '.join(f'{x:.1f}' for x in os.getloadavg())}  aperture {aperture.__version__} "
           f"({Path(aperture.__file__).parent})")
     print(f"mesh {a.mesh}  cameras {a.cameras}  size {width}x{height}  aovs {a.aovs}  rounds {a.rounds}")
-    for mode in ("fresh", "out"):
+    for mode in modes:
         w, s = statistics.median(wall[mode]), statistics.median(inner[mode])
         ratios = [x / y for x, y in zip(wall[mode], inner[mode])]
         print(f"{mode:6s}  wall median {w * 1e3:7.1f} ms  last_render {s * 1e3:7.1f} ms  "
@@ -104,7 +109,7 @@ def main() -> int:
         o = statistics.median(wall["open3d"])
         print(f"open3d  wall median {o * 1e3:7.1f} ms  {rays_n / o * 1e-6:.1f} Mrays/s  rounds "
               f"{' '.join(f'{x * 1e3:.0f}' for x in wall['open3d'])}")
-        for mode in ("fresh", "out"):
+        for mode in modes:
             per_round = [x / y for x, y in zip(wall["open3d"], wall[mode])]
             print(f"open3d / aperture {mode}: median of per-round ratios {statistics.median(per_round):.2f} "
                   f"(ratio of medians {o / statistics.median(wall[mode]):.2f})")
