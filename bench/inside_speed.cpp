@@ -2,6 +2,8 @@
 // winding number, on N points spread uniformly over a mesh's box (enlarged by 10 % on each
 // side, fixed seed), in alternating rounds; medians in points per second (bench/RESULTS.md).
 //   aperture_inside_speed MESH [POINTS=1000000] [ROUNDS=3] [BETA=2]
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -78,8 +80,9 @@ int main(int argc, char** argv) {
     variants[1].name = "parity, 5 directions";
     variants[1].options.method = InsideMethod::Parity;
     variants[1].options.parityDirections = 5;
-    variants[2].name = "winding (tree built per call)";
+    variants[2].name = "winding (tree kept)";
     variants[2].options.method = InsideMethod::Winding;
+    variants[2].options.windingTree = &tree;
     for (Variant& v : variants) v.options.windingBeta = beta;
     for (int r = 0; r < rounds; ++r)
       for (Variant& v : variants) {

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "core/engine/intersect_scene.h"
 #include "core/engine/packet.h"
@@ -267,13 +268,15 @@ class ParityStream {
 
   /// Ends the lane's current direction, with its vote (`vote`) or discarded, and aims the next
   /// one (directions whose ray misses the box vote at once). True when the point is decided:
-  /// parityDirections votes, or the directions used up (a majority of the votes there are;
-  /// none: undecided, outside).
+  /// a majority of parityDirections votes on one side, or the directions used up (a majority
+  /// of the votes there are; none: undecided, outside).
   bool endDirection(ParityLane& lane, bool vote) {
     while (true) {
       if (vote) ++lane.votes, lane.insideVotes += lane.crossings & 1;
-      if (lane.votes == options_.parityDirections)
-        return decide(lane, 2 * lane.insideVotes > lane.votes);
+      // Decided once either side holds a majority of parityDirections.
+      const int majority = options_.parityDirections / 2 + 1;
+      if (lane.insideVotes >= majority || lane.votes - lane.insideVotes >= majority)
+        return decide(lane, lane.insideVotes >= majority);
       if (++lane.direction == kParityDirectionCount) {
         if (lane.votes == 0) ++undecided_;
         return decide(lane, 2 * lane.insideVotes > lane.votes);
@@ -344,7 +347,9 @@ void insideByParity(const Scene& scene, const double* points, size_t count,
 
 void insideByWinding(const Scene& scene, const double* points, size_t count,
                      const InsideOptions& options, InsideResult& result) {
-  const WindingNumberTree tree(worldTriangleCorners(scene));
+  std::optional<WindingNumberTree> built;
+  if (!options.windingTree) built.emplace(worldTriangleCorners(scene));
+  const WindingNumberTree& tree = options.windingTree ? *options.windingTree : *built;
   result.winding.resize(count);
   result.windingErrorBound.resize(count);
   tree.evaluate(points, count, options.windingBeta, result.winding.data(),
@@ -379,7 +384,9 @@ InsideResult insideOf(const Scene& scene, const double* points, size_t count,
   InsideResult result;
   result.method = options.method;
   if (result.method == InsideMethod::Automatic)
-    result.method = checkClosed(scene).closed ? InsideMethod::Parity : InsideMethod::Winding;
+    result.method = (options.closed ? options.closed->closed : checkClosed(scene).closed)
+                        ? InsideMethod::Parity
+                        : InsideMethod::Winding;
   result.inside.assign(count, 0);
   if (result.method == InsideMethod::Parity)
     insideByParity(scene, points, count, options, result);

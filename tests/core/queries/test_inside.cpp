@@ -14,6 +14,7 @@
 #include "core/queries/inside.h"
 #include "core/queries/trace.h"
 #include "core/queries/winding_number.h"
+#include "core/queries/world_triangles.h"
 #include "core/util/error.h"
 #include "tests/inside_support.h"
 #include "tests/support.h"
@@ -332,6 +333,27 @@ TEST(InsideOf, AutomaticIsParityWhenClosedAndWindingWhenOpen) {
       EXPECT_EQ(b.inside[i], exact > 0.5 ? 1 : 0) << i;
     }
   }
+}
+
+TEST(InsideOf, KeptClosedCheckAndTreeAreUsed) {
+  const SceneOf open = sceneOf(subdividedBox(8, true));
+  const std::vector<double> points = gridPoints(-1.3, 1.3, 7);
+  // A closedness the caller claims is taken as given: parity runs on the open box.
+  ClosedCheck claimed;
+  claimed.closed = true;
+  InsideOptions o;
+  o.closed = &claimed;
+  EXPECT_EQ(insideOf(*open.scene, points.data(), points.size() / 3, o).method,
+            InsideMethod::Parity);
+  // A kept tree gives what a tree built per call gives.
+  const WindingNumberTree tree(worldTriangleCorners(*open.scene));
+  InsideOptions w;
+  w.method = InsideMethod::Winding;
+  const InsideResult fresh = insideOf(*open.scene, points.data(), points.size() / 3, w);
+  w.windingTree = &tree;
+  const InsideResult kept = insideOf(*open.scene, points.data(), points.size() / 3, w);
+  EXPECT_EQ(kept.winding, fresh.winding);
+  EXPECT_EQ(kept.inside, fresh.inside);
 }
 
 TEST(InsideOf, NonFinitePointsAreOutsideAndCounted) {
