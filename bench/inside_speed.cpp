@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <random>
@@ -104,7 +105,12 @@ int main(int argc, char** argv) {
     }
     double worstBound = 0;
     for (double b : variants[2].last.windingErrorBound) worstBound = std::max(worstBound, b);
-    std::printf("winding: largest error bound %.3g\n", worstBound);
+    size_t uncertain = 0;
+    for (size_t i = 0; i < count; ++i)
+      uncertain +=
+          std::abs(variants[2].last.winding[i] - 0.5) <= variants[2].last.windingErrorBound[i];
+    std::printf("winding: largest error bound %.3g; points whose |w - 0.5| <= bound: %.4f\n",
+                worstBound, double(uncertain) / double(count));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;

@@ -198,13 +198,14 @@ WindingValue WindingNumberTree::evaluate(const glm::dvec3& p, double beta) const
 }
 
 void WindingNumberTree::evaluate(const double* points, size_t count, double beta, double* winding,
-                                 double* errorBound) const {
+                                 double* errorBound, double refineBand) const {
   if (!(beta > 1.0) || !std::isfinite(beta))
     throw Error(cat("winding number: beta ", beta, " must be a finite number above 1"));
   parallelFor(count, 256, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
       const glm::dvec3 p(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
-      const WindingValue v = evaluate(p, beta);
+      WindingValue v = evaluate(p, beta);
+      if (std::abs(v.winding - 0.5) < refineBand) v = evaluate(p, kWindingRefineFactor * beta);
       winding[i] = v.winding;
       if (errorBound) errorBound[i] = v.errorBound;
     }

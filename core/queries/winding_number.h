@@ -43,6 +43,13 @@ inline constexpr size_t kWindingExactBelow = 64;
 /// The most triangles in a leaf of the tree (summed exactly when a leaf is opened).
 inline constexpr size_t kWindingLeafTriangles = 8;
 
+/// WindingNumberTree::evaluate's default band about 0.5 in which a point is evaluated again,
+/// and the factor on beta it is evaluated with. The band is 8 times the worst error measured
+/// at beta = 2 (docs/queries_sign.md): near an open mesh's holes w passes through 0.5 away
+/// from the surface, and there the refined value decides the side.
+inline constexpr double kWindingRefineBand = 0.05;
+inline constexpr double kWindingRefineFactor = 4.0;
+
 /// The signed solid angle (steradians, in (−2π, 2π]) that triangle (a, b, c) subtends at p:
 /// positive when p lies behind it, on the side opposite to the normal (b − a) × (c − a) of its
 /// counter-clockwise winding (inside a closed outward-oriented surface). Van Oosterom and
@@ -73,10 +80,12 @@ class WindingNumberTree {
   double exact(const glm::dvec3& p) const { return exactWindingNumber(corners_, p); }
   /// The hierarchical evaluation at p with far-field parameter `beta` (> 1).
   WindingValue evaluate(const glm::dvec3& p, double beta) const;
-  /// evaluate at `count` points (3 doubles each) on every core. A point that is not finite
-  /// gets NaN for both. `errorBound` may be null. Throws Error unless beta > 1 and finite.
+  /// evaluate at `count` points (3 doubles each) on every core. A point whose w lands within
+  /// `refineBand` of 0.5 (the inside threshold) is evaluated again with kWindingRefineFactor ·
+  /// beta, and gets that value and bound. A point that is not finite gets NaN for both.
+  /// `errorBound` may be null. Throws Error unless beta > 1 and finite.
   void evaluate(const double* points, size_t count, double beta, double* winding,
-                double* errorBound) const;
+                double* errorBound, double refineBand = kWindingRefineBand) const;
 
  private:
   struct Node {
