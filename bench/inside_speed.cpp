@@ -58,6 +58,8 @@ int main(int argc, char** argv) {
     std::printf("%s: %zu triangles, %zu points, %d rounds, beta %g\n", argv[1],
                 mesh.triangleCount(), count, rounds, beta);
 
+    std::printf("threads: %d (TBB default), Embree ISA %s\n",
+                tbb::this_task_arena::max_concurrency(), device.isaName().c_str());
     auto start = std::chrono::steady_clock::now();
     const ClosedCheck closed = checkClosed(scene);
     std::printf(

@@ -135,6 +135,9 @@ const ParityDirections& parityDirections() {
 }
 
 /// One point's parity rays in flight: its current direction and the crossings so far.
+/// Parity's packet width.
+constexpr int kParityPacket = 8;
+
 struct ParityLane {
   size_t point = 0;
   glm::dvec3 org{0.0};     ///< the point, render space
@@ -146,14 +149,16 @@ struct ParityLane {
   bool live = false;
 };
 
-/// Parity over the points [begin, end): lanes of a packet of 8 rays, each lane taking the
-/// next point when its point is decided.
+/// Parity over the points order[begin, end): lanes of a packet of N rays, each lane taking
+/// the next point when its point is decided.
+template <int N>
 class ParityStream {
  public:
-  ParityStream(const Scene& scene, const double* points, const InsideOptions& options,
-               float diagonal, InsideResult& result)
+  ParityStream(const Scene& scene, const double* points, const size_t* order,
+               const InsideOptions& options, float diagonal, InsideResult& result)
       : scene_(scene),
         points_(points),
+        order_(order),
         options_(options),
         diagonal_(diagonal),
         band_(kParitySurfaceBand * diagonal),
@@ -164,11 +169,11 @@ class ParityStream {
     for (ParityLane& lane : lanes_) start(lane);
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    alignas(32) RTCRayHit8 packet;
-    alignas(32) int valid[8];
+    alignas(64) typename PacketOf<N>::type packet;
+    alignas(64) int valid[N];
     while (true) {
       int live = 0;
-      for (int k = 0; k < 8; ++k) {
+      for (int k = 0; k < N; ++k) {
         const ParityLane& lane = lanes_[k];
         const glm::vec3 dir = parityDirections().d[lane.direction];
         packet.ray.org_x[k] = lane.rayOrg.x, packet.ray.org_y[k] = lane.rayOrg.y;
@@ -182,9 +187,9 @@ class ParityStream {
         live += lane.live;
       }
       if (live == 0) break;
-      clearHits<8>(packet);
-      intersectScene<8>(scene_, &ctx, valid, packet);
-      for (int k = 0; k < 8; ++k) {
+      clearHits<N>(packet);
+      intersectScene<N>(scene_, &ctx, valid, packet);
+      for (int k = 0; k < N; ++k) {
         ParityLane& lane = lanes_[k];
         if (!lane.live) continue;
         bool decided = false;
@@ -208,10 +213,11 @@ class ParityStream {
  private:
   const Scene& scene_;
   const double* points_;
+  const size_t* order_;
   const InsideOptions& options_;
   float diagonal_, band_;
   InsideResult& result_;
-  ParityLane lanes_[8];
+  ParityLane lanes_[N];
   size_t next_ = 0, end_ = 0;
   size_t discarded_ = 0, undecided_ = 0, nonFinite_ = 0;
 
@@ -220,7 +226,7 @@ class ParityStream {
   /// it dead.
   void start(ParityLane& lane) {
     while (next_ < end_) {
-      const size_t i = next_++;
+      const size_t i = order_[next_++];
       const glm::dvec3 p(points_[3 * i], points_[3 * i + 1], points_[3 * i + 2]);
       if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) {
         result_.inside[i] = 0;
@@ -289,7 +295,7 @@ class ParityStream {
   /// Whether lane k's hit is one whose crossing cannot be counted with certainty: near an
   /// edge or a vertex (where Embree's watertight test may report both triangles, or the
   /// second one a float later), grazing, or at the ray's origin (a point on the surface).
-  bool ambiguous(const RTCRayHit8& p, int k, const glm::vec3& dir) const {
+  bool ambiguous(const typename PacketOf<N>::type& p, int k, const glm::vec3& dir) const {
     const float t = p.ray.tfar[k];
 
     if (t < band_) return true;
@@ -329,12 +335,52 @@ void checkOptions(const InsideOptions& options) {
         cat("insideOf: windingBeta ", options.windingBeta, " must be a finite number above 1"));
 }
 
+/// Spreads the low 21 bits of x to every third bit.
+uint64_t spreadBits(uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffull;
+  x = (x | x << 16) & 0x1f0000ff0000ffull;
+  x = (x | x << 8) & 0x100f00f00f00f00full;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+  x = (x | x << 2) & 0x1249249249249249ull;
+  return x;
+}
+
+/// The points' indices in Morton order over the scene's box (points outside it clamped to
+/// it): neighbouring lanes of a packet then trace neighbouring rays in one direction, which
+/// Embree's packet traversal shares.
+std::vector<size_t> spatialOrder(const Scene& scene, const double* points, size_t count) {
+  std::vector<std::pair<uint64_t, size_t>> keyed(count);
+  const std::optional<SceneBox>& box = scene.box();
+  const glm::dvec3 lo = box ? glm::dvec3(box->lo) : glm::dvec3(0.0);
+  const glm::dvec3 size = box ? glm::max(glm::dvec3(box->hi - box->lo), 1e-30) : glm::dvec3(1.0);
+  const glm::dvec3 origin = scene.renderOrigin();
+  parallelFor(count, 1 << 14, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      uint64_t key = 0;
+      for (int a = 0; a < 3; ++a) {
+        const double u = (points[3 * i + size_t(a)] - origin[a] - lo[a]) / size[a];
+        const double q = std::isnan(u) ? 0.0 : std::clamp(u, 0.0, 1.0) * 2097151.0;
+        key |= spreadBits(uint64_t(q)) << a;
+      }
+      keyed[i] = {key, i};
+    }
+  });
+  tbb::parallel_sort(keyed.begin(), keyed.end());
+  std::vector<size_t> order(count);
+  parallelFor(count, 1 << 14, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) order[i] = keyed[i].second;
+  });
+  return order;
+}
+
 void insideByParity(const Scene& scene, const double* points, size_t count,
                     const InsideOptions& options, InsideResult& result) {
   const float diagonal = sceneDiagonal(scene);
+  const std::vector<size_t> order = spatialOrder(scene, points, count);
   std::atomic<size_t> discarded{0}, undecided{0}, nonFinite{0};
   parallelFor(count, 1024, [&](size_t begin, size_t end) {
-    ParityStream stream(scene, points, options, diagonal, result);
+    ParityStream<kParityPacket> stream(scene, points, order.data(), options, diagonal, result);
     stream.run(begin, end);
     discarded += stream.discarded();
     undecided += stream.undecided();
