@@ -10,6 +10,7 @@
 
 #include "core/engine/intersect_scene.h"
 #include "core/engine/packet.h"
+#include "core/queries/morton_order.h"
 #include "core/queries/winding_number.h"
 #include "core/queries/world_triangles.h"
 #include "core/util/error.h"
@@ -335,43 +336,12 @@ void checkOptions(const InsideOptions& options) {
         cat("insideOf: windingBeta ", options.windingBeta, " must be a finite number above 1"));
 }
 
-/// Spreads the low 21 bits of x to every third bit.
-uint64_t spreadBits(uint64_t x) {
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffull;
-  x = (x | x << 16) & 0x1f0000ff0000ffull;
-  x = (x | x << 8) & 0x100f00f00f00f00full;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-  x = (x | x << 2) & 0x1249249249249249ull;
-  return x;
-}
-
-/// The points' indices in Morton order over the scene's box (points outside it clamped to
-/// it): neighbouring lanes of a packet then trace neighbouring rays in one direction, which
-/// Embree's packet traversal shares.
+/// The points' indices in Morton order over the scene's box, in world space.
 std::vector<size_t> spatialOrder(const Scene& scene, const double* points, size_t count) {
-  std::vector<std::pair<uint64_t, size_t>> keyed(count);
   const std::optional<SceneBox>& box = scene.box();
-  const glm::dvec3 lo = box ? glm::dvec3(box->lo) : glm::dvec3(0.0);
-  const glm::dvec3 size = box ? glm::max(glm::dvec3(box->hi - box->lo), 1e-30) : glm::dvec3(1.0);
+  if (!box) return mortonOrder(points, count, glm::dvec3(0.0), glm::dvec3(1.0));
   const glm::dvec3 origin = scene.renderOrigin();
-  parallelFor(count, 1 << 14, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) {
-      uint64_t key = 0;
-      for (int a = 0; a < 3; ++a) {
-        const double u = (points[3 * i + size_t(a)] - origin[a] - lo[a]) / size[a];
-        const double q = std::isnan(u) ? 0.0 : std::clamp(u, 0.0, 1.0) * 2097151.0;
-        key |= spreadBits(uint64_t(q)) << a;
-      }
-      keyed[i] = {key, i};
-    }
-  });
-  tbb::parallel_sort(keyed.begin(), keyed.end());
-  std::vector<size_t> order(count);
-  parallelFor(count, 1 << 14, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) order[i] = keyed[i].second;
-  });
-  return order;
+  return mortonOrder(points, count, origin + glm::dvec3(box->lo), origin + glm::dvec3(box->hi));
 }
 
 void insideByParity(const Scene& scene, const double* points, size_t count,

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/queries/morton_order.h"
 #include "core/util/error.h"
 #include "core/util/parallel.h"
 
@@ -72,6 +73,7 @@ double exactWindingNumber(const std::vector<glm::dvec3>& corners, const glm::dve
 WindingNumberTree::WindingNumberTree(std::vector<glm::dvec3> corners)
     : corners_(std::move(corners)) {
   const size_t triangles = triangleCount();
+  for (const glm::dvec3& c : corners_) lo_ = glm::min(lo_, c), hi_ = glm::max(hi_, c);
   if (triangles > std::numeric_limits<uint32_t>::max() / 2)
     throw Error(cat("winding number: ", triangles, " triangles is more than the tree holds"));
   if (triangles <= kWindingExactBelow) return;
@@ -201,8 +203,12 @@ void WindingNumberTree::evaluate(const double* points, size_t count, double beta
                                  double* errorBound, double refineBand) const {
   if (!(beta > 1.0) || !std::isfinite(beta))
     throw Error(cat("winding number: beta ", beta, " must be a finite number above 1"));
+  // In Morton order over the triangles' box: consecutive points open the same nodes, which
+  // then come from the cache.
+  const std::vector<size_t> order = mortonOrder(points, count, lo_, hi_);
   parallelFor(count, 256, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) {
+    for (size_t at = begin; at < end; ++at) {
+      const size_t i = order[at];
       const glm::dvec3 p(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
       WindingValue v = evaluate(p, beta);
       if (std::abs(v.winding - 0.5) < refineBand) v = evaluate(p, kWindingRefineFactor * beta);

@@ -31,6 +31,7 @@
 // for beta = 2 and a flat node (A ≈ πR²) 5/64, and the shares of farther nodes fall as
 // 1/d⁵. The bound is rigorous but not tight: the tests measure errors of a few percent of it
 // (docs/queries_sign.md).
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <glm/glm.hpp>
@@ -102,7 +103,8 @@ class WindingNumberTree {
     uint32_t right = 0;  ///< inner node: the right child (the left one follows the node)
   };
   std::vector<glm::dvec3> corners_;
-  std::vector<uint32_t> order_;  ///< triangles in leaf order
+  glm::dvec3 lo_{INFINITY}, hi_{-INFINITY};  ///< the corners' box
+  std::vector<uint32_t> order_;              ///< triangles in leaf order
   std::vector<Node> nodes_;
 
   uint32_t build(uint32_t begin, uint32_t end, const std::vector<glm::dvec3>& centroids,
