@@ -16,6 +16,8 @@ See docs/python.md for conventions, memory ownership, the GIL and errors.
 from __future__ import annotations
 
 import os
+import socket
+import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import Any
@@ -156,6 +158,7 @@ class Scene:
             if vertices is None or faces is None:
                 raise ValueError("Scene: vertices= and faces= go together")
             v, f = _mesh_arrays(vertices, faces)
+            self._spec: dict[str, Any] = dict(vertices=v, faces=f, **options)
             self._scene = _Scene._from_arrays(v, f, name="arrays", **options)
             self._arrays = (v, f)
             self._scan_source = ("arrays", options)
@@ -166,6 +169,8 @@ class Scene:
             paths = [os.fspath(path)]
         else:
             paths = [os.fspath(p) for p in path]
+        self._spec = dict(path=[_absolute_mesh_path(p) for p in paths], aovs=_aov_list(aovs),
+                          gltf_scene=gltf_scene, **options)
         self._scene = _Scene._from_paths(paths, aovs=_aov_list(aovs), gltf_scene=gltf_scene, **options)
         self._scan_source = (paths, options)
 
@@ -373,6 +378,53 @@ class Scene:
 
     def __repr__(self) -> str:
         return f"Scene({self._scene.mesh_names!r}, triangles={self.triangle_count})"
+
+    def __reduce__(self) -> tuple[Any, tuple[dict[str, Any]]]:
+        """A scene pickles as its specification, the constructor's arguments (mesh paths made
+        absolute, or the vertex and face arrays), never its BVH: unpickling builds it again
+        (aperture.distributed.Renderer builds it once per worker). Arrays of more than
+        _PICKLE_WARN_BYTES warn, as they travel with every pickle."""
+        if "vertices" in self._spec:
+            size = self._spec["vertices"].nbytes + self._spec["faces"].nbytes
+            if size > _PICKLE_WARN_BYTES:
+                warnings.warn(
+                    f"Scene: pickling {size / 2**20:.0f} MB of vertex and face arrays, which travel "
+                    "with every pickle of this scene (each task or worker it is sent to); write the "
+                    "mesh to a file (e.g. a .ply) on storage the workers share and make the scene "
+                    "with Scene(path)",
+                    stacklevel=2,
+                )
+        return (_scene_of_spec, (self._spec,))
+
+
+# A scene holding vertex and face arrays of more bytes than this warns when pickled.
+_PICKLE_WARN_BYTES = 64 * 2**20
+
+
+def _absolute_mesh_path(path: str) -> str:
+    """A mesh path as a pickled scene records it: absolute, so that a worker with another
+    current directory finds it; procedural specs as given."""
+    return path if path.startswith("procedural:") else os.path.abspath(path)
+
+
+# Scenes this process built from a pickled specification (aperture.distributed.scene_builds).
+_spec_builds = 0
+
+
+def _scene_of_spec(spec: dict[str, Any]) -> Scene:
+    """The scene of a pickled specification (Scene.__reduce__), built again. Counted in
+    _spec_builds and, when the environment variable APERTURE_SCENE_BUILD_LOG names a file, one
+    line appended to it: host, PID, seconds the build took, triangles (docs/distributed.md)."""
+    global _spec_builds
+    start = time.perf_counter()
+    scene = Scene(**spec)
+    seconds = time.perf_counter() - start
+    _spec_builds += 1
+    log = os.environ.get("APERTURE_SCENE_BUILD_LOG")
+    if log:
+        with open(log, "a", encoding="utf-8") as f:
+            f.write(f"{socket.gethostname()} {os.getpid()} {seconds:.6f} {scene.triangle_count}\n")
+    return scene
 
 
 def _mesh_arrays(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray]:

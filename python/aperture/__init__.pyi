@@ -46,6 +46,9 @@ class Camera:
     def spp(self) -> int: ...
     name: str
     """The image name (load_cameras), else ''."""
+    def __getstate__(self) -> tuple[dict[str, Any], str]:
+        """Pickles as (params, name): unpickling is Camera(**params) with the name set."""
+    def __setstate__(self, state: tuple[dict[str, Any], str]) -> None: ...
 
     def describe(self) -> str:
         """The text of `aperture camera --describe` for this camera."""
@@ -78,6 +81,10 @@ class Scene:
 
     def triangles(self) -> npt.NDArray[np.float64]:
         """Every triangle in world space, float64 (T, 3, 3), objects in scene order."""
+
+    def __reduce__(self) -> tuple[Any, tuple[dict[str, Any]]]:
+        """Pickles as the constructor's arguments (absolute paths, or the arrays: warns above
+        64 MB), never the BVH; unpickling builds the scene again."""
 
     @property
     def last_render(self) -> dict[str, float]:
