@@ -135,14 +135,13 @@ const ParityDirections& parityDirections() {
   return directions;
 }
 
-/// One point's parity rays in flight: its current direction and the crossings so far.
 /// Parity's packet width.
 constexpr int kParityPacket = 8;
 
+/// One point's parity rays in flight: its current direction and the crossings so far.
 struct ParityLane {
   size_t point = 0;
-  glm::dvec3 org{0.0};     ///< the point, render space
-  glm::vec3 rayOrg{0.0f};  ///< where the current direction's ray starts (aim)
+  glm::vec3 org{0.0f};  ///< the point, render space
   int direction = 0;
   float tnear = 0;
   int crossings = 0;
@@ -177,8 +176,8 @@ class ParityStream {
       for (int k = 0; k < N; ++k) {
         const ParityLane& lane = lanes_[k];
         const glm::vec3 dir = parityDirections().d[lane.direction];
-        packet.ray.org_x[k] = lane.rayOrg.x, packet.ray.org_y[k] = lane.rayOrg.y;
-        packet.ray.org_z[k] = lane.rayOrg.z, packet.ray.dir_x[k] = dir.x;
+        packet.ray.org_x[k] = lane.org.x, packet.ray.org_y[k] = lane.org.y;
+        packet.ray.org_z[k] = lane.org.z, packet.ray.dir_x[k] = dir.x;
         packet.ray.dir_y[k] = dir.y, packet.ray.dir_z[k] = dir.z;
         packet.ray.tnear[k] = lane.tnear;
         packet.ray.tfar[k] = std::numeric_limits<float>::infinity();
@@ -222,10 +221,13 @@ class ParityStream {
   size_t next_ = 0, end_ = 0;
   size_t discarded_ = 0, undecided_ = 0, nonFinite_ = 0;
 
-  /// Gives the lane the next finite point whose first ray needs tracing (points decided
-  /// without a trace, their rays missing the scene's box, are written on the way), or leaves
-  /// it dead.
+  /// Gives the lane the next finite point inside the scene's box, or leaves it dead. Points
+  /// outside the box (which holds every triangle) are outside, without a ray: no surface
+  /// can enclose them. Rays therefore start within a box diagonal of the surface, and
+  /// Embree's rounding, which grows with the distance from the ray's origin, stays at the
+  /// scene's scale.
   void start(ParityLane& lane) {
+    const std::optional<SceneBox>& box = scene_.box();
     while (next_ < end_) {
       const size_t i = order_[next_++];
       const glm::dvec3 p(points_[3 * i], points_[3 * i + 1], points_[3 * i + 2]);
@@ -234,37 +236,19 @@ class ParityStream {
         ++nonFinite_;
         continue;
       }
+      const glm::dvec3 org = p - scene_.renderOrigin();
+      if (box && (glm::any(glm::lessThan(org, glm::dvec3(box->lo))) ||
+                  glm::any(glm::greaterThan(org, glm::dvec3(box->hi))))) {
+        result_.inside[i] = 0;
+        continue;
+      }
       lane = ParityLane{};
       lane.point = i;
-      lane.org = p - scene_.renderOrigin();
+      lane.org = glm::vec3(org);
       lane.live = true;
-      if (aim(lane) || !endDirection(lane, true)) return;
+      return;
     }
     lane = ParityLane{};
-  }
-
-  /// Starts the lane's ray of its current direction where it enters the scene's box (its
-  /// point when inside): a ray from far away keeps Embree's rounding, which grows with the
-  /// distance from the ray's origin, at the scale of the scene. Nothing lies between the
-  /// point and the box. False when the ray misses the box: no crossing.
-  bool aim(ParityLane& lane) const {
-    lane.crossings = 0, lane.tnear = 0;
-    const std::optional<SceneBox>& box = scene_.box();
-    if (!box) {
-      lane.rayOrg = glm::vec3(lane.org);
-      return true;
-    }
-    const glm::dvec3 d(parityDirections().d[lane.direction]);
-    double enter = 0, leave = std::numeric_limits<double>::infinity();
-    for (int a = 0; a < 3; ++a) {
-      const double lo = (double(box->lo[a]) - lane.org[a]) / d[a];
-      const double hi = (double(box->hi[a]) - lane.org[a]) / d[a];
-      enter = std::max(enter, std::min(lo, hi));
-      leave = std::min(leave, std::max(lo, hi));
-    }
-    if (!(enter <= leave)) return false;
-    lane.rayOrg = glm::vec3(lane.org + enter * d);
-    return true;
   }
 
   /// Writes the lane's verdict; true.
@@ -273,24 +257,22 @@ class ParityStream {
     return true;
   }
 
-  /// Ends the lane's current direction, with its vote (`vote`) or discarded, and aims the next
-  /// one (directions whose ray misses the box vote at once). True when the point is decided:
+  /// Ends the lane's current direction, with its vote (`vote`) or discarded, and turns it to
+  /// the next one. True when the point is decided:
   /// a majority of parityDirections votes on one side, or the directions used up (a majority
   /// of the votes there are; none: undecided, outside).
   bool endDirection(ParityLane& lane, bool vote) {
-    while (true) {
-      if (vote) ++lane.votes, lane.insideVotes += lane.crossings & 1;
-      // Decided once either side holds a majority of parityDirections.
-      const int majority = options_.parityDirections / 2 + 1;
-      if (lane.insideVotes >= majority || lane.votes - lane.insideVotes >= majority)
-        return decide(lane, lane.insideVotes >= majority);
-      if (++lane.direction == kParityDirectionCount) {
-        if (lane.votes == 0) ++undecided_;
-        return decide(lane, 2 * lane.insideVotes > lane.votes);
-      }
-      if (aim(lane)) return false;
-      vote = true;
+    if (vote) ++lane.votes, lane.insideVotes += lane.crossings & 1;
+    // Decided once either side holds a majority of parityDirections.
+    const int majority = options_.parityDirections / 2 + 1;
+    if (lane.insideVotes >= majority || lane.votes - lane.insideVotes >= majority)
+      return decide(lane, lane.insideVotes >= majority);
+    if (++lane.direction == kParityDirectionCount) {
+      if (lane.votes == 0) ++undecided_;
+      return decide(lane, 2 * lane.insideVotes > lane.votes);
     }
+    lane.crossings = 0, lane.tnear = 0;
+    return false;
   }
 
   /// Whether lane k's hit is one whose crossing cannot be counted with certainty: near an

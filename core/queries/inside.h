@@ -8,7 +8,8 @@
 //    next fixed direction: a hit within a few float ulps of an edge or a vertex (where Embree's
 //    robust test may report both triangles of an edge, at the same t or one float apart, or a
 //    silhouette's two triangles at one t, which the retrace would count once), a grazing hit, or
-//    one at the ray's own origin. Rays start where they enter the scene's box, so that
+//    one at the ray's own origin. A point outside the scene's box is outside without a ray
+//    (nothing can enclose it), so every ray starts within a box diagonal of the surface and
 //    Embree's rounding (relative to the distance from the origin) stays at the scene's scale.
 //    Needs the scene built robust (BuildOptions::robust, the default): without it a ray can
 //    slip between two triangles of an edge without any hit to tell.

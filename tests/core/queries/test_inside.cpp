@@ -84,12 +84,12 @@ TEST(CheckClosed, ThreeTrianglesOnOneEdgeAreNonManifold) {
 std::vector<double> cubeGrid() { return gridPoints(-1.5, 1.5, 13); }
 
 /// Points from which parity direction `k` runs exactly through the given targets (vertices,
-/// points on edges): target − s · direction for a few s.
-std::vector<double> pointsAimedAt(const std::vector<glm::dvec3>& targets, int k) {
+/// points on edges): target − s · size · direction for a few s, `size` the mesh's size.
+std::vector<double> pointsAimedAt(const std::vector<glm::dvec3>& targets, int k, double size) {
   const glm::dvec3 d(parityDirection(k));
   std::vector<double> p;
   for (const glm::dvec3& t : targets)
-    for (double s : {0.3, 0.75, 1.9, 3.1}) {
+    for (double s : {0.015 * size, 0.15 * size, 0.4 * size, 0.9 * size}) {
       const glm::dvec3 q = t - s * d;
       p.insert(p.end(), {q.x, q.y, q.z});
     }
@@ -188,7 +188,7 @@ std::vector<double> joined(std::vector<double> a, const std::vector<double>& b) 
 
 TEST(InsideParity, CubeHasNoErrorsWhereNaiveParityHasSome) {
   const SceneOf cube = sceneOf(loadMesh("procedural:cube?size=2"));
-  const std::vector<double> points = joined(cubeGrid(), pointsAimedAt(cubeTargets(), 0));
+  const std::vector<double> points = joined(cubeGrid(), pointsAimedAt(cubeTargets(), 0, 2.0));
   const std::vector<int> truth = cubeTruth(points);
   for (int directions : {1, 5}) {
     InsideOptions o;
@@ -217,7 +217,7 @@ TEST(InsideParity, SphereHasNoErrorsThroughPolesAndVertices) {
   std::vector<glm::dvec3> targets;
   for (size_t v = 0; v < sphere.mesh->vertexCount; v += 7)
     targets.push_back(sphere.mesh->anchor + glm::dvec3(sphere.mesh->vertex(v)));
-  std::vector<double> points = joined(gridPoints(-1.25, 1.25, 11), pointsAimedAt(targets, 0));
+  std::vector<double> points = joined(gridPoints(-1.25, 1.25, 11), pointsAimedAt(targets, 0, 2.0));
   // On the pole axis (y), where axis rays run through the poles' fans.
   for (int k = -10; k <= 10; ++k) points.insert(points.end(), {0.0, k * 0.13, 0.0});
   const std::vector<int> truth = windingTruth(*sphere.mesh, points);
@@ -266,7 +266,7 @@ TEST(InsideParity, HoleFilledBunnyHasNoErrors) {
     const glm::dvec3 inPlane = a + 1.6 * (b - a) - 0.3 * (c - a);
     points.insert(points.end(), {inPlane.x, inPlane.y, inPlane.z});
   }
-  points = joined(points, pointsAimedAt(targets, 0));
+  points = joined(points, pointsAimedAt(targets, 0, glm::length(glm::dvec3(hi - lo))));
   const std::vector<int> truth = windingTruth(m, points);
   InsideOptions o;
   o.method = InsideMethod::Parity;
