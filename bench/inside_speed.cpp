@@ -100,10 +100,10 @@ int main(int argc, char** argv) {
         agree += v.last.inside[i] == variants[2].last.inside[i];
       }
       std::printf(
-          "%-30s median %.3f s  %.3g points/s  inside %.4f  agrees with winding %.5f"
+          "%-30s median %.3f s  %.3g points/s  inside %.4f  differs from winding at %zu"
           "  discarded rays %zu\n",
           v.name, median(v.times), double(count) / median(v.times), double(inside) / double(count),
-          double(agree) / double(count), v.last.discardedRays);
+          count - agree, v.last.discardedRays);
     }
     double worstBound = 0;
     for (double b : variants[2].last.windingErrorBound) worstBound = std::max(worstBound, b);
