@@ -2,6 +2,7 @@
 // Helpers of the sign tests (tests/core/queries/test_inside.cpp, test_winding_number.cpp):
 // meshes built from vertex and index lists, subdivided boxes with or without their top, the
 // bunny with its holes filled, and points on a grid.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <glm/glm.hpp>
@@ -124,6 +125,39 @@ inline std::vector<glm::dvec3> cornersOf(const Mesh& m) {
   std::vector<glm::dvec3> corners;
   for (uint32_t i : m.indices) corners.push_back(m.anchor + glm::dvec3(m.vertex(i)));
   return corners;
+}
+
+/// The distance from p to triangle (a, b, c): the closest point by the Voronoi regions of its
+/// corners, edges and face (Ericson, Real-Time Collision Detection, 5.1.5), in double.
+inline double pointTriangleDistance(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b,
+                                    const glm::dvec3& c) {
+  const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return glm::length(p - a);
+  const glm::dvec3 bp = p - b;
+  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return glm::length(p - b);
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return glm::length(p - (a + ab * (d1 / (d1 - d3))));
+  const glm::dvec3 cp = p - c;
+  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return glm::length(p - c);
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return glm::length(p - (a + ac * (d2 / (d2 - d6))));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return glm::length(p - (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)))));
+  const double denom = 1.0 / (va + vb + vc);
+  return glm::length(p - (a + ab * (vb * denom) + ac * (vc * denom)));
+}
+
+/// The distance from p to the nearest of the triangles of `corners` (3 per triangle), by
+/// brute force.
+inline double distanceToSoup(const std::vector<glm::dvec3>& corners, const glm::dvec3& p) {
+  double best = INFINITY;
+  for (size_t k = 0; k + 2 < corners.size(); k += 3)
+    best = std::min(best, pointTriangleDistance(p, corners[k], corners[k + 1], corners[k + 2]));
+  return best;
 }
 
 /// The points of a grid of `n` per axis over [lo, hi]³, x fastest, as 3 doubles each.

@@ -6,9 +6,11 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "core/engine/intersect_scene.h"
 #include "core/engine/packet.h"
+#include "core/queries/morton_order.h"
 #include "core/queries/winding_number.h"
 #include "core/queries/world_triangles.h"
 #include "core/util/error.h"
@@ -47,21 +49,60 @@ bool lessPosition(const glm::dvec3& a, const glm::dvec3& b) {
   return a.z < b.z;
 }
 
-/// For each corner, the id of its position: corners at the same position get the same id.
-std::vector<uint32_t> weldedIds(const std::vector<glm::dvec3>& corners) {
-  std::vector<uint32_t> byPosition(corners.size());
-  parallelFor(corners.size(), 1 << 16, [&](size_t begin, size_t end) {
+/// For each position, its id: positions that are equal get the same id.
+std::vector<uint32_t> weldedIds(const std::vector<glm::dvec3>& positions) {
+  std::vector<uint32_t> byPosition(positions.size());
+  parallelFor(positions.size(), 1 << 16, [&](size_t begin, size_t end) {
     for (size_t k = begin; k < end; ++k) byPosition[k] = uint32_t(k);
   });
-  tbb::parallel_sort(byPosition.begin(), byPosition.end(),
-                     [&](uint32_t a, uint32_t b) { return lessPosition(corners[a], corners[b]); });
-  std::vector<uint32_t> ids(corners.size());
+  tbb::parallel_sort(byPosition.begin(), byPosition.end(), [&](uint32_t a, uint32_t b) {
+    return lessPosition(positions[a], positions[b]);
+  });
+  std::vector<uint32_t> ids(positions.size());
   uint32_t id = 0;
   for (size_t k = 0; k < byPosition.size(); ++k) {
-    if (k > 0 && lessPosition(corners[byPosition[k - 1]], corners[byPosition[k]])) ++id;
+    if (k > 0 && lessPosition(positions[byPosition[k - 1]], positions[byPosition[k]])) ++id;
     ids[byPosition[k]] = id;
   }
   return ids;
+}
+
+/// The scene's triangles as 3 welded vertex ids each (objects in order, each object's
+/// triangles as its BVH holds them): every object's vertices are placed in world space
+/// (x = worldFromMesh · (anchor + position), double), and vertices at one position share an
+/// id. Welding the vertices, not the corners, sorts a sixth as many positions.
+std::vector<uint32_t> weldedTriangles(const Scene& scene) {
+  const std::vector<SceneObject>& objects = scene.objects();
+  std::vector<size_t> firstVertex(objects.size() + 1, 0);
+  for (size_t o = 0; o < objects.size(); ++o)
+    firstVertex[o + 1] = firstVertex[o] + objects[o].mesh->vertexCount;
+  if (firstVertex.back() >= (size_t(1) << 31))
+    throw Error(cat("checkClosed: ", firstVertex.back(), " vertices is more than it handles"));
+  std::vector<glm::dvec3> positions(firstVertex.back());
+  for (size_t o = 0; o < objects.size(); ++o) {
+    const Mesh& m = *objects[o].mesh;
+    const glm::dmat4 worldFromMesh = objects[o].worldFromMesh;
+    parallelFor(m.vertexCount, 1 << 16, [&](size_t begin, size_t end) {
+      for (size_t v = begin; v < end; ++v)
+        positions[firstVertex[o] + v] =
+            glm::dvec3(worldFromMesh * glm::dvec4(m.anchor + glm::dvec3(m.vertex(v)), 1.0));
+    });
+  }
+  const std::vector<uint32_t> ids = weldedIds(positions);
+  std::vector<uint32_t> triangles;
+  for (size_t o = 0; o < objects.size(); ++o) {
+    const SceneObject& object = objects[o];
+    const uint32_t* indices =
+        object.subset ? object.subset->indices.data() : object.mesh->indices.data();
+    const size_t corners =
+        3 * (object.subset ? object.subset->triangleCount() : object.mesh->triangleCount());
+    const size_t first = triangles.size();
+    triangles.resize(first + corners);
+    parallelFor(corners, 1 << 16, [&](size_t begin, size_t end) {
+      for (size_t k = begin; k < end; ++k) triangles[first + k] = ids[firstVertex[o] + indices[k]];
+    });
+  }
+  return triangles;
 }
 
 /// An edge as (lower id << 32 | higher id) << 1 | (1 when traversed from the lower id).
@@ -73,11 +114,8 @@ uint64_t edgeKey(uint32_t from, uint32_t to) {
 }  // namespace
 
 ClosedCheck checkClosed(const Scene& scene) {
-  const std::vector<glm::dvec3> corners = worldTriangleCorners(scene);
-  if (corners.size() >= (size_t(1) << 31))
-    throw Error(cat("checkClosed: ", corners.size() / 3, " triangles is more than it handles"));
-  const std::vector<uint32_t> ids = weldedIds(corners);
-  const size_t triangles = corners.size() / 3;
+  const std::vector<uint32_t> ids = weldedTriangles(scene);
+  const size_t triangles = ids.size() / 3;
   // Three keys per triangle; a degenerate triangle (two corners at one position) has none.
   std::vector<uint64_t> keys(3 * triangles, std::numeric_limits<uint64_t>::max());
   parallelFor(triangles, 1 << 14, [&](size_t begin, size_t end) {
@@ -133,11 +171,13 @@ const ParityDirections& parityDirections() {
   return directions;
 }
 
+/// Parity's packet width.
+constexpr int kParityPacket = 8;
+
 /// One point's parity rays in flight: its current direction and the crossings so far.
 struct ParityLane {
   size_t point = 0;
-  glm::dvec3 org{0.0};     ///< the point, render space
-  glm::vec3 rayOrg{0.0f};  ///< where the current direction's ray starts (aim)
+  glm::vec3 org{0.0f};  ///< the point, render space
   int direction = 0;
   float tnear = 0;
   int crossings = 0;
@@ -145,14 +185,16 @@ struct ParityLane {
   bool live = false;
 };
 
-/// Parity over the points [begin, end): lanes of a packet of 8 rays, each lane taking the
-/// next point when its point is decided.
+/// Parity over the points order[begin, end): lanes of a packet of N rays, each lane taking
+/// the next point when its point is decided.
+template <int N>
 class ParityStream {
  public:
-  ParityStream(const Scene& scene, const double* points, const InsideOptions& options,
-               float diagonal, InsideResult& result)
+  ParityStream(const Scene& scene, const double* points, const size_t* order,
+               const InsideOptions& options, float diagonal, InsideResult& result)
       : scene_(scene),
         points_(points),
+        order_(order),
         options_(options),
         diagonal_(diagonal),
         band_(kParitySurfaceBand * diagonal),
@@ -163,15 +205,15 @@ class ParityStream {
     for (ParityLane& lane : lanes_) start(lane);
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    alignas(32) RTCRayHit8 packet;
-    alignas(32) int valid[8];
+    alignas(64) typename PacketOf<N>::type packet;
+    alignas(64) int valid[N];
     while (true) {
       int live = 0;
-      for (int k = 0; k < 8; ++k) {
+      for (int k = 0; k < N; ++k) {
         const ParityLane& lane = lanes_[k];
         const glm::vec3 dir = parityDirections().d[lane.direction];
-        packet.ray.org_x[k] = lane.rayOrg.x, packet.ray.org_y[k] = lane.rayOrg.y;
-        packet.ray.org_z[k] = lane.rayOrg.z, packet.ray.dir_x[k] = dir.x;
+        packet.ray.org_x[k] = lane.org.x, packet.ray.org_y[k] = lane.org.y;
+        packet.ray.org_z[k] = lane.org.z, packet.ray.dir_x[k] = dir.x;
         packet.ray.dir_y[k] = dir.y, packet.ray.dir_z[k] = dir.z;
         packet.ray.tnear[k] = lane.tnear;
         packet.ray.tfar[k] = std::numeric_limits<float>::infinity();
@@ -181,9 +223,9 @@ class ParityStream {
         live += lane.live;
       }
       if (live == 0) break;
-      clearHits<8>(packet);
-      intersectScene<8>(scene_, &ctx, valid, packet);
-      for (int k = 0; k < 8; ++k) {
+      clearHits<N>(packet);
+      intersectScene<N>(scene_, &ctx, valid, packet);
+      for (int k = 0; k < N; ++k) {
         ParityLane& lane = lanes_[k];
         if (!lane.live) continue;
         bool decided = false;
@@ -207,56 +249,42 @@ class ParityStream {
  private:
   const Scene& scene_;
   const double* points_;
+  const size_t* order_;
   const InsideOptions& options_;
   float diagonal_, band_;
   InsideResult& result_;
-  ParityLane lanes_[8];
+  ParityLane lanes_[N];
   size_t next_ = 0, end_ = 0;
   size_t discarded_ = 0, undecided_ = 0, nonFinite_ = 0;
 
-  /// Gives the lane the next finite point whose first ray needs tracing (points decided
-  /// without a trace, their rays missing the scene's box, are written on the way), or leaves
-  /// it dead.
+  /// Gives the lane the next finite point inside the scene's box, or leaves it dead. Points
+  /// outside the box (which holds every triangle) are outside, without a ray: no surface
+  /// can enclose them. Rays therefore start within a box diagonal of the surface, and
+  /// Embree's rounding, which grows with the distance from the ray's origin, stays at the
+  /// scene's scale.
   void start(ParityLane& lane) {
+    const std::optional<SceneBox>& box = scene_.box();
     while (next_ < end_) {
-      const size_t i = next_++;
+      const size_t i = order_[next_++];
       const glm::dvec3 p(points_[3 * i], points_[3 * i + 1], points_[3 * i + 2]);
       if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) {
         result_.inside[i] = 0;
         ++nonFinite_;
         continue;
       }
+      const glm::dvec3 org = p - scene_.renderOrigin();
+      if (box && (glm::any(glm::lessThan(org, glm::dvec3(box->lo))) ||
+                  glm::any(glm::greaterThan(org, glm::dvec3(box->hi))))) {
+        result_.inside[i] = 0;
+        continue;
+      }
       lane = ParityLane{};
       lane.point = i;
-      lane.org = p - scene_.renderOrigin();
+      lane.org = glm::vec3(org);
       lane.live = true;
-      if (aim(lane) || !endDirection(lane, true)) return;
+      return;
     }
     lane = ParityLane{};
-  }
-
-  /// Starts the lane's ray of its current direction where it enters the scene's box (its
-  /// point when inside): a ray from far away keeps Embree's rounding, which grows with the
-  /// distance from the ray's origin, at the scale of the scene. Nothing lies between the
-  /// point and the box. False when the ray misses the box: no crossing.
-  bool aim(ParityLane& lane) const {
-    lane.crossings = 0, lane.tnear = 0;
-    const std::optional<SceneBox>& box = scene_.box();
-    if (!box) {
-      lane.rayOrg = glm::vec3(lane.org);
-      return true;
-    }
-    const glm::dvec3 d(parityDirections().d[lane.direction]);
-    double enter = 0, leave = std::numeric_limits<double>::infinity();
-    for (int a = 0; a < 3; ++a) {
-      const double lo = (double(box->lo[a]) - lane.org[a]) / d[a];
-      const double hi = (double(box->hi[a]) - lane.org[a]) / d[a];
-      enter = std::max(enter, std::min(lo, hi));
-      leave = std::min(leave, std::max(lo, hi));
-    }
-    if (!(enter <= leave)) return false;
-    lane.rayOrg = glm::vec3(lane.org + enter * d);
-    return true;
   }
 
   /// Writes the lane's verdict; true.
@@ -265,28 +293,28 @@ class ParityStream {
     return true;
   }
 
-  /// Ends the lane's current direction, with its vote (`vote`) or discarded, and aims the next
-  /// one (directions whose ray misses the box vote at once). True when the point is decided:
-  /// parityDirections votes, or the directions used up (a majority of the votes there are;
-  /// none: undecided, outside).
+  /// Ends the lane's current direction, with its vote (`vote`) or discarded, and turns it to
+  /// the next one. True when the point is decided:
+  /// a majority of parityDirections votes on one side, or the directions used up (a majority
+  /// of the votes there are; none: undecided, outside).
   bool endDirection(ParityLane& lane, bool vote) {
-    while (true) {
-      if (vote) ++lane.votes, lane.insideVotes += lane.crossings & 1;
-      if (lane.votes == options_.parityDirections)
-        return decide(lane, 2 * lane.insideVotes > lane.votes);
-      if (++lane.direction == kParityDirectionCount) {
-        if (lane.votes == 0) ++undecided_;
-        return decide(lane, 2 * lane.insideVotes > lane.votes);
-      }
-      if (aim(lane)) return false;
-      vote = true;
+    if (vote) ++lane.votes, lane.insideVotes += lane.crossings & 1;
+    // Decided once either side holds a majority of parityDirections.
+    const int majority = options_.parityDirections / 2 + 1;
+    if (lane.insideVotes >= majority || lane.votes - lane.insideVotes >= majority)
+      return decide(lane, lane.insideVotes >= majority);
+    if (++lane.direction == kParityDirectionCount) {
+      if (lane.votes == 0) ++undecided_;
+      return decide(lane, 2 * lane.insideVotes > lane.votes);
     }
+    lane.crossings = 0, lane.tnear = 0;
+    return false;
   }
 
   /// Whether lane k's hit is one whose crossing cannot be counted with certainty: near an
   /// edge or a vertex (where Embree's watertight test may report both triangles, or the
   /// second one a float later), grazing, or at the ray's origin (a point on the surface).
-  bool ambiguous(const RTCRayHit8& p, int k, const glm::vec3& dir) const {
+  bool ambiguous(const typename PacketOf<N>::type& p, int k, const glm::vec3& dir) const {
     const float t = p.ray.tfar[k];
 
     if (t < band_) return true;
@@ -326,12 +354,21 @@ void checkOptions(const InsideOptions& options) {
         cat("insideOf: windingBeta ", options.windingBeta, " must be a finite number above 1"));
 }
 
+/// The points' indices in Morton order over the scene's box, in world space.
+std::vector<size_t> spatialOrder(const Scene& scene, const double* points, size_t count) {
+  const std::optional<SceneBox>& box = scene.box();
+  if (!box) return mortonOrder(points, count, glm::dvec3(0.0), glm::dvec3(1.0));
+  const glm::dvec3 origin = scene.renderOrigin();
+  return mortonOrder(points, count, origin + glm::dvec3(box->lo), origin + glm::dvec3(box->hi));
+}
+
 void insideByParity(const Scene& scene, const double* points, size_t count,
                     const InsideOptions& options, InsideResult& result) {
   const float diagonal = sceneDiagonal(scene);
+  const std::vector<size_t> order = spatialOrder(scene, points, count);
   std::atomic<size_t> discarded{0}, undecided{0}, nonFinite{0};
   parallelFor(count, 1024, [&](size_t begin, size_t end) {
-    ParityStream stream(scene, points, options, diagonal, result);
+    ParityStream<kParityPacket> stream(scene, points, order.data(), options, diagonal, result);
     stream.run(begin, end);
     discarded += stream.discarded();
     undecided += stream.undecided();
@@ -344,7 +381,9 @@ void insideByParity(const Scene& scene, const double* points, size_t count,
 
 void insideByWinding(const Scene& scene, const double* points, size_t count,
                      const InsideOptions& options, InsideResult& result) {
-  const WindingNumberTree tree(worldTriangleCorners(scene));
+  std::optional<WindingNumberTree> built;
+  if (!options.windingTree) built.emplace(worldTriangleCorners(scene));
+  const WindingNumberTree& tree = options.windingTree ? *options.windingTree : *built;
   result.winding.resize(count);
   result.windingErrorBound.resize(count);
   tree.evaluate(points, count, options.windingBeta, result.winding.data(),
@@ -379,7 +418,9 @@ InsideResult insideOf(const Scene& scene, const double* points, size_t count,
   InsideResult result;
   result.method = options.method;
   if (result.method == InsideMethod::Automatic)
-    result.method = checkClosed(scene).closed ? InsideMethod::Parity : InsideMethod::Winding;
+    result.method = (options.closed ? options.closed->closed : checkClosed(scene).closed)
+                        ? InsideMethod::Parity
+                        : InsideMethod::Winding;
   result.inside.assign(count, 0);
   if (result.method == InsideMethod::Parity)
     insideByParity(scene, points, count, options, result);

@@ -14,6 +14,7 @@
 #include "core/queries/inside.h"
 #include "core/queries/trace.h"
 #include "core/queries/winding_number.h"
+#include "core/queries/world_triangles.h"
 #include "core/util/error.h"
 #include "tests/inside_support.h"
 #include "tests/support.h"
@@ -83,12 +84,12 @@ TEST(CheckClosed, ThreeTrianglesOnOneEdgeAreNonManifold) {
 std::vector<double> cubeGrid() { return gridPoints(-1.5, 1.5, 13); }
 
 /// Points from which parity direction `k` runs exactly through the given targets (vertices,
-/// points on edges): target − s · direction for a few s.
-std::vector<double> pointsAimedAt(const std::vector<glm::dvec3>& targets, int k) {
+/// points on edges): target − s · size · direction for a few s, `size` the mesh's size.
+std::vector<double> pointsAimedAt(const std::vector<glm::dvec3>& targets, int k, double size) {
   const glm::dvec3 d(parityDirection(k));
   std::vector<double> p;
   for (const glm::dvec3& t : targets)
-    for (double s : {0.3, 0.75, 1.9, 3.1}) {
+    for (double s : {0.015 * size, 0.15 * size, 0.4 * size, 0.9 * size}) {
       const glm::dvec3 q = t - s * d;
       p.insert(p.end(), {q.x, q.y, q.z});
     }
@@ -187,7 +188,7 @@ std::vector<double> joined(std::vector<double> a, const std::vector<double>& b) 
 
 TEST(InsideParity, CubeHasNoErrorsWhereNaiveParityHasSome) {
   const SceneOf cube = sceneOf(loadMesh("procedural:cube?size=2"));
-  const std::vector<double> points = joined(cubeGrid(), pointsAimedAt(cubeTargets(), 0));
+  const std::vector<double> points = joined(cubeGrid(), pointsAimedAt(cubeTargets(), 0, 2.0));
   const std::vector<int> truth = cubeTruth(points);
   for (int directions : {1, 5}) {
     InsideOptions o;
@@ -216,7 +217,7 @@ TEST(InsideParity, SphereHasNoErrorsThroughPolesAndVertices) {
   std::vector<glm::dvec3> targets;
   for (size_t v = 0; v < sphere.mesh->vertexCount; v += 7)
     targets.push_back(sphere.mesh->anchor + glm::dvec3(sphere.mesh->vertex(v)));
-  std::vector<double> points = joined(gridPoints(-1.25, 1.25, 11), pointsAimedAt(targets, 0));
+  std::vector<double> points = joined(gridPoints(-1.25, 1.25, 11), pointsAimedAt(targets, 0, 2.0));
   // On the pole axis (y), where axis rays run through the poles' fans.
   for (int k = -10; k <= 10; ++k) points.insert(points.end(), {0.0, k * 0.13, 0.0});
   const std::vector<int> truth = windingTruth(*sphere.mesh, points);
@@ -265,7 +266,7 @@ TEST(InsideParity, HoleFilledBunnyHasNoErrors) {
     const glm::dvec3 inPlane = a + 1.6 * (b - a) - 0.3 * (c - a);
     points.insert(points.end(), {inPlane.x, inPlane.y, inPlane.z});
   }
-  points = joined(points, pointsAimedAt(targets, 0));
+  points = joined(points, pointsAimedAt(targets, 0, glm::length(glm::dvec3(hi - lo))));
   const std::vector<int> truth = windingTruth(m, points);
   InsideOptions o;
   o.method = InsideMethod::Parity;
@@ -332,6 +333,27 @@ TEST(InsideOf, AutomaticIsParityWhenClosedAndWindingWhenOpen) {
       EXPECT_EQ(b.inside[i], exact > 0.5 ? 1 : 0) << i;
     }
   }
+}
+
+TEST(InsideOf, KeptClosedCheckAndTreeAreUsed) {
+  const SceneOf open = sceneOf(subdividedBox(8, true));
+  const std::vector<double> points = gridPoints(-1.3, 1.3, 7);
+  // A closedness the caller claims is taken as given: parity runs on the open box.
+  ClosedCheck claimed;
+  claimed.closed = true;
+  InsideOptions o;
+  o.closed = &claimed;
+  EXPECT_EQ(insideOf(*open.scene, points.data(), points.size() / 3, o).method,
+            InsideMethod::Parity);
+  // A kept tree gives what a tree built per call gives.
+  const WindingNumberTree tree(worldTriangleCorners(*open.scene));
+  InsideOptions w;
+  w.method = InsideMethod::Winding;
+  const InsideResult fresh = insideOf(*open.scene, points.data(), points.size() / 3, w);
+  w.windingTree = &tree;
+  const InsideResult kept = insideOf(*open.scene, points.data(), points.size() / 3, w);
+  EXPECT_EQ(kept.winding, fresh.winding);
+  EXPECT_EQ(kept.inside, fresh.inside);
 }
 
 TEST(InsideOf, NonFinitePointsAreOutsideAndCounted) {
