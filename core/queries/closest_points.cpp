@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "core/engine/packet.h"
+#include "core/queries/morton_order.h"
 #include "core/util/error.h"
 #include "core/util/parallel.h"
 
@@ -236,56 +237,20 @@ bool searchOne(const QueryScene& qs, const double* world, const Seed& seed, Quer
   return st.object != RTC_INVALID_GEOMETRY_ID;
 }
 
-/// Cells per axis of the grid spatialOrder sorts by.
-constexpr uint32_t kOrderGrid = 64;
-
-/// Bit k of v moved to bit 3k: one axis of a Morton code.
-uint32_t spreadBits(uint32_t v) {
-  uint32_t out = 0;
-  for (int k = 0; k < 6; ++k) out |= ((v >> k) & 1u) << (3 * k);
-  return out;
-}
-
-/// The indices of the `count` points ordered by the Morton code of their cell of a 64³ grid on
-/// the finite points' box (one counting-sort pass; points that are not finite go first), so
-/// that consecutive queries are neighbours.
-std::vector<uint32_t> spatialOrder(const double* points, size_t count) {
-  dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
+/// The box of the finite points of `points` (lo > hi when there is none).
+void finiteBox(const double* points, size_t count, dvec3& lo, dvec3& hi) {
+  lo = dvec3(std::numeric_limits<double>::infinity()), hi = -lo;
   for (size_t k = 0; k < count; ++k) {
     const dvec3 p = load(points + 3 * k);
     if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))
       lo = glm::min(lo, p), hi = glm::max(hi, p);
   }
-  const dvec3 scale = double(kOrderGrid) / glm::max(hi - lo, dvec3(1e-300));
-  std::vector<uint32_t> cell(count);
-  parallelFor(count, 1 << 14, [&](size_t first, size_t last) {
-    for (size_t k = first; k < last; ++k) {
-      const dvec3 g = (load(points + 3 * k) - lo) * scale;
-      uint32_t code = 0;
-      for (int a = 0; a < 3; ++a) {
-        const double v = g[a];
-        if (!(v >= 0 && v < 1e9)) {  // NaN, or not finite
-          code = 0;
-          break;
-        }
-        code |= spreadBits(std::min(uint32_t(v), kOrderGrid - 1)) << a;
-      }
-      cell[k] = code;
-    }
-  });
-  std::vector<uint32_t> start(kOrderGrid * kOrderGrid * kOrderGrid + 1, 0);
-  for (uint32_t c : cell) ++start[c + 1];
-  for (size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
-  std::vector<uint32_t> order(count);
-  for (size_t k = 0; k < count; ++k) order[start[cell[k]]++] = uint32_t(k);
-  return order;
+  if (lo.x > hi.x) lo = hi = dvec3(0.0);
 }
 
 }  // namespace
 
 ClosestPoints closestPoints(const Scene& scene, const double* points, size_t count) {
-  if (count >= size_t(UINT32_MAX))
-    throw Error(cat("closest points: ", count, " points; at most ", UINT32_MAX - 1, " at once"));
   const QueryScene qs = queryScene(scene);
   ClosestPoints out;
   out.points.resize(3 * count);
@@ -294,9 +259,11 @@ ClosestPoints closestPoints(const Scene& scene, const double* points, size_t cou
   out.primId.resize(count);
   out.geomId.resize(count);
   out.instance.resize(count);
-  // Queries run in spatial order (spatialOrder), each seeded with the answer of the one before
-  // it in its chunk.
-  const std::vector<uint32_t> order = spatialOrder(points, count);
+  // Queries run in Morton order over the points' box, each seeded with the answer of the one
+  // before it in its chunk.
+  dvec3 lo, hi;
+  finiteBox(points, count, lo, hi);
+  const std::vector<size_t> order = mortonOrder(points, count, lo, hi);
   constexpr size_t kChunk = 1024;
   std::vector<size_t> skipped((count + kChunk - 1) / kChunk, 0);
   parallelForChunks(count, kChunk, [&](size_t c, size_t first, size_t last) {
