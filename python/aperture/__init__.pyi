@@ -101,6 +101,7 @@ class Scene:
         progress: Callable[[int, int], Any] | None = None,
         packet: int = 16,
         tile: int = 32,
+        out: dict[str, np.ndarray] | None = None,
     ) -> _Result:
         """Renders every camera in one parallel loop with the GIL released; name -> array."""
 
@@ -110,9 +111,11 @@ class Scene:
         aovs: _Aovs = ("color", "depth"),
         batch: int = 8,
         progress: Callable[[int, int], Any] | None = None,
+        reuse: bool = True,
         **options: Any,
     ) -> Iterator[tuple[Camera, dict[str, np.ndarray]]]:
-        """Yields (camera, name -> (H, W[, C]) array), batch cameras at a time."""
+        """Yields (camera, name -> (H, W[, C]) array), batch cameras at a time; reuse: the next
+        batch overwrites the arrays of the one before."""
     def face_visibility(
         self,
         cameras: Camera | Iterable[Camera],
