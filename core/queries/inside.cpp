@@ -11,7 +11,6 @@
 
 #include "core/engine/intersect_scene.h"
 #include "core/engine/packet.h"
-#include "core/queries/morton_order.h"
 #include "core/queries/winding_number.h"
 #include "core/queries/world_triangles.h"
 #include "core/util/error.h"
@@ -483,18 +482,56 @@ void checkOptions(const InsideOptions& options) {
         cat("insideOf: windingBeta ", options.windingBeta, " must be a finite number above 1"));
 }
 
-/// The points' indices in Morton order over the scene's box, in world space.
-std::vector<size_t> spatialOrder(const Scene& scene, const double* points, size_t count) {
+/// Cells per axis of parityOrder's grid over the scene's box (64³ cells, 18-bit Morton keys).
+constexpr int kParityOrderBits = 6;
+
+/// Spreads the low kParityOrderBits bits of x to every third bit.
+uint32_t spreadCellBits(uint32_t x) {
+  uint32_t spread = 0;
+  for (int b = 0; b < kParityOrderBits; ++b) spread |= ((x >> b) & 1u) << (3 * b);
+  return spread;
+}
+
+/// The order parity takes the points in: those inside the scene's box (the only ones that
+/// trace rays) by cell of a 64³ grid over the box, cells in Morton order, so that a packet's
+/// lanes hold neighbouring rays; then the others (outside the box or not finite). A counting
+/// sort: linear, where a full Morton sort of a million points took a tenth of parity's time.
+/// Each point's answer does not depend on the order, only the speed does.
+std::vector<size_t> parityOrder(const Scene& scene, const double* points, size_t count) {
   const std::optional<SceneBox>& box = scene.box();
-  if (!box) return mortonOrder(points, count, glm::dvec3(0.0), glm::dvec3(1.0));
-  const glm::dvec3 origin = scene.renderOrigin();
-  return mortonOrder(points, count, origin + glm::dvec3(box->lo), origin + glm::dvec3(box->hi));
+  constexpr uint32_t cells = 1u << (3 * kParityOrderBits), outside = cells;
+  std::vector<uint32_t> key(count, outside);
+  if (box) {
+    const glm::dvec3 lo(box->lo), hi(box->hi), origin = scene.renderOrigin();
+    const glm::dvec3 scale = double(1 << kParityOrderBits) / glm::max(hi - lo, glm::dvec3(1e-300));
+    parallelFor(count, 1 << 14, [&](size_t begin, size_t end) {
+      for (size_t i = begin; i < end; ++i) {
+        const glm::dvec3 org =
+            glm::dvec3(points[3 * i], points[3 * i + 1], points[3 * i + 2]) - origin;
+        if (!(glm::all(glm::greaterThanEqual(org, lo)) && glm::all(glm::lessThanEqual(org, hi))))
+          continue;  // also NaN
+        uint32_t k = 0;
+        for (int a = 0; a < 3; ++a) {
+          const double c =
+              std::min((org[a] - lo[a]) * scale[a], double((1 << kParityOrderBits) - 1));
+          k |= spreadCellBits(uint32_t(c)) << a;
+        }
+        key[i] = k;
+      }
+    });
+  }
+  std::vector<size_t> start(cells + 2, 0);
+  for (uint32_t k : key) ++start[k + 1];
+  for (size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
+  std::vector<size_t> order(count);
+  for (size_t i = 0; i < count; ++i) order[start[key[i]]++] = i;
+  return order;
 }
 
 void insideByParity(const Scene& scene, const double* points, size_t count,
                     const InsideOptions& options, InsideResult& result) {
   const float diagonal = sceneDiagonal(scene);
-  const std::vector<size_t> order = spatialOrder(scene, points, count);
+  const std::vector<size_t> order = parityOrder(scene, points, count);
   std::atomic<size_t> discarded{0}, undecided{0}, nonFinite{0};
   parallelFor(count, 1024, [&](size_t begin, size_t end) {
     ParityStream<kParityPacket> stream(scene, points, order.data(), options, diagonal, result);
