@@ -57,8 +57,6 @@ struct ScanSweep {
   double traceSeconds = 0;  ///< tracing and fields, without writing
 };
 
-struct ScanSurface;
-
 /// The scan loop: traces sweeps of `sensor` through `scene` with `options` on the parallel
 /// loop, in two passes over fixed chunks of rays (the same points on any thread count): the
 /// trace pass leaves each chunk's hits, compacted, in a buffer the scanner keeps from one
