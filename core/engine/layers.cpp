@@ -7,7 +7,9 @@
 #include <cstdlib>
 #include <limits>
 #include <optional>
+#include <string>
 
+#include "core/aov/aov_table.h"
 #include "core/engine/intersect_scene.h"
 #include "core/util/error.h"
 #include "core/util/spelling.h"
@@ -59,18 +61,39 @@ bool layersNeedContextFilter(const AovSet& aovs) {
   return aovs.layers > 0 && defaultLayerMethod() == LayerMethod::Filter;
 }
 
-LayerPlan::LayerPlan(const Scene& scene_, const Camera& camera_, Framebuffer& fb_, glm::vec3 eye_,
-                     glm::vec3 axis_, LayerMethod method_)
+namespace {
+
+/// The first value of the layered hits of the AOV row `row` ("layers.depth" for "depth") in
+/// `px`; Error when it has no storage.
+void* layerStorage(const FramePixels& px, const char* row) {
+  const std::string name = layerAovName(*findAovRow(row));
+  const PixelChannel* c = px.find(name);
+  if (!c || !c->data) throw Error(cat("layered hits: the storage holds no '", name, "'"));
+  return c->data;
+}
+
+}  // namespace
+
+LayerPlan::LayerPlan(const Scene& scene_, const Camera& camera_, const FramePixels& px,
+                     glm::vec3 eye_, glm::vec3 axis_, LayerMethod method_)
     : scene(scene_),
       camera(camera_),
-      fb(fb_),
+      depth(static_cast<float*>(layerStorage(px, "depth"))),
+      distance(static_cast<float*>(layerStorage(px, "distance"))),
+      primId(static_cast<uint32_t*>(layerStorage(px, "primid"))),
+      geomId(static_cast<uint32_t*>(layerStorage(px, "geomid"))),
+      pixelCount(px.pixelCount()),
       eye(eye_),
       axis(axis_),
       method(scene_.options().contextFilter ? method_ : LayerMethod::Retrace),
-      layers(fb_.layers),
-      imageWidth(fb_.width) {
+      layers(px.aovs.layers),
+      imageWidth(px.width) {
   checkLayerCount(layers, "framebuffer layers");
 }
+
+LayerPlan::LayerPlan(const Scene& scene_, const Camera& camera_, Framebuffer& fb, glm::vec3 eye_,
+                     glm::vec3 axis_, LayerMethod method_)
+    : LayerPlan(scene_, camera_, framePixelsOf(fb), eye_, axis_, method_) {}
 
 namespace {
 
@@ -275,14 +298,13 @@ inline float planarDepth(const LayerPlan& plan, const RayLanes& l, int k, float 
 
 /// Writes layer `layer` of pixel `px`.
 void storeLayer(const LayerPlan& plan, size_t px, int layer, const LayerHit& h, float z) {
-  Framebuffer& fb = plan.fb;
-  const size_t at = size_t(layer) * fb.pixelCount() + px;
+  const size_t at = size_t(layer) * plan.pixelCount + px;
   const unsigned object = h.object();
-  fb.layerDepth[at] = z;
-  fb.layerDistance[at] = h.t;
-  fb.layerPrimId[at] =
+  plan.depth[at] = z;
+  plan.distance[at] = h.t;
+  plan.primId[at] =
       plan.scene.remapsPrimIds() ? plan.scene.sourcePrimId(object, h.primID) : h.primID;
-  fb.layerGeomId[at] = object;
+  plan.geomId[at] = object;
 }
 
 /// Stores lane k's layers: the first hit, then the method's hits other than it, in order.

@@ -4,6 +4,7 @@
 #include <glm/glm.hpp>
 #include <string>
 
+#include "core/aov/frame_pixels.h"
 #include "core/aov/framebuffer.h"
 #include "core/engine/camera.h"
 #include "core/engine/packet.h"
@@ -127,27 +128,34 @@ extern template void traceSurfaces<16>(const Scene&, const SurfaceSearch&, Packe
 struct LayerPlan {
   /// `eye` and `axis`: the camera's render-space eye and view axis (planar depth, as the Z
   /// AOV). The method falls back to Retrace on a scene built without contextFilter.
+  /// `px`: the storage of the layered hits ("layers.depth", ...), which must hold them.
+  LayerPlan(const Scene& scene, const Camera& camera, const FramePixels& px, glm::vec3 eye,
+            glm::vec3 axis, LayerMethod method = defaultLayerMethod());
+  /// The layers of `fb` (framePixelsOf).
   LayerPlan(const Scene& scene, const Camera& camera, Framebuffer& fb, glm::vec3 eye,
             glm::vec3 axis, LayerMethod method = defaultLayerMethod());
 
   const Scene& scene;
   const Camera& camera;
-  Framebuffer& fb;
+  /// Where layer k of storage pixel p goes: [k · pixelCount + p] of each.
+  float *depth, *distance;
+  uint32_t *primId, *geomId;
+  size_t pixelCount;  ///< pixels of the storage (all its stacked frames)
   glm::vec3 eye, axis;
   LayerMethod method;      ///< the method actually used
-  int layers;              ///< K = fb.layers
-  int imageWidth;          ///< the camera's image width (fb.width unless frames are stacked)
-  size_t pixelOffset = 0;  ///< fb index of the image's pixel (0, 0)
+  int layers;              ///< K = AovSet::layers of the storage
+  int imageWidth;          ///< the camera's image width (the storage's unless frames are stacked)
+  size_t pixelOffset = 0;  ///< storage index of the image's pixel (0, 0)
   /// Places the image in a framebuffer of stacked frames (core/engine/render.h
   /// renderImagesStacked).
   void place(int width, size_t offset) { imageWidth = width, pixelOffset = offset; }
 };
 
-/// Fills fb's layers at the pixels of the packet of `req` (a centre-ray request) from its
+/// Fills the plan's layers at the pixels of the packet of `req` (a centre-ray request) from its
 /// traced first hits: `first` the packet's hit fields after rtcIntersectN, `hit[k]` nonzero
 /// for lanes that hit. Layer 0 is that first hit itself (so it equals the Z, T, primID and
 /// geomID AOVs bit for bit); layers 1..K-1 are the next surfaces in t order. Lanes that did
-/// not hit, and layers past the last surface, keep the framebuffer's miss values. The rays are
+/// not hit, and layers past the last surface, keep the storage's miss values. The rays are
 /// generated again from the camera (deterministic), so the caller's packet is not touched.
 template <int N>
 void traceLayers(const LayerPlan& plan, const PacketRequest& req, const HitLanes& first,

@@ -17,6 +17,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "core/aov/aov_table.h"
 #include "core/engine/coverage_mask.h"
 #include "core/engine/interleaved_row.h"
 #include "core/engine/intersect_scene.h"
@@ -70,19 +71,18 @@ void validateRenderSettings(const RenderSettings& s) {
 
 namespace {
 
-/// For each property channel of `fb`, each object's values of that property. Throws Error,
-/// before anything is rendered, naming the first object mesh that lacks one.
-std::vector<std::vector<const uint32_t*>> propertyTables(const Scene& scene,
-                                                         const Framebuffer& fb) {
+/// For each property of `aovs`, each object's values of that property. Throws Error, before
+/// anything is rendered, naming the first object mesh that lacks one.
+std::vector<std::vector<const uint32_t*>> propertyTables(const Scene& scene, const AovSet& aovs) {
   std::vector<std::vector<const uint32_t*>> tables;
-  for (const PropertyChannel& channel : fb.properties) {
+  for (const PropertyAov& property : aovs.properties) {
     std::vector<const uint32_t*> perObject;
     for (size_t object = 0; object < scene.objectCount(); ++object) {
       const Mesh& mesh = scene.objectMesh(unsigned(object));
-      const MeshProperty* p = mesh.property(channel.property.domain, channel.property.name);
+      const MeshProperty* p = mesh.property(property.domain, property.name);
       if (!p)
-        throw Error(cat("AOV '", channel.property.aovName(), "': mesh '", mesh.name, "' (object ",
-                        object, ") has no such property; was it loaded with it ",
+        throw Error(cat("AOV '", property.aovName(), "': mesh '", mesh.name, "' (object ", object,
+                        ") has no such property; was it loaded with it ",
                         "(LoadOptions::properties)?"));
       perObject.push_back(p->values.data());
     }
@@ -91,32 +91,39 @@ std::vector<std::vector<const uint32_t*>> propertyTables(const Scene& scene,
   return tables;
 }
 
-/// The surface AOVs of `fb` (instance, mesh, material, barycentric, uv, vertex-color, albedo).
+/// The domain of each property of `aovs`, in order.
+std::vector<PropertyDomain> domainsOf(const AovSet& aovs) {
+  std::vector<PropertyDomain> out;
+  for (const PropertyAov& p : aovs.properties) out.push_back(p.domain);
+  return out;
+}
+
+/// The surface AOVs (instance, mesh, material, barycentric, uv, vertex-color, albedo).
 constexpr AovMask kSurfaceAovs = kAovInstanceId | kAovMeshId | kAovMaterialId | kAovBarycentric |
                                  kAovUv | kAovVertexColor | kAovAlbedo;
 
-/// Checks, before anything is rendered, that the scene holds what the surface AOVs of `fb`
+/// Checks, before anything is rendered, that the scene holds what the surface AOVs of `aovs`
 /// read, and returns the looks the albedo AOV reads (null without albedo). Throws Error when
 /// uv is asked of a scene where no object's mesh has texture coordinates, vertex-color where
 /// none has colours, and albedo without the scene's looks, with a material an unsupported
 /// extension leaves unknown, with a material id beyond the looks' materials, or with a textured
 /// material on a mesh without texture coordinates. Objects without texture coordinates or
 /// colours where others have them read 0 and (1, 1, 1, 1).
-const SurfaceLooks* surfaceLooksFor(const Scene& scene, const Framebuffer& fb) {
+const SurfaceLooks* surfaceLooksFor(const Scene& scene, const AovSet& aovs) {
   const auto anyMesh = [&](auto&& has) {
     for (size_t object = 0; object < scene.objectCount(); ++object)
       if (has(scene.objectMesh(unsigned(object)))) return true;
     return false;
   };
-  if (fb.has(kAovUv) && !anyMesh([](const Mesh& m) { return !m.texcoords.empty(); }))
+  if (aovs.has(kAovUv) && !anyMesh([](const Mesh& m) { return !m.texcoords.empty(); }))
     throw Error(
         "AOV 'uv': no mesh of the scene has texture coordinates (glTF TEXCOORD_0, OBJ vt; "
         "loaded only when asked: LoadOptions::texcoords)");
-  if (fb.has(kAovVertexColor) && !anyMesh([](const Mesh& m) { return !m.vertexColors.empty(); }))
+  if (aovs.has(kAovVertexColor) && !anyMesh([](const Mesh& m) { return !m.vertexColors.empty(); }))
     throw Error(
         "AOV 'vertex-color': no mesh of the scene has vertex colours (glTF COLOR_0; loaded only "
         "when asked: LoadOptions::vertexColors)");
-  if (!fb.has(kAovAlbedo)) return nullptr;
+  if (!aovs.has(kAovAlbedo)) return nullptr;
   const SurfaceLooks* looks = scene.looks();
   if (!looks)
     throw Error(
@@ -194,18 +201,71 @@ struct WrittenChannel {
   size_t bytesPerPixel;
 };
 
-/// The per-pixel channels of `fb` the frame loop stores into: every AOV the framebuffer holds
-/// (aovNames, aovView: its one list of channels), but the layered hits of more than one layer,
-/// whose pixels lie layer after layer.
-std::vector<WrittenChannel> writtenChannels(const Framebuffer& fb) {
+/// The per-pixel channels of `px` the frame loop stores into: every AOV it holds (its one list
+/// of channels), but the layered hits of more than one layer, whose pixels lie layer after
+/// layer.
+std::vector<WrittenChannel> writtenChannels(const FramePixels& px) {
   std::vector<WrittenChannel> out;
-  for (const std::string& name : aovNames(fb)) {
-    const ImageView v = aovView(fb, name);
-    if (v.layers > 1) continue;
-    const char* pixels =
-        v.f32 ? reinterpret_cast<const char*>(v.f32) : reinterpret_cast<const char*>(v.u32);
-    out.push_back({pixels, sizeof(float) * size_t(v.channels)});
+  for (const PixelChannel& c : px.channels)
+    if (c.layers == 1)
+      out.push_back({static_cast<const char*>(c.data), sizeof(uint32_t) * size_t(c.channels)});
+  return out;
+}
+
+/// The first value of the fixed AOV `bit` in `px` as T (float or uint32_t), null when `px`
+/// does not hold it.
+template <class T>
+T* fixedChannel(const FramePixels& px, Aov bit) {
+  if (!px.aovs.has(bit)) return nullptr;
+  for (const AovRow& row : aovTable())
+    if (row.bit == AovMask(bit))
+      if (const PixelChannel* c = px.find(row.name)) return static_cast<T*>(c->data);
+  throw Error(cat("frame pixels: AOV bit ", uint32_t(bit), " has no storage"));
+}
+
+/// Where the frame loop stores each AOV: its first value in the plan's storage (null for the
+/// AOVs not rendered).
+struct AovStores {
+  float *rgba, *depth, *distance, *normal, *position, *shadingNormal;
+  float *barycentric, *uv, *vertexColor, *albedo;
+  uint32_t *primId, *geomId, *instanceId, *meshId, *materialId;
+  std::vector<uint32_t*> properties;  ///< in AovSet::properties order
+
+  explicit AovStores(const FramePixels& px)
+      : rgba(fixedChannel<float>(px, kAovColor)),
+        depth(fixedChannel<float>(px, kAovDepth)),
+        distance(fixedChannel<float>(px, kAovDistance)),
+        normal(fixedChannel<float>(px, kAovNormal)),
+        position(fixedChannel<float>(px, kAovPosition)),
+        shadingNormal(fixedChannel<float>(px, kAovShadingNormal)),
+        barycentric(fixedChannel<float>(px, kAovBarycentric)),
+        uv(fixedChannel<float>(px, kAovUv)),
+        vertexColor(fixedChannel<float>(px, kAovVertexColor)),
+        albedo(fixedChannel<float>(px, kAovAlbedo)),
+        primId(fixedChannel<uint32_t>(px, kAovPrimId)),
+        geomId(fixedChannel<uint32_t>(px, kAovGeomId)),
+        instanceId(fixedChannel<uint32_t>(px, kAovInstanceId)),
+        meshId(fixedChannel<uint32_t>(px, kAovMeshId)),
+        materialId(fixedChannel<uint32_t>(px, kAovMaterialId)) {
+    for (const PropertyAov& p : px.aovs.properties)
+      properties.push_back(static_cast<uint32_t*>(px.find(p.aovName())->data));
   }
+};
+
+/// A channel whose miss values the frame loop writes (FramePixels::missesWritten false): its
+/// first value, values a pixel, layers and the stride between them (values), and the miss.
+struct MissChannel {
+  uint32_t* data;
+  size_t channels, layers, layerStride;
+  uint32_t bits;
+};
+
+std::vector<MissChannel> missChannels(const FramePixels& px) {
+  std::vector<MissChannel> out;
+  if (px.missesWritten) return out;
+  for (const PixelChannel& c : px.channels)
+    out.push_back({static_cast<uint32_t*>(c.data), size_t(c.channels), size_t(c.layers),
+                   px.pixelCount() * size_t(c.channels), c.missBits});
   return out;
 }
 
@@ -221,18 +281,18 @@ TileRenderer tileRendererFor(const RenderSettings& settings);
 
 /// What one frame computes, decided once from the framebuffer's AOVs.
 struct ImagePlan {
-  /// `pixelOffset`: where the camera's pixel (0, 0) is in `fb` (frame k of a stacked
-  /// framebuffer starts at k·W·H; 0 otherwise).
+  /// `pixelOffset`: where the camera's pixel (0, 0) is in `px` (frame k of stacked frames
+  /// starts at k·W·H; 0 otherwise).
   ImagePlan(const Scene& scene, const Camera& camera, const RenderSettings& settings,
-            Framebuffer& fb, size_t pixelOffset = 0);
+            const FramePixels& px, size_t pixelOffset = 0);
 
   const Scene& scene;
   const Camera& camera;
-  Framebuffer& fb;
+  AovStores out;  // where each AOV's pixels go
   RenderSettings settings;
   CameraDescription description;  // the camera's, taken once
   int width, height;              // the camera's image
-  size_t pixelOffset;             // fb index of the image's pixel (0, 0)
+  size_t pixelOffset;             // storage index of the image's pixel (0, 0)
   glm::vec3 eye, axis;            // render space
   glm::dvec3 origin;              // world position of the render-space origin
   bool color, depth, distance, normal, position, primId, geomId;
@@ -242,8 +302,9 @@ struct ImagePlan {
   const SurfaceLooks* looks;  // the albedo AOV's materials and textures (surfaceLooksFor)
   bool rotateNormals;         // normalFrame is not World: normals go through frameFromWorld
   glm::mat3 frameFromWorld;   // normalFrameFromWorld(settings.normalFrame, camera)
-  /// Per requested property (fb.properties order), per object: the mesh's values.
+  /// Per requested property (AovSet::properties order), per object: the mesh's values.
   std::vector<std::vector<const uint32_t*>> propertyValues;
+  std::vector<PropertyDomain> propertyDomains;  // per requested property
   /// Anything of the mesh data pass (storeMeshDataLane): decided once, so a frame without
   /// it runs the geometry store unchanged.
   bool meshData;
@@ -266,8 +327,11 @@ struct ImagePlan {
   int colorSamples;
   bool geometryFromSample;
   int passes;
-  /// Every per-pixel channel of `fb` the frame loop stores into (writtenChannels).
+  /// Every per-pixel channel the frame loop stores into (writtenChannels).
   std::vector<WrittenChannel> written;
+  /// The channels whose misses each tile writes before its hits (missChannels; none when the
+  /// storage holds them already).
+  std::vector<MissChannel> misses;
   /// The packet width and trace mode, chosen here once, so no packet tests them.
   TileRenderer renderTile;
   /// RenderSettings::nullTrace: the fake primID of lane k (k mod object 0's triangle count).
@@ -275,10 +339,10 @@ struct ImagePlan {
 };
 
 ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSettings& settings_,
-                     Framebuffer& fb_, size_t pixelOffset_)
+                     const FramePixels& px_, size_t pixelOffset_)
     : scene(scene_),
       camera(camera_),
-      fb(fb_),
+      out(px_),
       settings(settings_),
       description(camera_.describe()),
       width(description.width),
@@ -287,32 +351,34 @@ ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSet
       eye(camera_.renderEye()),
       axis(camera_.viewAxis()),
       origin(scene_.renderOrigin()),
-      color(fb_.has(kAovColor)),
-      depth(fb_.has(kAovDepth)),
-      distance(fb_.has(kAovDistance)),
-      normal(fb_.has(kAovNormal)),
-      position(fb_.has(kAovPosition)),
-      primId(fb_.has(kAovPrimId)),
-      geomId(fb_.has(kAovGeomId)),
-      shadingNormal(fb_.has(kAovShadingNormal)),
-      instanceId(fb_.has(kAovInstanceId)),
-      meshId(fb_.has(kAovMeshId)),
-      materialId(fb_.has(kAovMaterialId)),
-      barycentric(fb_.has(kAovBarycentric)),
-      uv(fb_.has(kAovUv)),
-      vertexColor(fb_.has(kAovVertexColor)),
-      albedo(fb_.has(kAovAlbedo)),
-      surface((fb_.aovs & kSurfaceAovs) != 0),
-      looks(surfaceLooksFor(scene_, fb_)),
+      color(px_.aovs.has(kAovColor)),
+      depth(px_.aovs.has(kAovDepth)),
+      distance(px_.aovs.has(kAovDistance)),
+      normal(px_.aovs.has(kAovNormal)),
+      position(px_.aovs.has(kAovPosition)),
+      primId(px_.aovs.has(kAovPrimId)),
+      geomId(px_.aovs.has(kAovGeomId)),
+      shadingNormal(px_.aovs.has(kAovShadingNormal)),
+      instanceId(px_.aovs.has(kAovInstanceId)),
+      meshId(px_.aovs.has(kAovMeshId)),
+      materialId(px_.aovs.has(kAovMaterialId)),
+      barycentric(px_.aovs.has(kAovBarycentric)),
+      uv(px_.aovs.has(kAovUv)),
+      vertexColor(px_.aovs.has(kAovVertexColor)),
+      albedo(px_.aovs.has(kAovAlbedo)),
+      surface((px_.aovs.mask & kSurfaceAovs) != 0),
+      looks(surfaceLooksFor(scene_, px_.aovs)),
       rotateNormals(settings_.normalFrame != NormalFrame::World),
       frameFromWorld(normalFrameFromWorld(settings_.normalFrame, description)),
-      propertyValues(propertyTables(scene_, fb_)),
-      meshData(shadingNormal || !fb_.properties.empty() || (normal && rotateNormals) || surface),
-      layers(fb_.layers > 0
-                 ? std::optional<LayerPlan>(std::in_place, scene_, camera_, fb_, eye, axis)
+      propertyValues(propertyTables(scene_, px_.aovs)),
+      propertyDomains(domainsOf(px_.aovs)),
+      meshData(shadingNormal || !px_.aovs.properties.empty() || (normal && rotateNormals) ||
+               surface),
+      layers(px_.aovs.layers > 0
+                 ? std::optional<LayerPlan>(std::in_place, scene_, camera_, px_, eye, axis)
                  : std::nullopt),
       anyGeometry(depth || distance || normal || position || primId || geomId || shadingNormal ||
-                  surface || !fb_.properties.empty() || layers),
+                  surface || !px_.aovs.properties.empty() || layers),
       instanced(scene_.instanceCount() > 0),
       remapPrimIds(scene_.remapsPrimIds()),
       coverage(coverageFor(scene_, camera_, settings_)),
@@ -321,7 +387,8 @@ ImagePlan::ImagePlan(const Scene& scene_, const Camera& camera_, const RenderSet
       colorSamples(color ? settings_.spp : 0),
       geometryFromSample(anyGeometry && color && settings_.spp == 1),
       passes(colorSamples + (anyGeometry && !geometryFromSample ? 1 : 0)),
-      written(writtenChannels(fb_)),
+      written(writtenChannels(px_)),
+      misses(missChannels(px_)),
       renderTile(tileRendererFor(settings_)) {
   if (layers) layers->place(width, pixelOffset);
   if (settings.nullTrace) {
@@ -626,36 +693,34 @@ void primIds(const ImagePlan& plan, const PacketState<N>& st, const int* hit, ui
 }
 
 /// Stores the geometry AOVs of every hit lane of the packet of `req` (misses keep the
-/// framebuffer's miss values): one pass per requested AOV, only its buffer touched.
+/// storage's miss values): one pass per requested AOV, only its buffer touched.
 template <int N>
 void storeGeometryAovs(const ImagePlan& plan, const PacketRequest& req, const PacketState<N>& st,
                        const PacketHits<N>& h) {
-  Framebuffer& fb = plan.fb;
+  const AovStores& out = plan.out;
   const BlockPixels<N> px(plan, req);
   if (plan.depth) {
     alignas(64) float z[N];
     planarDepths<N>(plan, st, z);
-    storeHitLanes<N, 1, float>(px, h.hit, h.bits, {z}, fb.depth.data());
+    storeHitLanes<N, 1, float>(px, h.hit, h.bits, {z}, out.depth);
   }
-  if (plan.distance)
-    storeHitLanes<N, 1, float>(px, h.hit, h.bits, {st.hits.tfar}, fb.distance.data());
-  if (plan.normal)
-    storeHitLanes<N, 3, float>(px, h.hit, h.bits, {h.nx, h.ny, h.nz}, fb.normal.data());
+  if (plan.distance) storeHitLanes<N, 1, float>(px, h.hit, h.bits, {st.hits.tfar}, out.distance);
+  if (plan.normal) storeHitLanes<N, 3, float>(px, h.hit, h.bits, {h.nx, h.ny, h.nz}, out.normal);
   if (plan.position) {
     alignas(64) float x[N], y[N], z[N];
     worldPositions<N>(plan, st, x, y, z);
-    storeHitLanes<N, 3, float>(px, h.hit, h.bits, {x, y, z}, fb.position.data());
+    storeHitLanes<N, 3, float>(px, h.hit, h.bits, {x, y, z}, out.position);
   }
   if (plan.primId) {
     alignas(64) uint32_t ids[N];
     primIds<N>(plan, st, h.hit, ids);
-    storeHitLanes<N, 1, uint32_t>(px, h.hit, h.bits, {ids}, fb.primId.data());
+    storeHitLanes<N, 1, uint32_t>(px, h.hit, h.bits, {ids}, out.primId);
   }
   if (plan.geomId) {
     alignas(64) uint32_t ids[N];
     APERTURE_LANE_LOOP
     for (int k = 0; k < N; ++k) ids[k] = objectId(st.hits, k);
-    storeHitLanes<N, 1, uint32_t>(px, h.hit, h.bits, {ids}, fb.geomId.data());
+    storeHitLanes<N, 1, uint32_t>(px, h.hit, h.bits, {ids}, out.geomId);
   }
 }
 
@@ -693,29 +758,29 @@ inline void interpolateCorners(const float* data, const uint32_t* corner, const 
 inline void storeSurfaceLane(const ImagePlan& plan, unsigned object, uint32_t prim,
                              const Mesh& mesh, const uint32_t* corner, float u, float v,
                              size_t px) {
-  Framebuffer& fb = plan.fb;
+  const AovStores& out = plan.out;
   const ObjectIds& ids = plan.scene.objectIds(object);
   if (plan.instanceId)
-    fb.instanceId[px] = ids.instance + (mesh.faceGroups.empty() ? 0u : mesh.faceGroups[prim]);
-  if (plan.meshId) fb.meshId[px] = ids.mesh;
+    out.instanceId[px] = ids.instance + (mesh.faceGroups.empty() ? 0u : mesh.faceGroups[prim]);
+  if (plan.meshId) out.meshId[px] = ids.mesh;
   const uint32_t material =
       ids.materialBase + (mesh.faceMaterials.empty() ? 0u : mesh.faceMaterials[prim]);
-  if (plan.materialId) fb.materialId[px] = material;
-  if (plan.barycentric) fb.barycentric[2 * px] = u, fb.barycentric[2 * px + 1] = v;
+  if (plan.materialId) out.materialId[px] = material;
+  if (plan.barycentric) out.barycentric[2 * px] = u, out.barycentric[2 * px + 1] = v;
   if (!plan.uv && !plan.vertexColor && !plan.albedo) return;
   const float w[3] = {1.0f - u - v, u, v};
   float st[2] = {0.0f, 0.0f}, cd[4] = {1.0f, 1.0f, 1.0f, 1.0f};
   if (!mesh.texcoords.empty()) interpolateCorners<2>(mesh.texcoords.data(), corner, w, st);
   if (!mesh.vertexColors.empty()) interpolateCorners<4>(mesh.vertexColors.data(), corner, w, cd);
-  if (plan.uv) fb.uv[2 * px] = st[0], fb.uv[2 * px + 1] = st[1];
+  if (plan.uv) out.uv[2 * px] = st[0], out.uv[2 * px + 1] = st[1];
   if (plan.vertexColor)
-    for (int c = 0; c < 4; ++c) fb.vertexColor[4 * px + size_t(c)] = cd[c];
+    for (int c = 0; c < 4; ++c) out.vertexColor[4 * px + size_t(c)] = cd[c];
   if (plan.albedo) {
     const Material& m = plan.looks->materials[material];
     glm::vec4 a = m.baseColor * glm::vec4(cd[0], cd[1], cd[2], cd[3]);
     if (m.baseColorTexture >= 0)
       a *= plan.looks->textures->sample(m.baseColorTexture, st[0], st[1]);
-    for (int c = 0; c < 4; ++c) fb.albedo[4 * px + size_t(c)] = a[c];
+    for (int c = 0; c < 4; ++c) out.albedo[4 * px + size_t(c)] = a[c];
   }
 }
 
@@ -728,7 +793,7 @@ inline void storeSurfaceLane(const ImagePlan& plan, unsigned object, uint32_t pr
 template <int N>
 void storeMeshDataLane(const ImagePlan& plan, const PacketState<N>& st, const PacketHits<N>& h,
                        int k, size_t px) {
-  Framebuffer& fb = plan.fb;
+  const AovStores& out = plan.out;
   const unsigned object = objectId(st.hits, k);
   const uint32_t prim =
       plan.remapPrimIds ? plan.scene.meshTriangle(object, st.hits.primID[k]) : st.hits.primID[k];
@@ -748,17 +813,17 @@ void storeMeshDataLane(const ImagePlan& plan, const PacketState<N>& st, const Pa
       ns = unitOr(sum, geometricNormal());
     }
     if (plan.rotateNormals) ns = plan.frameFromWorld * ns;
-    for (int a = 0; a < 3; ++a) fb.shadingNormal[3 * px + size_t(a)] = ns[a];
+    for (int a = 0; a < 3; ++a) out.shadingNormal[3 * px + size_t(a)] = ns[a];
   }
   if (plan.normal && plan.rotateNormals) {
     const glm::vec3 n = plan.frameFromWorld * geometricNormal();
-    for (int a = 0; a < 3; ++a) fb.normal[3 * px + size_t(a)] = n[a];
+    for (int a = 0; a < 3; ++a) out.normal[3 * px + size_t(a)] = n[a];
   }
-  for (size_t j = 0; j < fb.properties.size(); ++j) {
+  for (size_t j = 0; j < out.properties.size(); ++j) {
     const uint32_t* values = plan.propertyValues[j][object];
-    fb.properties[j].values[px] = fb.properties[j].property.domain == PropertyDomain::Face
-                                      ? values[prim]
-                                      : values[corner[nearestCorner(u, v)]];
+    out.properties[j][px] = plan.propertyDomains[j] == PropertyDomain::Face
+                                ? values[prim]
+                                : values[corner[nearestCorner(u, v)]];
   }
   if (plan.surface) storeSurfaceLane(plan, object, prim, mesh, corner, u, v, px);
 }
@@ -814,7 +879,7 @@ void storeColor(const ImagePlan& plan, const PacketRequest& req, const BlockColo
     every[k] = 1;
   }
   storeHitLanes<N, 4, float>(BlockPixels<N>(plan, req), every, uint32_t((uint64_t(1) << N) - 1),
-                             {shade, shade, shade, cover}, plan.fb.rgba.data());
+                             {shade, shade, shade, cover}, plan.out.rgba);
 }
 
 /// This thread's two packets of width N, which PacketPipeline fills in turn. In thread-local
@@ -1009,17 +1074,32 @@ TileRenderer tileRendererFor(const RenderSettings& settings) {
                             : tileRendererOfWidth<false>(settings.packetWidth);
 }
 
-/// Throws Error when the framebuffer is empty or does not match the camera's image size
-/// and spp.
-void checkFramebuffer(const Camera& camera, const RenderSettings& settings, const Framebuffer& fb) {
-  if (fb.width <= 0 || fb.height <= 0 || fb.aovSet().empty())
-    throw Error(cat("framebuffer ", fb.width, "x", fb.height, " with AOVs '",
-                    aovListString(fb.aovSet()), "' is empty"));
+/// Throws Error when the frame's storage is empty, lacks a channel's storage, or does not
+/// match the camera's image size and spp.
+void checkFrame(const Camera& camera, const RenderSettings& settings, const FramePixels& px) {
+  if (px.width <= 0 || px.height <= 0 || px.aovs.empty())
+    throw Error(cat("framebuffer ", px.width, "x", px.height, " with AOVs '",
+                    aovListString(px.aovs), "' is empty"));
+  for (const PixelChannel& c : px.channels)
+    if (!c.data) throw Error(cat("framebuffer: AOV '", c.name, "' has no storage"));
   const CameraDescription desc = camera.describe();
-  if (desc.width != fb.width || desc.height != fb.height || desc.spp != settings.spp)
+  if (desc.width != px.width || desc.height != px.height || desc.spp != settings.spp)
     throw Error(cat("camera image ", desc.width, "x", desc.height, " spp ", desc.spp,
-                    " does not match the framebuffer ", fb.width, "x", fb.height, " spp ",
+                    " does not match the framebuffer ", px.width, "x", px.height, " spp ",
                     settings.spp));
+}
+
+/// Writes the miss value of every value of the tile of columns [x0, x1) and rows [y0, y1) of
+/// the plan's image, in every channel and layer of ImagePlan::misses: before its hits, on the
+/// thread that renders it.
+void writeTileMisses(const ImagePlan& plan, int x0, int y0, int x1, int y1) {
+  for (const MissChannel& m : plan.misses)
+    for (size_t layer = 0; layer < m.layers; ++layer)
+      for (int y = y0; y < y1; ++y) {
+        const size_t pixel = plan.pixelOffset + size_t(y) * size_t(plan.width) + size_t(x0);
+        std::fill_n(m.data + layer * m.layerStride + pixel * m.channels,
+                    size_t(x1 - x0) * m.channels, m.bits);
+      }
 }
 
 }  // namespace
@@ -1067,6 +1147,7 @@ std::vector<RenderStats> renderPlans(const std::deque<ImagePlan>& plans,
       const int x0 = (local % tilesX) * ts, y0 = (local / tilesX) * ts;
       const int x1 = std::min(x0 + ts, plan.width), y1 = std::min(y0 + ts, plan.height);
       TileCounters c;
+      writeTileMisses(plan, x0, y0, x1, y1);
       plan.renderTile(plan, x0, y0, x1, y1, c);
       FrameProgress& f = frames[k];
       f.traced += c.traced;
@@ -1105,9 +1186,10 @@ RenderStats renderImage(const Scene& scene, const Camera& camera, const RenderSe
                         Framebuffer& fb) {
   const TimePoint start = std::chrono::steady_clock::now();
   validateRenderSettings(settings);
-  checkFramebuffer(camera, settings, fb);
+  const FramePixels px = framePixelsOf(fb);
+  checkFrame(camera, settings, px);
   std::deque<ImagePlan> plans;
-  plans.emplace_back(scene, camera, settings, fb);
+  plans.emplace_back(scene, camera, settings, px);
   return renderPlans(plans, {}, start).front();
 }
 
@@ -1115,17 +1197,26 @@ std::vector<RenderStats> renderImages(const Scene& scene, const std::vector<cons
                                       const RenderSettings& settings,
                                       std::vector<Framebuffer>& framebuffers,
                                       const std::function<void(size_t)>& progress) {
+  std::vector<FramePixels> frames;
+  for (Framebuffer& fb : framebuffers) frames.push_back(framePixelsOf(fb));
+  return renderImages(scene, cameras, settings, frames, progress);
+}
+
+std::vector<RenderStats> renderImages(const Scene& scene, const std::vector<const Camera*>& cameras,
+                                      const RenderSettings& settings,
+                                      const std::vector<FramePixels>& frames,
+                                      const std::function<void(size_t)>& progress) {
   const TimePoint start = std::chrono::steady_clock::now();
   validateRenderSettings(settings);
-  if (cameras.size() != framebuffers.size())
-    throw Error(cat("renderImages: ", cameras.size(), " cameras but ", framebuffers.size(),
-                    " framebuffers"));
+  if (cameras.size() != frames.size())
+    throw Error(
+        cat("renderImages: ", cameras.size(), " cameras but ", frames.size(), " framebuffers"));
   std::deque<ImagePlan> plans;  // a deque: plans are not movable (references)
   for (size_t k = 0; k < cameras.size(); ++k) {
     APERTURE_CHECK_OP(cameras[k], !=, nullptr);
     const RenderSettings forCamera = settingsFor(*cameras[k], settings);
-    checkFramebuffer(*cameras[k], forCamera, framebuffers[k]);
-    plans.emplace_back(scene, *cameras[k], forCamera, framebuffers[k]);
+    checkFrame(*cameras[k], forCamera, frames[k]);
+    plans.emplace_back(scene, *cameras[k], forCamera, frames[k]);
   }
   return renderPlans(plans, progress, start);
 }
@@ -1134,16 +1225,26 @@ std::vector<RenderStats> renderImagesStacked(const Scene& scene,
                                              const std::vector<const Camera*>& cameras,
                                              const RenderSettings& settings, Framebuffer& stacked,
                                              const std::function<void(size_t)>& progress) {
+  return renderImagesStacked(scene, cameras, settings, framePixelsOf(stacked), progress);
+}
+
+std::vector<RenderStats> renderImagesStacked(const Scene& scene,
+                                             const std::vector<const Camera*>& cameras,
+                                             const RenderSettings& settings,
+                                             const FramePixels& stacked,
+                                             const std::function<void(size_t)>& progress) {
   const TimePoint start = std::chrono::steady_clock::now();
   validateRenderSettings(settings);
   if (cameras.empty()) throw Error("renderImagesStacked: no camera");
-  if (stacked.aovSet().empty()) throw Error("renderImagesStacked: the framebuffer holds no AOV");
+  if (stacked.aovs.empty()) throw Error("renderImagesStacked: the framebuffer holds no AOV");
   const CameraDescription first = cameras.front()->describe();
   if (stacked.width != first.width ||
       size_t(stacked.height) != size_t(first.height) * cameras.size())
     throw Error(cat("renderImagesStacked: framebuffer ", stacked.width, "x", stacked.height,
                     " does not hold ", cameras.size(), " frames of ", first.width, "x",
                     first.height));
+  for (const PixelChannel& c : stacked.channels)
+    if (!c.data) throw Error(cat("renderImagesStacked: AOV '", c.name, "' has no storage"));
   const size_t framePixels = size_t(first.width) * size_t(first.height);
   std::deque<ImagePlan> plans;
   for (size_t k = 0; k < cameras.size(); ++k) {

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "core/aov/frame_pixels.h"
 #include "core/aov/framebuffer.h"
 #include "core/engine/camera.h"
 #include "core/engine/scene.h"
@@ -84,6 +85,14 @@ std::vector<RenderStats> renderImages(const Scene& scene, const std::vector<cons
                                       const RenderSettings& settings,
                                       std::vector<Framebuffer>& framebuffers,
                                       const std::function<void(size_t)>& progress = {});
+/// renderImages into storage held elsewhere (core/aov/frame_pixels.h): frame k into
+/// `frames[k]`. Storage whose misses are not written (FramePixels::missesWritten false) gets
+/// every value written by the render threads, each tile's misses before its hits, so it may
+/// start unwritten; the pixels equal those of a Framebuffer bit for bit.
+std::vector<RenderStats> renderImages(const Scene& scene, const std::vector<const Camera*>& cameras,
+                                      const RenderSettings& settings,
+                                      const std::vector<FramePixels>& frames,
+                                      const std::function<void(size_t)>& progress = {});
 
 /// renderImages for cameras of one size W x H into ONE framebuffer of W x (N·H): frame k fills
 /// rows [k·H, (k+1)·H), so each AOV is a single (N, H, W[, C]) block (layered hits: (K, N, H,
@@ -93,6 +102,13 @@ std::vector<RenderStats> renderImages(const Scene& scene, const std::vector<cons
 std::vector<RenderStats> renderImagesStacked(const Scene& scene,
                                              const std::vector<const Camera*>& cameras,
                                              const RenderSettings& settings, Framebuffer& stacked,
+                                             const std::function<void(size_t)>& progress = {});
+/// renderImagesStacked into storage held elsewhere (renderImages over FramePixels says how
+/// its misses are written): the zero-copy arrays of the Python module, fresh or the caller's.
+std::vector<RenderStats> renderImagesStacked(const Scene& scene,
+                                             const std::vector<const Camera*>& cameras,
+                                             const RenderSettings& settings,
+                                             const FramePixels& stacked,
                                              const std::function<void(size_t)>& progress = {});
 
 /// Checks settings (packet width in {1,4,8,16}, tile size a positive multiple of 4 up to

@@ -16,6 +16,8 @@ See docs/python.md for conventions, memory ownership, the GIL and errors.
 from __future__ import annotations
 
 import os
+import socket
+import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import Any
@@ -155,6 +157,7 @@ class Scene:
             if vertices is None or faces is None:
                 raise ValueError("Scene: vertices= and faces= go together")
             v, f = _mesh_arrays(vertices, faces)
+            self._spec: dict[str, Any] = dict(vertices=v, faces=f, **options)
             self._scene = _Scene._from_arrays(v, f, name="arrays", **options)
             return
         if path is None:
@@ -163,6 +166,8 @@ class Scene:
             paths = [os.fspath(path)]
         else:
             paths = [os.fspath(p) for p in path]
+        self._spec = dict(path=[_absolute_mesh_path(p) for p in paths], aovs=_aov_list(aovs),
+                          gltf_scene=gltf_scene, **options)
         self._scene = _Scene._from_paths(paths, aovs=_aov_list(aovs), gltf_scene=gltf_scene, **options)
 
     @property
@@ -209,6 +214,7 @@ class Scene:
         progress: Callable[[int, int], Any] | None = None,
         packet: int = 16,
         tile: int = 32,
+        out: dict[str, np.ndarray] | None = None,
     ) -> dict[str, Any]:
         """Renders every camera in one parallel loop over (camera, tile), with the GIL released.
 
@@ -223,11 +229,17 @@ class Scene:
         (N, H, W) or (N, H, W, C). A list of cameras of different sizes: name -> list of
         (H, W[, C]) arrays. float32 (color, depth, distance, normal, position,
         shading-normal) or uint32 (primid, geomid, face./vertex. properties; 0xFFFFFFFF for a
-        miss); depth and distance are +inf for a miss, normals 0."""
+        miss); depth and distance are +inf for a miss, normals 0.
+
+        ``out``: name -> array to render that AOV into (some or all of them), of the shape and
+        dtype the AOV is returned with, C-contiguous and writeable (one camera or cameras of
+        one size; not the layered ``layers.*``). The result holds those very arrays (no copy);
+        a wrong shape or dtype is a ValueError naming the AOV. Every value is written, misses
+        included."""
         single = isinstance(cameras, Camera)
         cams: Any = cameras if single else _camera_list(cameras)
         return self._scene._render(
-            cams, _aov_list(aovs), spp, layers, normal_frame, threads, progress, packet, tile
+            cams, _aov_list(aovs), spp, layers, normal_frame, threads, progress, packet, tile, out
         )
 
     def render_iter(
@@ -236,16 +248,25 @@ class Scene:
         aovs: str | Iterable[str] = ("color", "depth"),
         batch: int = 8,
         progress: Callable[[int, int], Any] | None = None,
+        reuse: bool = True,
         **options: Any,
     ) -> Iterator[tuple[Camera, dict[str, Any]]]:
         """Yields (camera, name -> (H, W[, C]) array) per camera, rendering ``batch`` cameras
         at a time (one parallel loop each), so memory stays that of one batch however many
         cameras there are. ``cameras`` may be any iterable (a generator too); ``progress``
-        gets (done, total) with total the number known so far. Other options as render."""
+        gets (done, total) with total the number known so far. Other options as render.
+
+        ``reuse`` (default True): each batch renders into the arrays of the batch before
+        (``render(..., out=...)``) when its cameras have the same size, so the arrays a
+        batch yielded are OVERWRITTEN by the next batch: copy what you keep
+        (``arr.copy()``). ``reuse=False`` renders every batch into new arrays."""
         cams = iter(cameras)
         done = 0
         if batch < 1:
             raise ValueError(f"render_iter: batch {batch} must be >= 1")
+        if "out" in options:
+            raise TypeError("render_iter: out= is not an option here (see reuse)")
+        previous: dict[str, Any] | None = None
         while True:
             chunk = [c for _, c in zip(range(batch), cams)]
             if not chunk:
@@ -256,10 +277,12 @@ class Scene:
                 if progress is not None:
                     progress(start + k, start + n)
 
-            out = self.render(chunk, aovs, progress=chunk_progress, **options)
+            into = _reusable(previous, chunk) if reuse else None
+            out = self.render(chunk, aovs, progress=chunk_progress, out=into, **options)
             done += len(chunk)
             for k, camera in enumerate(chunk):
                 yield camera, {name: value[k] for name, value in out.items()}
+            previous = out if reuse else None
             del out
 
     def face_visibility(
@@ -359,6 +382,72 @@ class Scene:
 
     def __repr__(self) -> str:
         return f"Scene({self._scene.mesh_names!r}, triangles={self.triangle_count})"
+
+    def __reduce__(self) -> tuple[Any, tuple[dict[str, Any]]]:
+        """A scene pickles as its specification, the constructor's arguments (mesh paths made
+        absolute, or the vertex and face arrays), never its BVH: unpickling builds it again
+        (aperture.distributed.Renderer builds it once per worker). Arrays of more than
+        _PICKLE_WARN_BYTES warn, as they travel with every pickle."""
+        if "vertices" in self._spec:
+            size = self._spec["vertices"].nbytes + self._spec["faces"].nbytes
+            if size > _PICKLE_WARN_BYTES:
+                warnings.warn(
+                    f"Scene: pickling {size / 2**20:.0f} MB of vertex and face arrays, which travel "
+                    "with every pickle of this scene (each task or worker it is sent to); write the "
+                    "mesh to a file (e.g. a .ply) on storage the workers share and make the scene "
+                    "with Scene(path)",
+                    stacklevel=2,
+                )
+        return (_scene_of_spec, (self._spec,))
+
+
+# A scene holding vertex and face arrays of more bytes than this warns when pickled.
+_PICKLE_WARN_BYTES = 64 * 2**20
+
+
+def _absolute_mesh_path(path: str) -> str:
+    """A mesh path as a pickled scene records it: absolute, so that a worker with another
+    current directory finds it; procedural specs as given."""
+    return path if path.startswith("procedural:") else os.path.abspath(path)
+
+
+# Scenes this process built from a pickled specification (aperture.distributed.scene_builds).
+_spec_builds = 0
+
+
+def _scene_of_spec(spec: dict[str, Any]) -> Scene:
+    """The scene of a pickled specification (Scene.__reduce__), built again. Counted in
+    _spec_builds and, when the environment variable APERTURE_SCENE_BUILD_LOG names a file, one
+    line appended to it: host, PID, seconds the build took, triangles (docs/distributed.md)."""
+    global _spec_builds
+    start = time.perf_counter()
+    scene = Scene(**spec)
+    seconds = time.perf_counter() - start
+    _spec_builds += 1
+    log = os.environ.get("APERTURE_SCENE_BUILD_LOG")
+    if log:
+        with open(log, "a", encoding="utf-8") as f:
+            f.write(f"{socket.gethostname()} {os.getpid()} {seconds:.6f} {scene.triangle_count}\n")
+    return scene
+
+
+def _reusable(previous: dict[str, Any] | None, chunk: list[Camera]) -> dict[str, np.ndarray] | None:
+    """The arrays of the batch before to render `chunk` into (its first len(chunk) frames), or
+    None when there is none or the sizes differ. Layered hits are not reused (render's out=
+    does not take them)."""
+    if previous is None:
+        return None
+    size = (chunk[0].height, chunk[0].width)
+    if any((c.height, c.width) != size for c in chunk):
+        return None
+    into: dict[str, np.ndarray] = {}
+    for name, array in previous.items():
+        if name.startswith("layers.") or not isinstance(array, np.ndarray):
+            continue
+        if array.shape[1:3] != size or array.shape[0] < len(chunk):
+            return None
+        into[name] = array[: len(chunk)]
+    return into
 
 
 def _mesh_arrays(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray]:

@@ -46,6 +46,9 @@ class Camera:
     def spp(self) -> int: ...
     name: str
     """The image name (load_cameras), else ''."""
+    def __getstate__(self) -> tuple[dict[str, Any], str]:
+        """Pickles as (params, name): unpickling is Camera(**params) with the name set."""
+    def __setstate__(self, state: tuple[dict[str, Any], str]) -> None: ...
 
     def describe(self) -> str:
         """The text of `aperture camera --describe` for this camera."""
@@ -79,6 +82,10 @@ class Scene:
     def triangles(self) -> npt.NDArray[np.float64]:
         """Every triangle in world space, float64 (T, 3, 3), objects in scene order."""
 
+    def __reduce__(self) -> tuple[Any, tuple[dict[str, Any]]]:
+        """Pickles as the constructor's arguments (absolute paths, or the arrays: warns above
+        64 MB), never the BVH; unpickling builds the scene again."""
+
     @property
     def last_render(self) -> dict[str, float]:
         """seconds, rays, hits, frames, mrays_per_second of the last render call."""
@@ -94,6 +101,7 @@ class Scene:
         progress: Callable[[int, int], Any] | None = None,
         packet: int = 16,
         tile: int = 32,
+        out: dict[str, np.ndarray] | None = None,
     ) -> _Result:
         """Renders every camera in one parallel loop with the GIL released; name -> array."""
 
@@ -103,9 +111,11 @@ class Scene:
         aovs: _Aovs = ("color", "depth"),
         batch: int = 8,
         progress: Callable[[int, int], Any] | None = None,
+        reuse: bool = True,
         **options: Any,
     ) -> Iterator[tuple[Camera, dict[str, np.ndarray]]]:
-        """Yields (camera, name -> (H, W[, C]) array), batch cameras at a time."""
+        """Yields (camera, name -> (H, W[, C]) array), batch cameras at a time; reuse: the next
+        batch overwrites the arrays of the one before."""
     def face_visibility(
         self,
         cameras: Camera | Iterable[Camera],

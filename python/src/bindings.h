@@ -19,11 +19,12 @@ struct PyCamera {
   std::string name;
 };
 
-void bindErrors(nb::module_& m);    ///< aperture::Error -> ValueError, file errors -> OSError
-void bindCamera(nb::module_& m);    ///< Camera, load_cameras
-void bindScene(nb::module_& m);     ///< Scene, Scene.render
-void bindImageIo(nb::module_& m);   ///< read_exr, write, read
-void bindAovTable(nb::module_& m);  ///< _aov_table, _AovRegistration (for the tests)
-void bindScan(nb::module_& m);      ///< _ScanScene: Scene.scan (LiDAR sweeps)
+void bindErrors(nb::module_& m);       ///< aperture::Error -> ValueError, file errors -> OSError
+void bindCamera(nb::module_& m);       ///< Camera, load_cameras
+void bindScene(nb::module_& m);        ///< Scene, Scene.render
+void bindImageIo(nb::module_& m);      ///< read_exr, write, read
+void bindAovTable(nb::module_& m);     ///< _aov_table, _AovRegistration (for the tests)
+void bindScan(nb::module_& m);         ///< _ScanScene: Scene.scan (LiDAR sweeps)
+void bindDistributed(nb::module_& m);  ///< _parse_temporary_name (aperture.distributed)
 
 }  // namespace aperture::python

@@ -53,7 +53,7 @@ std::vector<std::string> keywordNames() {
 
 /// The parameters given as keywords, each read through the job file's paramFromJson with
 /// the source "Camera(NAME=...)"; an unknown keyword is an Error with "did you mean".
-ParamSet paramsOfKeywords(const nb::kwargs& kwargs) {
+ParamSet paramsOfKeywords(const nb::dict& kwargs) {
   json entry = json::object();
   std::vector<std::string> order;  // the keywords as given (JSON objects sort their keys)
   for (auto [key, value] : kwargs) {
@@ -96,11 +96,29 @@ nb::object pythonOf(const ParamValue& v) {
       v);
 }
 
-PyCamera cameraOfKeywords(const nb::kwargs& kwargs) {
+PyCamera cameraOfKeywords(const nb::dict& kwargs) {
   PyCamera c;
   c.params = resolveCameraParams(paramsOfKeywords(kwargs));
   makeCamera(c.params);  // the model's own checks (up parallel to the view, ...), now
   return c;
+}
+
+/// Camera.params: the parameters that differ from the defaults (and the type), by keyword.
+nb::dict paramsOf(const PyCamera& c) {
+  nb::dict d;
+  const ParamSet given = paramSetOf(c.params, "");
+  for (const ParamSet::Entry& e : given.entries()) d[e.spec->name] = pythonOf(e.value);
+  return d;
+}
+
+/// What a Camera pickles as: its keywords (Camera.params) and its name, so that unpickling is
+/// Camera(**params) again, through every check of the schema.
+nb::tuple pickledState(const PyCamera& c) { return nb::make_tuple(paramsOf(c), c.name); }
+
+void restoreState(PyCamera* self, const nb::tuple& state) {
+  if (state.size() != 2) throw nb::value_error("Camera.__setstate__: expected (params, name)");
+  new (self) PyCamera(cameraOfKeywords(nb::cast<nb::dict>(state[0])));
+  self->name = nb::cast<std::string>(state[1]);
 }
 
 std::vector<PyCamera> loadCameras(const std::string& path,
@@ -134,16 +152,11 @@ void bindCamera(nb::module_& m) {
           },
           "Camera(type='perspective', **params): keywords are the job file's camera keys "
           "(fov, size, eye, at, up, intrinsics, ...), checked by name and value.")
-      .def_prop_ro(
-          "params",
-          [](const PyCamera& c) {
-            nb::dict d;
-            const ParamSet given = paramSetOf(c.params, "");
-            for (const ParamSet::Entry& e : given.entries()) d[e.spec->name] = pythonOf(e.value);
-            return d;
-          },
-          "The parameters that differ from the defaults (and type): Camera(**cam.params) is "
-          "the same camera.")
+      .def_prop_ro("params", &paramsOf,
+                   "The parameters that differ from the defaults (and type): Camera(**cam.params) "
+                   "is the same camera.")
+      .def("__getstate__", &pickledState)
+      .def("__setstate__", &restoreState)
       .def_prop_ro(
           "width", [](const PyCamera& c) { return c.params.width; }, "Image width, pixels")
       .def_prop_ro(

@@ -15,7 +15,6 @@
 #include <memory>
 #include <optional>
 
-#include "aov_arrays.h"
 #include "apps/services/render_options.h"
 #include "apps/services/scene_setup.h"
 #include "apps/services/visibility_arrays.h"
@@ -27,6 +26,7 @@
 #include "core/util/error.h"
 #include "file_errors.h"
 #include "named_arrays.h"
+#include "render_storage.h"
 #include "scan_binding.h"
 
 namespace aperture::python {
@@ -119,7 +119,7 @@ class PyScene {
 
   nb::object render(nb::handle cameras, const std::string& aovList, std::optional<int> spp,
                     int layers, const std::string& normalFrame, int threads,
-                    const nb::object& progress, int packet, int tile) {
+                    const nb::object& progress, int packet, int tile, nb::handle out) {
     const bool single = nb::isinstance<PyCamera>(cameras);
     std::vector<CameraParams> params = cameraParamsOf(cameras, "Scene.render");
     // Everything is checked before any work, as the command line does.
@@ -156,23 +156,31 @@ class PyScene {
         }
         throw ProgressRaised{};
       };
-    // Frames of one size go into one stacked framebuffer, so each AOV is one (N, H, W[, C])
-    // block handed to NumPy as it is; frames of mixed sizes get a framebuffer each.
-    const bool stacked = !single && sameSize(params);
-    std::shared_ptr<Framebuffer> block;
-    std::vector<Framebuffer> frames;
+    // Frames of one size go into one stacked image, so each AOV is one (N, H, W[, C]) block
+    // handed to NumPy as it is (one camera: (H, W[, C])); frames of mixed sizes get an image
+    // each. The storage is the caller's arrays (out=) or fresh and unwritten: the render
+    // threads write every value, misses included (render_storage.h).
+    const bool stacked = single || sameSize(params);
+    if (!stacked && !out.is_none())
+      throw nb::value_error("Scene.render: out= needs one camera or cameras of one size");
+    const size_t frameAxis = single ? 0 : params.size();
+    std::vector<RenderStorage> storage;
     if (stacked)
-      block = std::make_shared<Framebuffer>(params[0].width,
-                                            int(size_t(params[0].height) * params.size()), aovs);
+      storage.push_back(renderStorage(params[0].width,
+                                      int(size_t(params[0].height) * params.size()), aovs,
+                                      frameAxis, out, "Scene.render"));
     else
-      for (const CameraParams& p : params) frames.emplace_back(p.width, p.height, aovs);
+      for (const CameraParams& p : params)
+        storage.push_back(renderStorage(p.width, p.height, aovs, 0, nb::none(), "Scene.render"));
+    std::vector<FramePixels> frames;
+    for (const RenderStorage& s : storage) frames.push_back(s.pixels);
     std::vector<RenderStats> stats;
     const auto start = std::chrono::steady_clock::now();
     withoutGil(threads, [&] {
       try {
-        stats = stacked
-                    ? renderImagesStacked(*loaded_.scene, frameCameras, settings, *block, onFrame)
-                    : renderImages(*loaded_.scene, frameCameras, settings, frames, onFrame);
+        stats = stacked ? renderImagesStacked(*loaded_.scene, frameCameras, settings, frames[0],
+                                              onFrame)
+                        : renderImages(*loaded_.scene, frameCameras, settings, frames, onFrame);
       } catch (const ProgressRaised&) {
       }
     });
@@ -181,9 +189,8 @@ class PyScene {
     last_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     last_.frames = stats.size();
     for (const RenderStats& st : stats) last_.rays += st.raysTraced, last_.hits += st.hits;
-    if (stacked) return frameArrays(std::move(block), params.size());
-    if (single) return frameArrays(std::make_shared<Framebuffer>(std::move(frames[0])), 0);
-    return perFrameLists(frames);
+    if (stacked) return renderedArrays(storage[0], frameAxis);
+    return perFrameLists(storage);
   }
 
   /// Scene.face_visibility: faceVisibility (core/queries/visibility.h) with the GIL released, as
@@ -366,11 +373,11 @@ class PyScene {
   }
 
   /// Frames of mixed sizes: name -> list of (H, W[, C]) arrays, one per frame, no copy.
-  static nb::dict perFrameLists(std::vector<Framebuffer>& frames) {
+  static nb::dict perFrameLists(const std::vector<RenderStorage>& frames) {
     nb::dict out;
-    for (const std::string& name : aovNames(frames[0])) out[name.c_str()] = nb::list();
-    for (Framebuffer& f : frames) {
-      nb::dict one = frameArrays(std::make_shared<Framebuffer>(std::move(f)), 0);
+    for (const PixelChannel& c : frames[0].pixels.channels) out[c.name.c_str()] = nb::list();
+    for (const RenderStorage& f : frames) {
+      nb::dict one = renderedArrays(f, 0);
       for (auto [name, array] : one) nb::cast<nb::list>(out[name]).append(array);
     }
     return out;
@@ -441,7 +448,8 @@ void bindScene(nb::module_& m) {
   scene
       .def("_render", &PyScene::render, nb::arg("cameras"), nb::arg("aovs"), nb::arg("spp"),
            nb::arg("layers"), nb::arg("normal_frame"), nb::arg("threads"),
-           nb::arg("progress").none(), nb::arg("packet"), nb::arg("tile"))
+           nb::arg("progress").none(), nb::arg("packet"), nb::arg("tile"),
+           nb::arg("out").none() = nb::none())
       .def("_face_visibility", &PyScene::faceVisibility, nb::arg("cameras"), nb::arg("front_only"),
            nb::arg("threads"), nb::arg("method"))
       .def("_scan", &PyScene::scan, nb::arg("lidar"), nb::arg("trajectory").none(),

@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "cameras/registry/registry.h"
@@ -189,4 +192,83 @@ TEST(RenderImages, StackedRefusesMixedSizesAndAWrongHeight) {
   Framebuffer wrongHeight(32, 41, AovSet(kAovDepth));
   EXPECT_THROW(renderImagesStacked(*s.scene, {a.get(), a.get()}, RenderSettings{}, wrongHeight),
                Error);
+}
+
+namespace {
+
+/// Storage for every channel of `px`, each value set to the bits `pattern`, bound to `px`: what
+/// the render leaves unwritten keeps the pattern.
+std::vector<std::vector<uint32_t>> bindFilledStorage(FramePixels& px, uint32_t pattern) {
+  std::vector<std::vector<uint32_t>> storage;
+  for (PixelChannel& c : px.channels) {
+    storage.emplace_back(c.valueCount(px.pixelCount()), pattern);
+    c.data = storage.back().data();
+  }
+  return storage;
+}
+
+/// The AOVs of `px` that differ, bit for bit, from those of `fb` ("" when none).
+std::string differingChannels(const FramePixels& px, const Framebuffer& fb) {
+  std::string out;
+  for (const PixelChannel& c : px.channels) {
+    const ImageView v = aovView(fb, c.name);
+    const void* theirs = v.f32 ? static_cast<const void*>(v.f32) : v.u32;
+    if (std::memcmp(c.data, theirs, sizeof(uint32_t) * c.valueCount(px.pixelCount())) != 0)
+      out += c.name + " ";
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(RenderImages, StorageNothingWroteGetsEveryValueOfAFramebuffer) {
+  TwoObjects s;
+  // Every fixed AOV, two layers (most pixels have fewer surfaces: missing layers), misses at the
+  // image's edges, sizes that cut tiles and blocks, spp 4 colour.
+  const int w = 45, h = 29;
+  const std::vector<CameraParams> params = {cameraOf("perspective", w, h, 1),
+                                            cameraOf("thinlens", w, h, 4),
+                                            cameraOf("orthographic", w, h, 1)};
+  std::vector<std::unique_ptr<Camera>> owned;
+  std::vector<const Camera*> cameras;
+  for (const CameraParams& p : params) {
+    owned.push_back(makeCamera(p, s.scene->renderOrigin()));
+    cameras.push_back(owned.back().get());
+  }
+  AovSet aovs = kEveryFixedAov;
+  aovs.layers = 2;
+  RenderSettings settings;
+  settings.tileSize = 16;
+  Framebuffer stacked(w, h * int(params.size()), aovs);
+  renderImagesStacked(*s.scene, cameras, settings, stacked);
+  ASSERT_TRUE(std::any_of(stacked.depth.begin(), stacked.depth.end(), [](float z) {
+    return std::isinf(z);
+  })) << "the frames should have misses";
+  for (const uint32_t pattern : {0xFFFFFFFFu, 0x7FC00001u, 0u, 0x12345678u}) {
+    FramePixels px = unboundPixels(w, h * int(params.size()), aovs);
+    ASSERT_FALSE(px.missesWritten);
+    const auto storage = bindFilledStorage(px, pattern);
+    renderImagesStacked(*s.scene, cameras, settings, px);
+    EXPECT_EQ(differingChannels(px, stacked), "") << "storage filled with " << pattern;
+  }
+  // One frame at a time (renderImages over FramePixels) as well.
+  std::vector<FramePixels> frames;
+  std::vector<std::vector<std::vector<uint32_t>>> storage;
+  for (size_t k = 0; k < params.size(); ++k) {
+    frames.push_back(unboundPixels(w, h, aovs));
+    storage.push_back(bindFilledStorage(frames.back(), 0x7FC00001u));
+  }
+  renderImages(*s.scene, cameras, settings, frames);
+  for (size_t k = 0; k < params.size(); ++k)
+    EXPECT_EQ(differingChannels(frames[k], frameOfStack(stacked, k, h)), "") << "frame " << k;
+}
+
+TEST(RenderImages, StorageWithoutAChannelIsRefused) {
+  TwoObjects s;
+  const auto camera = makeCamera(cameraOf("perspective", 32, 20, 1));
+  FramePixels px = unboundPixels(32, 20, parseAovSet("depth,normal"));
+  std::vector<float> depth(px.pixelCount());
+  px.channels[0].data = depth.data();  // normal has none
+  EXPECT_THROW(renderImagesStacked(*s.scene, {camera.get()}, RenderSettings{}, px), Error);
+  EXPECT_THROW(renderImages(*s.scene, {camera.get()}, RenderSettings{}, {px}), Error);
 }
