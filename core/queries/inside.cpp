@@ -1,7 +1,21 @@
-// Placeholder until the sign helper lands (branch query-sign replaces this file).
 #include "core/queries/inside.h"
 
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include "core/engine/intersect_scene.h"
+#include "core/engine/packet.h"
+#include "core/queries/morton_order.h"
+#include "core/queries/winding_number.h"
+#include "core/queries/world_triangles.h"
 #include "core/util/error.h"
+#include "core/util/parallel.h"
+#include "core/util/spelling.h"
 
 namespace aperture {
 
@@ -17,16 +31,402 @@ const char* insideMethodName(InsideMethod method) {
 }
 
 InsideMethod parseInsideMethod(const std::string& name) {
-  if (name == "parity") return InsideMethod::Parity;
-  if (name == "winding") return InsideMethod::Winding;
-  if (name == "automatic") return InsideMethod::Automatic;
-  throw Error("unknown inside method '" + name + "' (parity, winding, automatic)");
+  for (InsideMethod m : {InsideMethod::Parity, InsideMethod::Winding, InsideMethod::Automatic})
+    if (name == insideMethodName(m)) return m;
+  throw Error(cat("unknown inside method '", name, "'",
+                  didYouMean(name, {"parity", "winding", "automatic"}),
+                  " (known: parity, winding, automatic)"));
 }
 
-ClosedCheck checkClosed(const Scene&) { throw Error("checkClosed: not built yet"); }
+// ---------------------------------------------------------------------------------------------
+// Closedness
 
-InsideResult insideOf(const Scene&, const double*, size_t, const InsideOptions&) {
-  throw Error("insideOf: not built yet");
+namespace {
+
+bool lessPosition(const glm::dvec3& a, const glm::dvec3& b) {
+  if (a.x != b.x) return a.x < b.x;
+  if (a.y != b.y) return a.y < b.y;
+  return a.z < b.z;
+}
+
+/// For each position, its id: positions that are equal get the same id.
+std::vector<uint32_t> weldedIds(const std::vector<glm::dvec3>& positions) {
+  std::vector<uint32_t> byPosition(positions.size());
+  parallelFor(positions.size(), 1 << 16, [&](size_t begin, size_t end) {
+    for (size_t k = begin; k < end; ++k) byPosition[k] = uint32_t(k);
+  });
+  tbb::parallel_sort(byPosition.begin(), byPosition.end(), [&](uint32_t a, uint32_t b) {
+    return lessPosition(positions[a], positions[b]);
+  });
+  std::vector<uint32_t> ids(positions.size());
+  uint32_t id = 0;
+  for (size_t k = 0; k < byPosition.size(); ++k) {
+    if (k > 0 && lessPosition(positions[byPosition[k - 1]], positions[byPosition[k]])) ++id;
+    ids[byPosition[k]] = id;
+  }
+  return ids;
+}
+
+/// The scene's triangles as 3 welded vertex ids each (objects in order, each object's
+/// triangles as its BVH holds them): every object's vertices are placed in world space
+/// (x = worldFromMesh · (anchor + position), double), and vertices at one position share an
+/// id. Welding the vertices, not the corners, sorts a sixth as many positions.
+std::vector<uint32_t> weldedTriangles(const Scene& scene) {
+  const std::vector<SceneObject>& objects = scene.objects();
+  std::vector<size_t> firstVertex(objects.size() + 1, 0);
+  for (size_t o = 0; o < objects.size(); ++o)
+    firstVertex[o + 1] = firstVertex[o] + objects[o].mesh->vertexCount;
+  if (firstVertex.back() >= (size_t(1) << 31))
+    throw Error(cat("checkClosed: ", firstVertex.back(), " vertices is more than it handles"));
+  std::vector<glm::dvec3> positions(firstVertex.back());
+  for (size_t o = 0; o < objects.size(); ++o) {
+    const Mesh& m = *objects[o].mesh;
+    const glm::dmat4 worldFromMesh = objects[o].worldFromMesh;
+    parallelFor(m.vertexCount, 1 << 16, [&](size_t begin, size_t end) {
+      for (size_t v = begin; v < end; ++v)
+        positions[firstVertex[o] + v] =
+            glm::dvec3(worldFromMesh * glm::dvec4(m.anchor + glm::dvec3(m.vertex(v)), 1.0));
+    });
+  }
+  const std::vector<uint32_t> ids = weldedIds(positions);
+  std::vector<uint32_t> triangles;
+  for (size_t o = 0; o < objects.size(); ++o) {
+    const SceneObject& object = objects[o];
+    const uint32_t* indices =
+        object.subset ? object.subset->indices.data() : object.mesh->indices.data();
+    const size_t corners =
+        3 * (object.subset ? object.subset->triangleCount() : object.mesh->triangleCount());
+    const size_t first = triangles.size();
+    triangles.resize(first + corners);
+    parallelFor(corners, 1 << 16, [&](size_t begin, size_t end) {
+      for (size_t k = begin; k < end; ++k) triangles[first + k] = ids[firstVertex[o] + indices[k]];
+    });
+  }
+  return triangles;
+}
+
+/// An edge as (lower id << 32 | higher id) << 1 | (1 when traversed from the lower id).
+uint64_t edgeKey(uint32_t from, uint32_t to) {
+  const uint64_t lo = std::min(from, to), hi = std::max(from, to);
+  return ((lo << 32 | hi) << 1) | uint64_t(from < to);
+}
+
+}  // namespace
+
+ClosedCheck checkClosed(const Scene& scene) {
+  const std::vector<uint32_t> ids = weldedTriangles(scene);
+  const size_t triangles = ids.size() / 3;
+  // Three keys per triangle; a degenerate triangle (two corners at one position) has none.
+  std::vector<uint64_t> keys(3 * triangles, std::numeric_limits<uint64_t>::max());
+  parallelFor(triangles, 1 << 14, [&](size_t begin, size_t end) {
+    for (size_t t = begin; t < end; ++t) {
+      const uint32_t a = ids[3 * t], b = ids[3 * t + 1], c = ids[3 * t + 2];
+      if (a == b || b == c || c == a) continue;
+      keys[3 * t] = edgeKey(a, b), keys[3 * t + 1] = edgeKey(b, c), keys[3 * t + 2] = edgeKey(c, a);
+    }
+  });
+  tbb::parallel_sort(keys.begin(), keys.end());
+  ClosedCheck check;
+  for (size_t k = 0; k < keys.size() && keys[k] != std::numeric_limits<uint64_t>::max();) {
+    size_t end = k, forward = 0;
+    for (; end < keys.size() && keys[end] >> 1 == keys[k] >> 1; ++end) forward += keys[end] & 1;
+    const size_t uses = end - k;
+    ++check.edges;
+    if (uses == 1)
+      ++check.boundaryEdges;
+    else if (uses > 2)
+      ++check.nonManifoldEdges;
+    else if (forward != 1)
+      ++check.misorientedEdges;
+    k = end;
+  }
+  check.closed = check.edges > 0 && check.boundaryEdges == 0 && check.nonManifoldEdges == 0 &&
+                 check.misorientedEdges == 0;
+  return check;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Parity
+
+namespace {
+
+struct ParityDirections {
+  glm::vec3 d[kParityDirectionCount];
+  ParityDirections() {
+    // Spherical Fibonacci points with irrational offsets, visited with a stride coprime to
+    // the count so that consecutive directions are far apart.
+    const double golden = 0.6180339887498949, pi = 3.14159265358979323846;
+    for (int j = 0; j < kParityDirectionCount; ++j) {
+      const int k = (j * 13) % kParityDirectionCount;
+      const double z = 1.0 - 2.0 * (k + golden) / (kParityDirectionCount + 0.4142135623730951);
+      const double phi = 2.0 * pi * (k * golden + 0.1415926535897932);
+      const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
+      d[j] = glm::normalize(glm::vec3(glm::dvec3(s * std::cos(phi), s * std::sin(phi), z)));
+    }
+  }
+};
+
+const ParityDirections& parityDirections() {
+  static const ParityDirections directions;
+  return directions;
+}
+
+/// Parity's packet width.
+constexpr int kParityPacket = 8;
+
+/// One point's parity rays in flight: its current direction and the crossings so far.
+struct ParityLane {
+  size_t point = 0;
+  glm::vec3 org{0.0f};  ///< the point, render space
+  int direction = 0;
+  float tnear = 0;
+  int crossings = 0;
+  int votes = 0, insideVotes = 0;
+  bool live = false;
+};
+
+/// Parity over the points order[begin, end): lanes of a packet of N rays, each lane taking
+/// the next point when its point is decided.
+template <int N>
+class ParityStream {
+ public:
+  ParityStream(const Scene& scene, const double* points, const size_t* order,
+               const InsideOptions& options, float diagonal, InsideResult& result)
+      : scene_(scene),
+        points_(points),
+        order_(order),
+        options_(options),
+        diagonal_(diagonal),
+        band_(kParitySurfaceBand * diagonal),
+        result_(result) {}
+
+  void run(size_t begin, size_t end) {
+    next_ = begin, end_ = end;
+    for (ParityLane& lane : lanes_) start(lane);
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    alignas(64) typename PacketOf<N>::type packet;
+    alignas(64) int valid[N];
+    while (true) {
+      int live = 0;
+      for (int k = 0; k < N; ++k) {
+        const ParityLane& lane = lanes_[k];
+        const glm::vec3 dir = parityDirections().d[lane.direction];
+        packet.ray.org_x[k] = lane.org.x, packet.ray.org_y[k] = lane.org.y;
+        packet.ray.org_z[k] = lane.org.z, packet.ray.dir_x[k] = dir.x;
+        packet.ray.dir_y[k] = dir.y, packet.ray.dir_z[k] = dir.z;
+        packet.ray.tnear[k] = lane.tnear;
+        packet.ray.tfar[k] = std::numeric_limits<float>::infinity();
+        packet.ray.time[k] = 0, packet.ray.mask[k] = 0xFFFFFFFFu;
+        packet.ray.id[k] = unsigned(k), packet.ray.flags[k] = 0;
+        valid[k] = lane.live ? -1 : 0;
+        live += lane.live;
+      }
+      if (live == 0) break;
+      clearHits<N>(packet);
+      intersectScene<N>(scene_, &ctx, valid, packet);
+      for (int k = 0; k < N; ++k) {
+        ParityLane& lane = lanes_[k];
+        if (!lane.live) continue;
+        bool decided = false;
+        if (!valid[k])  // a ray Embree cannot take (coordinates beyond its range)
+          decided = decide(lane, false);
+        else if (packet.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID)
+          decided = endDirection(lane, true);
+        else if (ambiguous(packet, k, parityDirections().d[lane.direction]))
+          ++discarded_, decided = endDirection(lane, false);
+        else
+          ++lane.crossings, lane.tnear = std::nextafter(packet.ray.tfar[k], INFINITY);
+        if (decided) start(lane);
+      }
+    }
+  }
+
+  size_t discarded() const { return discarded_; }
+  size_t undecided() const { return undecided_; }
+  size_t nonFinite() const { return nonFinite_; }
+
+ private:
+  const Scene& scene_;
+  const double* points_;
+  const size_t* order_;
+  const InsideOptions& options_;
+  float diagonal_, band_;
+  InsideResult& result_;
+  ParityLane lanes_[N];
+  size_t next_ = 0, end_ = 0;
+  size_t discarded_ = 0, undecided_ = 0, nonFinite_ = 0;
+
+  /// Gives the lane the next finite point inside the scene's box, or leaves it dead. Points
+  /// outside the box (which holds every triangle) are outside, without a ray: no surface
+  /// can enclose them. Rays therefore start within a box diagonal of the surface, and
+  /// Embree's rounding, which grows with the distance from the ray's origin, stays at the
+  /// scene's scale.
+  void start(ParityLane& lane) {
+    const std::optional<SceneBox>& box = scene_.box();
+    while (next_ < end_) {
+      const size_t i = order_[next_++];
+      const glm::dvec3 p(points_[3 * i], points_[3 * i + 1], points_[3 * i + 2]);
+      if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) {
+        result_.inside[i] = 0;
+        ++nonFinite_;
+        continue;
+      }
+      const glm::dvec3 org = p - scene_.renderOrigin();
+      if (box && (glm::any(glm::lessThan(org, glm::dvec3(box->lo))) ||
+                  glm::any(glm::greaterThan(org, glm::dvec3(box->hi))))) {
+        result_.inside[i] = 0;
+        continue;
+      }
+      lane = ParityLane{};
+      lane.point = i;
+      lane.org = glm::vec3(org);
+      lane.live = true;
+      return;
+    }
+    lane = ParityLane{};
+  }
+
+  /// Writes the lane's verdict; true.
+  bool decide(ParityLane& lane, bool inside) {
+    result_.inside[lane.point] = inside ? 1 : 0;
+    return true;
+  }
+
+  /// Ends the lane's current direction, with its vote (`vote`) or discarded, and turns it to
+  /// the next one. True when the point is decided:
+  /// a majority of parityDirections votes on one side, or the directions used up (a majority
+  /// of the votes there are; none: undecided, outside).
+  bool endDirection(ParityLane& lane, bool vote) {
+    if (vote) ++lane.votes, lane.insideVotes += lane.crossings & 1;
+    // Decided once either side holds a majority of parityDirections.
+    const int majority = options_.parityDirections / 2 + 1;
+    if (lane.insideVotes >= majority || lane.votes - lane.insideVotes >= majority)
+      return decide(lane, lane.insideVotes >= majority);
+    if (++lane.direction == kParityDirectionCount) {
+      if (lane.votes == 0) ++undecided_;
+      return decide(lane, 2 * lane.insideVotes > lane.votes);
+    }
+    lane.crossings = 0, lane.tnear = 0;
+    return false;
+  }
+
+  /// Whether lane k's hit is one whose crossing cannot be counted with certainty: near an
+  /// edge or a vertex (where Embree's watertight test may report both triangles, or the
+  /// second one a float later), grazing, or at the ray's origin (a point on the surface).
+  bool ambiguous(const typename PacketOf<N>::type& p, int k, const glm::vec3& dir) const {
+    const float t = p.ray.tfar[k];
+
+    if (t < band_) return true;
+    const bool instanced = p.hit.instID[0][k] != RTC_INVALID_GEOMETRY_ID;
+    const unsigned object = instanced ? p.hit.instID[0][k] : p.hit.geomID[k];
+    glm::vec3 ng(p.hit.Ng_x[k], p.hit.Ng_y[k], p.hit.Ng_z[k]);
+    if (instanced) ng = scene_.normalFromMesh(object) * ng;
+    if (!(std::abs(glm::dot(ng, dir)) >= kParityGrazingCosine * glm::length(ng))) return true;
+    // The hit point's distance to each edge: its barycentric weight times the triangle's
+    // height over that edge (mesh units).
+    const Mesh& mesh = scene_.objectMesh(object);
+    const size_t triangle = scene_.meshTriangle(object, p.hit.primID[k]);
+    const glm::vec3 v0 = mesh.vertex(mesh.indices[3 * triangle]),
+                    v1 = mesh.vertex(mesh.indices[3 * triangle + 1]),
+                    v2 = mesh.vertex(mesh.indices[3 * triangle + 2]);
+    const float twiceArea = glm::length(glm::cross(v1 - v0, v2 - v0));
+    const float u = p.hit.u[k], v = p.hit.v[k], w = 1.0f - u - v;
+    const float margin = kParityEdgeTolerance * (t + diagonal_);
+    return !(w * twiceArea > margin * glm::length(v2 - v1) &&
+             u * twiceArea > margin * glm::length(v0 - v2) &&
+             v * twiceArea > margin * glm::length(v1 - v0));
+  }
+};
+
+float sceneDiagonal(const Scene& scene) {
+  const std::optional<SceneBox>& box = scene.box();
+  return box ? glm::length(box->hi - box->lo) : 0.0f;
+}
+
+void checkOptions(const InsideOptions& options) {
+  if (options.parityDirections < 1 || options.parityDirections > kMaxParityDirections ||
+      options.parityDirections % 2 == 0)
+    throw Error(cat("insideOf: parityDirections ", options.parityDirections,
+                    " is not an odd number from 1 to ", kMaxParityDirections));
+  if (!(options.windingBeta > 1.0) || !std::isfinite(options.windingBeta))
+    throw Error(
+        cat("insideOf: windingBeta ", options.windingBeta, " must be a finite number above 1"));
+}
+
+/// The points' indices in Morton order over the scene's box, in world space.
+std::vector<size_t> spatialOrder(const Scene& scene, const double* points, size_t count) {
+  const std::optional<SceneBox>& box = scene.box();
+  if (!box) return mortonOrder(points, count, glm::dvec3(0.0), glm::dvec3(1.0));
+  const glm::dvec3 origin = scene.renderOrigin();
+  return mortonOrder(points, count, origin + glm::dvec3(box->lo), origin + glm::dvec3(box->hi));
+}
+
+void insideByParity(const Scene& scene, const double* points, size_t count,
+                    const InsideOptions& options, InsideResult& result) {
+  const float diagonal = sceneDiagonal(scene);
+  const std::vector<size_t> order = spatialOrder(scene, points, count);
+  std::atomic<size_t> discarded{0}, undecided{0}, nonFinite{0};
+  parallelFor(count, 1024, [&](size_t begin, size_t end) {
+    ParityStream<kParityPacket> stream(scene, points, order.data(), options, diagonal, result);
+    stream.run(begin, end);
+    discarded += stream.discarded();
+    undecided += stream.undecided();
+    nonFinite += stream.nonFinite();
+  });
+  result.discardedRays = discarded;
+  result.undecided = undecided;
+  result.nonFinite = nonFinite;
+}
+
+void insideByWinding(const Scene& scene, const double* points, size_t count,
+                     const InsideOptions& options, InsideResult& result) {
+  std::optional<WindingNumberTree> built;
+  if (!options.windingTree) built.emplace(worldTriangleCorners(scene));
+  const WindingNumberTree& tree = options.windingTree ? *options.windingTree : *built;
+  result.winding.resize(count);
+  result.windingErrorBound.resize(count);
+  tree.evaluate(points, count, options.windingBeta, result.winding.data(),
+                result.windingErrorBound.data());
+  size_t nonFinite = 0;
+  for (size_t i = 0; i < count; ++i) {
+    nonFinite += std::isnan(result.winding[i]);
+    result.inside[i] = result.winding[i] > 0.5 ? 1 : 0;
+  }
+  result.nonFinite = nonFinite;
+}
+
+size_t placedTriangles(const Scene& scene) {
+  size_t total = 0;
+  for (const SceneObject& o : scene.objects())
+    total += o.subset ? o.subset->triangleCount() : o.mesh->triangleCount();
+  return total;
+}
+
+}  // namespace
+
+glm::vec3 parityDirection(int k) {
+  if (k < 0 || k >= kParityDirectionCount)
+    throw Error(cat("parityDirection: ", k, " is not in [0, ", kParityDirectionCount, ")"));
+  return parityDirections().d[k];
+}
+
+InsideResult insideOf(const Scene& scene, const double* points, size_t count,
+                      const InsideOptions& options) {
+  checkOptions(options);
+  if (placedTriangles(scene) == 0) throw Error("insideOf: the scene has no triangles");
+  InsideResult result;
+  result.method = options.method;
+  if (result.method == InsideMethod::Automatic)
+    result.method = (options.closed ? options.closed->closed : checkClosed(scene).closed)
+                        ? InsideMethod::Parity
+                        : InsideMethod::Winding;
+  result.inside.assign(count, 0);
+  if (result.method == InsideMethod::Parity)
+    insideByParity(scene, points, count, options, result);
+  else
+    insideByWinding(scene, points, count, options, result);
+  return result;
 }
 
 }  // namespace aperture

@@ -1,0 +1,116 @@
+#pragma once
+// The generalized winding number of a triangle soup (Jacobson, Kavan and Sorkine-Hornung,
+// "Robust inside-outside segmentation using generalized winding numbers", 2013): at a point p,
+//   w(p) = Σ_t Ω_t(p) / 4π,
+// Ω_t the signed solid angle triangle t subtends at p (Van Oosterom and Strackee's formula, in
+// double). For a closed, consistently oriented surface w is the number of times it winds
+// around p (1 inside, 0 outside, 0.5 on the surface); for an open one it degrades gracefully
+// and w > 0.5 is the inside people trust.
+//
+// The fast evaluation (WindingNumberTree) sums over a BVH of the triangles: a node of radius R
+// (every corner of its triangles within R of its centre c) whose centre is farther from p than
+// beta·R is replaced by the first two terms of the Taylor expansion of its double-layer
+// potential about c (the dipole, second- and third-order terms); nodes closer than that are
+// opened, and leaves (at most kWindingLeafTriangles triangles) are summed exactly. Scenes of
+// at most kWindingExactBelow triangles are always summed exactly.
+//
+// Error bound. With y = x − p and G(y) = y / |y|³ = −∇(1/|y|), a node contributes
+// (1/4π) ∫ G(x − p) · n dA, n the unit normal. Write x − p = r + δ with r = c − p, d = |r| and
+// |δ| ≤ R. The Taylor series of G(r + δ) · n in δ has as its k-th term
+// (1/k!) D^{k+1}(1/|·|)(r)[n, δ, ..., δ]. The j-th derivative of 1/|y| along a unit direction
+// is j!·P_j(cos θ)/|y|^{j+1} (the Legendre expansion of 1/|y − δ|, |P_j| ≤ 1), and a symmetric
+// multilinear form takes its norm on the diagonal, so the k-th term is at most
+// (k+1)·|δ|^k / d^{k+2}. The expansion used here keeps k = 0 (the dipole), 1 and 2; the
+// rest sums to at most Σ_{k≥3} (k+1)·Q^k / d² = Q³·(4 − 3Q) / ((1 − Q)²·d²) per unit area,
+// Q = R/d < 1. A node of total (unsigned) area A used at distance d > beta·R therefore adds
+// at most
+//   e(node) = A·Q³·(4 − 3Q) / (4π·d²·(1 − Q)²)
+// to the error, and the error of w(p) is at most the sum of e over the nodes the evaluation
+// used (WindingValue::errorBound, computed alongside), plus double rounding (about 1e-15 per
+// triangle). A priori each node's share is below A·(4β − 3) / (4π·β⁴·(β − 1)²·R²) (Q < 1/β):
+// for beta = 2 and a flat node (A ≈ πR²) 5/64, and the shares of farther nodes fall as
+// 1/d⁵. The bound is rigorous but not tight: the tests measure errors of a few percent of it
+// (docs/queries_sign.md).
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <vector>
+
+namespace aperture {
+
+/// Scenes with at most this many triangles are summed exactly (no tree is used).
+inline constexpr size_t kWindingExactBelow = 64;
+/// The most triangles in a leaf of the tree (summed exactly when a leaf is opened).
+inline constexpr size_t kWindingLeafTriangles = 8;
+
+/// WindingNumberTree::evaluate's default band about 0.5 in which a point is evaluated again,
+/// and the factor on beta it is evaluated with. The band is 8 times the worst error measured
+/// at beta = 2 (docs/queries_sign.md): near an open mesh's holes w passes through 0.5 away
+/// from the surface, and there the refined value decides the side.
+inline constexpr double kWindingRefineBand = 0.05;
+inline constexpr double kWindingRefineFactor = 4.0;
+
+/// The signed solid angle (steradians, in (−2π, 2π]) that triangle (a, b, c) subtends at p:
+/// positive when p lies behind it, on the side opposite to the normal (b − a) × (c − a) of its
+/// counter-clockwise winding (inside a closed outward-oriented surface). Van Oosterom and
+/// Strackee (1983): tan(Ω/2) = det[a′ b′ c′] / (|a′||b′||c′| + (a′·b′)|c′| + (b′·c′)|a′| +
+/// (c′·a′)|b′|), a′ = a − p, ... 0 when p is a corner.
+double triangleSolidAngle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
+                          const glm::dvec3& p);
+
+/// Σ Ω / 4π over the triangles of `corners` (3 per triangle): the exact sum, in order.
+double exactWindingNumber(const std::vector<glm::dvec3>& corners, const glm::dvec3& p);
+
+/// A winding number and the bound on its truncation error (0 when summed exactly).
+struct WindingValue {
+  double winding = 0;
+  double errorBound = 0;
+};
+
+/// The tree over a triangle soup, built once, evaluated at many points.
+class WindingNumberTree {
+ public:
+  /// `corners`: 3 per triangle, world space (worldTriangleCorners).
+  explicit WindingNumberTree(std::vector<glm::dvec3> corners);
+
+  size_t triangleCount() const { return corners_.size() / 3; }
+  size_t nodeCount() const { return nodes_.size(); }
+
+  /// The exact sum at p (exactWindingNumber).
+  double exact(const glm::dvec3& p) const { return exactWindingNumber(corners_, p); }
+  /// The hierarchical evaluation at p with far-field parameter `beta` (> 1).
+  WindingValue evaluate(const glm::dvec3& p, double beta) const;
+  /// evaluate at `count` points (3 doubles each) on every core. A point whose w lands within
+  /// `refineBand` of 0.5 (the inside threshold) is evaluated again with kWindingRefineFactor ·
+  /// beta, and gets that value and bound. A point that is not finite gets NaN for both.
+  /// `errorBound` may be null. Throws Error unless beta > 1 and finite.
+  void evaluate(const double* points, size_t count, double beta, double* winding,
+                double* errorBound, double refineBand = kWindingRefineBand) const;
+
+ private:
+  struct Node {
+    glm::dvec3 centre{0.0};
+    double radius = 0;
+    double area = 0;         ///< Σ |vector area|
+    glm::dvec3 normal{0.0};  ///< Σ vector area: the dipole moment
+    double moment[9] = {};   ///< M_ij = Σ a_i (g − c)_j, row-major: the second-order term
+    /// T_ijk = Σ ∫ n_i (x − c)_j (x − c)_k dA, i major, (j, k) as xx xy xz yy yz zz: the
+    /// third-order term.
+    double third[18] = {};
+    uint32_t first = 0;  ///< leaf: first index into order_
+    uint32_t count = 0;  ///< leaf: triangles; 0 for an inner node
+    uint32_t right = 0;  ///< inner node: the right child (the left one follows the node)
+  };
+  std::vector<glm::dvec3> corners_;
+  glm::dvec3 lo_{INFINITY}, hi_{-INFINITY};  ///< the corners' box
+  std::vector<uint32_t> order_;              ///< triangles in leaf order
+  std::vector<Node> nodes_;
+
+  uint32_t build(uint32_t begin, uint32_t end, const std::vector<glm::dvec3>& centroids,
+                 const std::vector<glm::dvec3>& vectorAreas);
+  void summarise(Node& node, uint32_t begin, uint32_t end, const std::vector<glm::dvec3>& centroids,
+                 const std::vector<glm::dvec3>& vectorAreas) const;
+};
+
+}  // namespace aperture
