@@ -2,7 +2,6 @@
 
 #include <nanobind/stl/string.h>
 
-#include <functional>
 #include <memory>
 #include <vector>
 
@@ -33,14 +32,11 @@ void checkSameCount(const Points& origins, const Points& directions, const char*
 
 }  // namespace
 
-nb::tuple pointQueries(const Scene& renderScene, const std::function<const Scene&()>& insideScene,
-                       const Points& points, const std::string& what, const std::string& method,
-                       int parityDirections, int threads) {
+nb::tuple pointQueries(const Scene& scene, const Points& points, const std::string& what,
+                       const std::string& method, int parityDirections, int threads) {
   app::PointQueryRequest request = app::parsePointQueries(what, "what");
   request.inside.method = parseInsideMethod(method);
   request.inside.parityDirections = parityDirections;
-  const bool parity = request.needsInside() && request.inside.method != InsideMethod::Winding;
-  const Scene& scene = parity ? insideScene() : renderScene;
   auto r = std::make_shared<app::PointQueryResults>();
   const size_t n = points.shape(0);
   released(threads, [&] { *r = app::runPointQueries(scene, points.data(), n, request); });

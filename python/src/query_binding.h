@@ -6,7 +6,6 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 
-#include <functional>
 #include <optional>
 #include <string>
 
@@ -21,39 +20,30 @@ using Points = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::dev
 
 /// (dict of arrays, non-finite count, method name or "") for `what`
 /// ("closest,distance,sign,occupancy" items), `method` "automatic", "parity" or "winding".
-/// `insideScene` gives the scene the inside test runs on (parity is one traversal per ray on
-/// a scene built with BuildOptions::contextFilter); called only when the inside is needed and
-/// the method is not winding.
-nb::tuple pointQueries(const Scene& scene, const std::function<const Scene&()>& insideScene,
-                       const Points& points, const std::string& what, const std::string& method,
-                       int parityDirections, int threads);
-/// (counts (N) uint32, non-finite count); one traversal per ray when `scene` was built with
-/// BuildOptions::contextFilter.
+nb::tuple pointQueries(const Scene& scene, const Points& points, const std::string& what,
+                       const std::string& method, int parityDirections, int threads);
+/// (counts (N) uint32, non-finite count).
 nb::tuple countIntersections(const Scene& scene, const Points& origins, const Points& directions,
                              int threads);
 /// (dict ray_splits, ray_ids, t, primid, geomid, non-finite count).
 nb::tuple listIntersections(const Scene& scene, const Points& origins, const Points& directions,
                             int threads);
 
-/// The query methods of `c`, whose instances give their Scene by `scene()` and the same
-/// objects built with BuildOptions::contextFilter by `queryScene()` (for parity and
-/// count_intersections: one traversal per ray instead of one per hit).
+/// The query methods of `c`, whose instances give their Scene by `scene()`.
 template <class PyScene>
 void bindSceneQueries(nb::class_<PyScene>& c) {
   c.def(
        "_point_queries",
        [](const PyScene& s, const Points& points, const std::string& what,
           const std::string& method, int parityDirections, int threads) {
-         return pointQueries(
-             s.scene(), [&s]() -> const Scene& { return s.queryScene(); }, points, what, method,
-             parityDirections, threads);
+         return pointQueries(s.scene(), points, what, method, parityDirections, threads);
        },
        nb::arg("points"), nb::arg("what"), nb::arg("method"), nb::arg("parity_directions"),
        nb::arg("threads"))
       .def(
           "_count_intersections",
           [](const PyScene& s, const Points& origins, const Points& directions, int threads) {
-            return countIntersections(s.queryScene(), origins, directions, threads);
+            return countIntersections(s.scene(), origins, directions, threads);
           },
           nb::arg("origins"), nb::arg("directions"), nb::arg("threads"))
       .def(

@@ -13,7 +13,6 @@
 #include <chrono>
 #include <exception>
 #include <memory>
-#include <mutex>
 #include <optional>
 
 #include "apps/services/render_options.h"
@@ -276,21 +275,6 @@ class PyScene {
   const std::vector<std::string>& meshNames() const { return loaded_.names; }
   /// The built scene (the point and ray queries, query_binding.h).
   const Scene& scene() const { return *loaded_.scene; }
-  /// The scene's objects built again with BuildOptions::contextFilter (a second BVH), at the
-  /// first call and kept until the scene is rebuilt: parity and count_intersections collect
-  /// every hit of a ray there in one traversal (core/queries/inside.h). The render scene has
-  /// no context filter: Embree's filter-capable kernels would slow every ray it traces.
-  const Scene& queryScene() const {
-    nb::gil_scoped_release release;  // the build takes seconds on a large mesh
-    std::lock_guard<std::mutex> lock(queryMutex_);
-    if (loaded_.scene->options().contextFilter) return *loaded_.scene;
-    if (!queryScene_) {
-      BuildOptions options = loaded_.scene->options();
-      options.contextFilter = true;
-      queryScene_ = std::make_unique<Scene>(*device_, loaded_.scene->objects(), options);
-    }
-    return *queryScene_;
-  }
 
   /// Scene.ids: the names behind the instance, mesh and material ids (SceneIds).
   nb::dict ids() const {
@@ -333,7 +317,6 @@ class PyScene {
 
  private:
   void load() {
-    dropQueryScene();
     readingFiles(files_, [&] { loaded_ = app::loadSceneMeshes(spec_, true); });
     app::buildLoadedScene(*device_, loaded_, spec_, true);
   }
@@ -348,7 +331,6 @@ class PyScene {
     if (holdsEverything(spec_, need)) return;
     spec_ = unionOf(spec_, need);
     nb::gil_scoped_release release;
-    dropQueryScene();
     if (fromFiles_) {
       loaded_.scene.reset();
       load();
@@ -409,14 +391,6 @@ class PyScene {
   std::vector<std::string> files_;  // the mesh files, for messages of readingFiles
   app::SceneSpec spec_;
   app::LoadedScene loaded_;
-  mutable std::mutex queryMutex_;
-  mutable std::unique_ptr<Scene> queryScene_;  ///< queryScene(); null until asked for
-
-  /// Forgets queryScene() (before the scene it was built over is rebuilt).
-  void dropQueryScene() {
-    std::lock_guard<std::mutex> lock(queryMutex_);
-    queryScene_.reset();
-  }
   RenderTotals last_;
 };
 
