@@ -1,12 +1,14 @@
 // Throughput of insideOf (core/queries/inside.h): parity with 1 and 5 directions and the
 // winding number, on N points spread uniformly over a mesh's box (enlarged by 10 % on each
 // side, fixed seed), in alternating rounds; medians in points per second (bench/RESULTS.md).
-//   aperture_inside_speed MESH [POINTS=1000000] [ROUNDS=3] [BETA=2]
+//   aperture_inside_speed MESH [POINTS=1000000] [ROUNDS=3] [BETA=2] [winding]
+// A fifth argument `winding` times the winding number alone (for profiling it).
 #include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <random>
@@ -35,12 +37,13 @@ double median(std::vector<double> v) {
 int main(int argc, char** argv) {
   using namespace aperture;
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s MESH [POINTS] [ROUNDS] [BETA]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s MESH [POINTS] [ROUNDS] [BETA] [winding]\n", argv[0]);
     return 2;
   }
   const size_t count = argc > 2 ? size_t(std::atoll(argv[2])) : 1000000;
   const int rounds = argc > 3 ? std::atoi(argv[3]) : 3;
   const double beta = argc > 4 ? std::atof(argv[4]) : 2.0;
+  const bool windingOnly = argc > 5 && std::string(argv[5]) == "winding";
   try {
     Device device;
     const Mesh mesh = loadMesh(argv[1]);
@@ -87,6 +90,7 @@ int main(int argc, char** argv) {
     variants[2].options.method = InsideMethod::Winding;
     variants[2].options.windingTree = &tree;
     for (Variant& v : variants) v.options.windingBeta = beta;
+    if (windingOnly) variants.erase(variants.begin(), variants.begin() + 2);
     for (int r = 0; r < rounds; ++r)
       for (Variant& v : variants) {
         start = std::chrono::steady_clock::now();
@@ -97,7 +101,7 @@ int main(int argc, char** argv) {
       size_t inside = 0, agree = 0;
       for (size_t i = 0; i < count; ++i) {
         inside += v.last.inside[i];
-        agree += v.last.inside[i] == variants[2].last.inside[i];
+        agree += v.last.inside[i] == variants.back().last.inside[i];
       }
       std::printf(
           "%-30s median %.3f s  %.3g points/s  inside %.4f  differs from winding at %zu"
@@ -106,13 +110,17 @@ int main(int argc, char** argv) {
           count - agree, v.last.discardedRays);
     }
     double worstBound = 0;
-    for (double b : variants[2].last.windingErrorBound) worstBound = std::max(worstBound, b);
+    for (double b : variants.back().last.windingErrorBound) worstBound = std::max(worstBound, b);
     size_t uncertain = 0;
     for (size_t i = 0; i < count; ++i)
-      uncertain +=
-          std::abs(variants[2].last.winding[i] - 0.5) <= variants[2].last.windingErrorBound[i];
-    std::printf("winding: largest error bound %.3g; points whose |w - 0.5| <= bound: %.4f\n",
-                worstBound, double(uncertain) / double(count));
+      uncertain += std::abs(variants.back().last.winding[i] - 0.5) <=
+                   variants.back().last.windingErrorBound[i];
+    uint64_t sides = 1469598103934665603ull;  // FNV-1a of the winding sides, to compare builds
+    for (uint8_t in : variants.back().last.inside) sides = (sides ^ in) * 1099511628211ull;
+    std::printf(
+        "winding: largest error bound %.3g; points whose |w - 0.5| <= bound: %.4f; sides hash "
+        "%016llx\n",
+        worstBound, double(uncertain) / double(count), (unsigned long long)sides);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;
