@@ -234,7 +234,7 @@ WindingNumberTree::FarTerms WindingNumberTree::farTerms(const Moments& m) {
 ///   ∂_j ∂_k G_i = −3 (δ_ij r_k + δ_ik r_j + δ_jk r_i)/d⁵ + 15 r_i r_j r_k/d⁷,
 /// that is (N·r + tr M)/d³ − (3 r·M·r + (3/2) Σ_ik r_k (2 T_iik + T_kii))/d⁵ + (15/2) Σ_ijk
 /// r_i r_j r_k T_ijk/d⁷.
-double WindingNumberTree::farField4Pi(const FarTerms& f, const glm::dvec3& r, double d) {
+inline double WindingNumberTree::farField4Pi(const FarTerms& f, const glm::dvec3& r, double d) {
   const double x = r.x, y = r.y, z = r.z;
   const double xx = x * x, yy = y * y, zz = z * z;
   const double dipole = f.normal[0] * x + f.normal[1] * y + f.normal[2] * z + f.trace;
@@ -279,6 +279,10 @@ WindingValue WindingNumberTree::evaluate(const glm::dvec3& p, double beta) const
       for (uint32_t k = 0; k < node.count; ++k, c += 3)
         sum += triangleSolidAngle(c[0], c[1], c[2], p);
     } else {
+      // The children's far-field terms are read if they are far: start loading them now.
+      for (const uint32_t child : {node.right, index + 1})
+        for (int line = 0; line < int(sizeof(FarTerms)); line += 64)
+          __builtin_prefetch(reinterpret_cast<const char*>(&far_[child]) + line);
       stack[top++] = node.right;
       stack[top++] = index + 1;
     }
