@@ -2,7 +2,9 @@
 // winding number, on N points spread uniformly over a mesh's box (enlarged by 10 % on each
 // side, fixed seed), in alternating rounds; medians in points per second (bench/RESULTS.md).
 //   aperture_inside_speed MESH [POINTS=1000000] [ROUNDS=3] [BETA=2] [winding]
-// A fifth argument `winding` times the winding number alone (for profiling it).
+// A fifth argument `winding` times the winding number alone (for profiling it). The CPU
+// seconds (all threads) are steadier than wall time on a loaded machine with one thread
+// (taskset -c 0).
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -11,6 +13,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <random>
 #include <string>
 #include <vector>
@@ -77,7 +80,7 @@ int main(int argc, char** argv) {
     struct Variant {
       const char* name;
       InsideOptions options;
-      std::vector<double> times;
+      std::vector<double> times, cpu;  // wall and process CPU seconds
       InsideResult last;
     };
     std::vector<Variant> variants(3);
@@ -94,8 +97,10 @@ int main(int argc, char** argv) {
     for (int r = 0; r < rounds; ++r)
       for (Variant& v : variants) {
         start = std::chrono::steady_clock::now();
+        const std::clock_t cpuStart = std::clock();
         v.last = insideOf(scene, points.data(), count, v.options);
         v.times.push_back(seconds(start));
+        v.cpu.push_back(double(std::clock() - cpuStart) / CLOCKS_PER_SEC);
       }
     for (const Variant& v : variants) {
       size_t inside = 0, agree = 0;
@@ -104,10 +109,11 @@ int main(int argc, char** argv) {
         agree += v.last.inside[i] == variants.back().last.inside[i];
       }
       std::printf(
-          "%-30s median %.3f s  %.3g points/s  inside %.4f  differs from winding at %zu"
+          "%-30s median %.3f s (CPU %.3f s)  %.3g points/s  inside %.4f  differs from winding at "
+          "%zu"
           "  discarded rays %zu\n",
-          v.name, median(v.times), double(count) / median(v.times), double(inside) / double(count),
-          count - agree, v.last.discardedRays);
+          v.name, median(v.times), median(v.cpu), double(count) / median(v.times),
+          double(inside) / double(count), count - agree, v.last.discardedRays);
     }
     double worstBound = 0;
     for (double b : variants.back().last.windingErrorBound) worstBound = std::max(worstBound, b);
