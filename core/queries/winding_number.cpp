@@ -292,21 +292,97 @@ WindingValue WindingNumberTree::evaluate(const glm::dvec3& p, double beta) const
   return value;
 }
 
+void WindingNumberTree::evaluatePacket(const glm::dvec3* points, unsigned lanes, double beta,
+                                       double* sum, double* bound) const {
+  // The traversal of evaluate(p, beta) for up to kPacket points at once: a node is visited
+  // with the lanes that reach it, each lane opens or uses it as evaluate would, and each adds
+  // its terms in the same order, so every lane gets evaluate's value to the bit. The points
+  // share each node's loads.
+  for (int l = 0; l < kPacket; ++l) sum[l] = bound[l] = 0;
+  struct Entry {
+    uint32_t index;
+    unsigned lanes;
+  };
+  Entry stack[128];
+  int top = 0;
+  stack[top++] = {0, lanes};
+  while (top > 0) {
+    const Entry entry = stack[--top];
+    const Node& node = nodes_[entry.index];
+    const double reach = beta * node.radius;
+    unsigned far = 0, near = 0;
+    glm::dvec3 r[kPacket];
+    double d[kPacket];
+    for (int l = 0; l < kPacket; ++l) {
+      if (!(entry.lanes >> l & 1u)) continue;
+      r[l] = node.centre - points[l];
+      d[l] = glm::length(r[l]);
+      (d[l] > reach ? far : near) |= 1u << l;
+    }
+    if (far) {
+      const FarTerms& f = far_[entry.index];
+      for (int l = 0; l < kPacket; ++l)
+        if (far >> l & 1u) {
+          sum[l] += farField4Pi(f, r[l], d[l]);
+          bound[l] += truncationBound4Pi(f.area, node.radius, d[l]);
+        }
+    }
+    if (!near) continue;
+    if (node.count > 0) {
+      const glm::dvec3* c = corners_.data() + 3 * size_t(node.first);
+      for (uint32_t k = 0; k < node.count; ++k, c += 3)
+        for (int l = 0; l < kPacket; ++l)
+          if (near >> l & 1u) sum[l] += triangleSolidAngle(c[0], c[1], c[2], points[l]);
+    } else {
+      for (const uint32_t child : {node.right, entry.index + 1})
+        for (int line = 0; line < int(sizeof(FarTerms)); line += 64)
+          __builtin_prefetch(reinterpret_cast<const char*>(&far_[child]) + line);
+      stack[top++] = {node.right, near};
+      stack[top++] = {entry.index + 1, near};
+    }
+  }
+}
+
 void WindingNumberTree::evaluate(const double* points, size_t count, double beta, double* winding,
                                  double* errorBound, double refineBand) const {
   if (!(beta > 1.0) || !std::isfinite(beta))
     throw Error(cat("winding number: beta ", beta, " must be a finite number above 1"));
   // In Morton order over the triangles' box: consecutive points open the same nodes, which
-  // then come from the cache.
+  // then come from the cache, and go through the tree together (evaluatePacket).
   const std::vector<size_t> order = mortonOrder(points, count, lo_, hi_);
+  auto store = [&](size_t i, const WindingValue& v) {
+    winding[i] = v.winding;
+    if (errorBound) errorBound[i] = v.errorBound;
+  };
   parallelFor(count, 256, [&](size_t begin, size_t end) {
-    for (size_t at = begin; at < end; ++at) {
-      const size_t i = order[at];
-      const glm::dvec3 p(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
-      WindingValue v = evaluate(p, beta);
-      if (std::abs(v.winding - 0.5) < refineBand) v = evaluate(p, kWindingRefineFactor * beta);
-      winding[i] = v.winding;
-      if (errorBound) errorBound[i] = v.errorBound;
+    for (size_t at = begin; at < end; at += kPacket) {
+      const int n = int(std::min(end - at, size_t(kPacket)));
+      glm::dvec3 p[kPacket];
+      unsigned lanes = 0;
+      for (int l = 0; l < n; ++l) {
+        const size_t i = order[at + size_t(l)];
+        p[l] = glm::dvec3(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
+        if (nodes_.empty() || !finitePoint(p[l]))
+          store(i, evaluate(p[l], beta));  // NaN, or the exact sum without a tree
+        else
+          lanes |= 1u << l;
+      }
+      if (!lanes) continue;
+      double sum[kPacket], bound[kPacket];
+      evaluatePacket(p, lanes, beta, sum, bound);
+      unsigned refine = 0;
+      for (int l = 0; l < n; ++l)
+        if (lanes >> l & 1u) {
+          const WindingValue v{sum[l] / kFourPi, bound[l] / kFourPi};
+          if (std::abs(v.winding - 0.5) < refineBand)
+            refine |= 1u << l;
+          else
+            store(order[at + size_t(l)], v);
+        }
+      if (!refine) continue;
+      evaluatePacket(p, refine, kWindingRefineFactor * beta, sum, bound);
+      for (int l = 0; l < n; ++l)
+        if (refine >> l & 1u) store(order[at + size_t(l)], {sum[l] / kFourPi, bound[l] / kFourPi});
     }
   });
 }

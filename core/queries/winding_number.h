@@ -123,6 +123,12 @@ class WindingNumberTree {
                       const std::vector<glm::dvec3>& vectorAreas) const;
   double radiusAbout(const glm::dvec3& centre, uint32_t begin, uint32_t end) const;
   static FarTerms farTerms(const Moments& m);
+  /// How many points evaluatePacket takes at once.
+  static constexpr int kPacket = 8;
+  /// 4π times the winding number and its bound at the points of `lanes` (a bit per point of
+  /// `points`), exactly as evaluate(p, beta) computes them.
+  void evaluatePacket(const glm::dvec3* points, unsigned lanes, double beta, double* sum,
+                      double* bound) const;
   static double farField4Pi(const FarTerms& f, const glm::dvec3& r, double d);
 };
 

@@ -289,5 +289,34 @@ TEST(WindingNumber, TreeFarFromTheSoupIsTheDirectTaylorExpansion) {
   }
 }
 
+TEST(WindingNumber, ManyPointsGetTheValuesOfOnePointAtATime) {
+  // The array form goes through the tree several points at a time (and re-evaluates near 0.5
+  // with a larger beta): each point must get what evaluate(p, beta) gives it, to the bit.
+  const std::vector<glm::dvec3> corners = cornersOf(subdividedBox(16, true));
+  const WindingNumberTree tree(corners);
+  std::vector<glm::dvec3> points = randomPoints(3001, glm::dvec3(-1.5), glm::dvec3(1.5), 23);
+  points[5] = glm::dvec3(std::nan(""), 0.0, 0.0);
+  for (int k = 0; k < 40; ++k) points.push_back(glm::dvec3(0.01 * k, -0.02 * k, 1.0));  // w ≈ 0.5
+  std::vector<double> flat;
+  for (const glm::dvec3& p : points) flat.insert(flat.end(), {p.x, p.y, p.z});
+  std::vector<double> w(points.size()), bound(points.size());
+  tree.evaluate(flat.data(), points.size(), 2.0, w.data(), bound.data());
+  size_t refined = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    WindingValue v = tree.evaluate(points[i], 2.0);
+    if (std::abs(v.winding - 0.5) < kWindingRefineBand) {
+      v = tree.evaluate(points[i], kWindingRefineFactor * 2.0);
+      ++refined;
+    }
+    if (std::isnan(v.winding)) {
+      EXPECT_TRUE(std::isnan(w[i]) && std::isnan(bound[i])) << i;
+      continue;
+    }
+    EXPECT_EQ(w[i], v.winding) << i;
+    EXPECT_EQ(bound[i], v.errorBound) << i;
+  }
+  EXPECT_GE(refined, 40u);
+}
+
 }  // namespace winding_test
 }  // namespace aperture
