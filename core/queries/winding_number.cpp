@@ -104,7 +104,7 @@ WindingNumberTree::WindingNumberTree(std::vector<glm::dvec3> corners)
   const size_t nodes = 4 * (triangles / kWindingLeafTriangles + 1);
   nodes_.reserve(nodes);
   far_.reserve(nodes);
-  build(0, uint32_t(triangles), centroids, vectorAreas);
+  build(0, uint32_t(triangles), centroids, vectorAreas, nodes_, far_);
   // The corners in leaf order: a leaf's triangles are then contiguous.
   std::vector<glm::dvec3> sorted(corners_.size());
   parallelFor(triangles, 1 << 14, [&](size_t begin, size_t end) {
@@ -165,10 +165,12 @@ double WindingNumberTree::radiusAbout(const glm::dvec3& centre, uint32_t begin,
 
 WindingNumberTree::Moments WindingNumberTree::build(uint32_t begin, uint32_t end,
                                                     const std::vector<glm::dvec3>& centroids,
-                                                    const std::vector<glm::dvec3>& vectorAreas) {
-  const uint32_t index = uint32_t(nodes_.size());
-  nodes_.emplace_back();
-  far_.emplace_back();
+                                                    const std::vector<glm::dvec3>& vectorAreas,
+                                                    std::vector<Node>& nodes,
+                                                    std::vector<FarTerms>& far) {
+  const uint32_t index = uint32_t(nodes.size());
+  nodes.emplace_back();
+  far.emplace_back();
   Node node;
   Moments m;
   if (end - begin <= kWindingLeafTriangles) {
@@ -189,9 +191,31 @@ WindingNumberTree::Moments WindingNumberTree::build(uint32_t begin, uint32_t end
     std::nth_element(
         order_.begin() + begin, order_.begin() + middle, order_.begin() + end,
         [&](uint32_t a, uint32_t b) { return centroids[a][axis] < centroids[b][axis]; });
-    const Moments left = build(begin, middle, centroids, vectorAreas);
-    node.right = uint32_t(nodes_.size());
-    const Moments right = build(middle, end, centroids, vectorAreas);
+    Moments left, right;
+    if (end - begin < kParallelBuildFrom) {
+      left = build(begin, middle, centroids, vectorAreas, nodes, far);
+      node.right = uint32_t(nodes.size());
+      right = build(middle, end, centroids, vectorAreas, nodes, far);
+    } else {
+      // The two halves at once, the right one into its own arrays, appended after the left.
+      std::vector<Node> rightNodes;
+      std::vector<FarTerms> rightFar;
+      rightNodes.reserve(4 * ((end - middle) / kWindingLeafTriangles + 1));
+      rightFar.reserve(rightNodes.capacity());
+      parallelFor(2, 1, [&](size_t first, size_t last) {
+        for (size_t half = first; half < last; ++half)
+          if (half == 0)
+            left = build(begin, middle, centroids, vectorAreas, nodes, far);
+          else
+            right = build(middle, end, centroids, vectorAreas, rightNodes, rightFar);
+      });
+      node.right = uint32_t(nodes.size());
+      for (Node n : rightNodes) {
+        if (n.count == 0) n.right += node.right;
+        nodes.push_back(n);
+      }
+      far.insert(far.end(), rightFar.begin(), rightFar.end());
+    }
     for (const Moments* child : {&left, &right}) {
       m.weighted += child->weighted;
       m.centroidSum += child->centroidSum;
@@ -205,8 +229,8 @@ WindingNumberTree::Moments WindingNumberTree::build(uint32_t begin, uint32_t end
   }
   node.centre = m.centre;
   node.radius = radiusAbout(m.centre, begin, end);
-  nodes_[index] = node;
-  far_[index] = farTerms(m);
+  nodes[index] = node;
+  far[index] = farTerms(m);
   return m;
 }
 

@@ -117,8 +117,12 @@ class WindingNumberTree {
   std::vector<Node> nodes_;
   std::vector<FarTerms> far_;  ///< parallel to nodes_
 
+  /// Builds the subtree over order_[begin, end) into `nodes` and `far` (indices relative to
+  /// their start); halves of at least kParallelBuildFrom triangles are built at once.
+  static constexpr uint32_t kParallelBuildFrom = 1 << 15;
   Moments build(uint32_t begin, uint32_t end, const std::vector<glm::dvec3>& centroids,
-                const std::vector<glm::dvec3>& vectorAreas);
+                const std::vector<glm::dvec3>& vectorAreas, std::vector<Node>& nodes,
+                std::vector<FarTerms>& far);
   Moments leafMoments(uint32_t begin, uint32_t end, const std::vector<glm::dvec3>& centroids,
                       const std::vector<glm::dvec3>& vectorAreas) const;
   double radiusAbout(const glm::dvec3& centre, uint32_t begin, uint32_t end) const;
