@@ -113,6 +113,16 @@ WindingNumberTree::WindingNumberTree(std::vector<glm::dvec3> corners)
   });
   corners_.swap(sorted);
   order_ = std::vector<uint32_t>();
+  // Each node's radius about its centre, from its triangles' corners, now contiguous.
+  std::vector<uint32_t> ends(nodes_.size());
+  for (size_t i = nodes_.size(); i-- > 0;) {
+    const Node& node = nodes_[i];
+    ends[i] = node.count > 0 ? node.first + node.count : ends[node.right];
+  }
+  parallelFor(nodes_.size(), 1 << 10, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
+      nodes_[i].radius = radiusAbout(nodes_[i].centre, nodes_[i].first, ends[i]);
+  });
 }
 
 WindingNumberTree::Moments WindingNumberTree::leafMoments(
@@ -153,8 +163,7 @@ WindingNumberTree::Moments WindingNumberTree::leafMoments(
 double WindingNumberTree::radiusAbout(const glm::dvec3& centre, uint32_t begin,
                                       uint32_t end) const {
   double radius2 = 0;
-  for (uint32_t at = begin; at < end; ++at) {
-    const size_t t = order_[at];
+  for (size_t t = begin; t < end; ++t) {
     for (size_t i = 0; i < 3; ++i) {
       const glm::dvec3 e = corners_[3 * t + i] - centre;
       radius2 = std::max(radius2, glm::dot(e, e));
@@ -172,10 +181,11 @@ WindingNumberTree::Moments WindingNumberTree::build(uint32_t begin, uint32_t end
   nodes.emplace_back();
   far.emplace_back();
   Node node;
+  node.first = begin;  // an inner node's too: its radius is found from it after the build
   Moments m;
   if (end - begin <= kWindingLeafTriangles) {
     m = leafMoments(begin, end, centroids, vectorAreas);
-    node.first = begin, node.count = end - begin;
+    node.count = end - begin;
   } else {
     // Median split of the centroids along the longest axis of their box.
     glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
@@ -228,7 +238,6 @@ WindingNumberTree::Moments WindingNumberTree::build(uint32_t begin, uint32_t end
     m.addMoved(right);
   }
   node.centre = m.centre;
-  node.radius = radiusAbout(m.centre, begin, end);
   nodes[index] = node;
   far[index] = farTerms(m);
   return m;

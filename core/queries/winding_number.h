@@ -93,7 +93,7 @@ class WindingNumberTree {
   struct Node {
     glm::dvec3 centre{0.0};
     double radius = 0;
-    uint32_t first = 0;  ///< leaf: first index into order_
+    uint32_t first = 0;  ///< first of its triangles in leaf order (corners_ after the build)
     uint32_t count = 0;  ///< leaf: triangles; 0 for an inner node
     uint32_t right = 0;  ///< inner node: the right child (the left one follows the node)
   };
@@ -125,6 +125,7 @@ class WindingNumberTree {
                 std::vector<FarTerms>& far);
   Moments leafMoments(uint32_t begin, uint32_t end, const std::vector<glm::dvec3>& centroids,
                       const std::vector<glm::dvec3>& vectorAreas) const;
+  /// The largest distance from `centre` to a corner of triangles [begin, end) of corners_.
   double radiusAbout(const glm::dvec3& centre, uint32_t begin, uint32_t end) const;
   static FarTerms farTerms(const Moments& m);
   /// How many points evaluatePacket takes at once.
