@@ -3,7 +3,9 @@
 # (`aperture scan --bench`: best of 15 of each, alternating, one sweep's rays), for an OS1-128 at
 # 2048 columns (262144 rays a sweep) inside the crown (3.5M triangles) and inside a 10M-triangle
 # procedural scene. The scan loop traces first returns and fills every field; bare Embree is
-# rtcIntersect16 over the same float rays, nothing else. Run on an idle machine:
+# rtcIntersect16 over the same float rays, nothing else. Each line gives wall and CPU seconds
+# (the process's, the steadier on a loaded machine) and the time to make the sweep's rays.
+# Run on an idle machine:
 #   bash bench/scan_speed.sh            (ROUNDS=3 by default)
 set -euo pipefail
 BIN=${BIN:-build/apps/aperture}

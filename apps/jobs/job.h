@@ -64,8 +64,8 @@ struct Job {
   /// scene.gltf_scene: the scene of every glTF mesh file (SceneSpec::gltfScene); unset: each
   /// file's default scene.
   std::optional<int> gltfScene;
-  /// The scene to load and build: meshes, placement, BVH options, culling, the glTF scene and
-  /// the mesh data the AOVs read.
+  /// The scene to load and build: meshes, placement, BVH options, culling, the glTF scene, the
+  /// mesh data the AOVs read and what the LiDAR scans need (withScanNeeds).
   SceneSpec sceneSpec() const {
     SceneSpec spec;
     spec.meshes = meshes;
@@ -74,9 +74,7 @@ struct Job {
     spec.cull = cull;
     spec.gltfScene = gltfScene;
     spec = withAovNeeds(spec, aovs);
-    for (const PropertyAov& p : lidarProperties(lidars))
-      if (std::find(spec.properties.begin(), spec.properties.end(), p) == spec.properties.end())
-        spec.properties.push_back(p);
+    for (const JobLidar& l : lidars) spec = withScanNeeds(spec, l.request.options);
     return spec;
   }
   /// "lidars": LiDAR sensors scanned through the job's scene after its images (job_lidar.h).

@@ -90,14 +90,4 @@ std::vector<JobLidar> readJobLidars(const Object& top, const std::string& baseDi
   return out;
 }
 
-std::vector<PropertyAov> lidarProperties(const std::vector<JobLidar>& lidars) {
-  std::vector<PropertyAov> out;
-  for (const JobLidar& l : lidars)
-    for (const std::string& name : l.request.options.faceProperties) {
-      const PropertyAov p{PropertyDomain::Face, name};
-      if (std::find(out.begin(), out.end(), p) == out.end()) out.push_back(p);
-    }
-  return out;
-}
-
 }  // namespace aperture::app

@@ -22,7 +22,4 @@ struct JobLidar {
 /// file and the key path (lidars[1].frame).
 std::vector<JobLidar> readJobLidars(const Object& top, const std::string& baseDir);
 
-/// The face properties the lidars carry, for the job's scene set-up.
-std::vector<PropertyAov> lidarProperties(const std::vector<JobLidar>& lidars);
-
 }  // namespace aperture::app

@@ -4,6 +4,7 @@
 // command written as point clouds or range images (core/points/point_writers.h). `aperture
 // scan`, job files and Python's Scene.scan share it.
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -22,6 +23,8 @@ const char* scanFrameName(ScanFrame frame);
 
 /// Which surfaces along a ray become points: the first, the last or the strongest (highest
 /// intensity) of up to ScanOptions::maxSurfaces, or all of them (return_number / returns).
+/// First is the closest hit; the others come from the layered hits' search
+/// (core/engine/layers.h traceSurfaces: one traversal collecting the nearest surfaces).
 enum class ScanReturns { First, Last, Strongest, All };
 ScanReturns parseScanReturns(const std::string& name);  ///< first|last|strongest|all, else Error
 const char* scanReturnsName(ScanReturns returns);
@@ -54,14 +57,51 @@ struct ScanSweep {
   double traceSeconds = 0;  ///< tracing and fields, without writing
 };
 
-/// Traces `rays` (one sweep of `sensor`) through `scene` on the parallel loop. With
-/// `rangeImage`, also fills the range image (Error for ScanReturns::All, which has no image).
-/// Points are the same on any thread count.
+/// The scan loop: traces sweeps of `sensor` through `scene` with `options` on the parallel
+/// loop, in two passes over fixed chunks of rays (the same points on any thread count): the
+/// trace pass leaves each chunk's hits, compacted, in a buffer the scanner keeps from one
+/// sweep to the next; the fields pass writes each chunk's points from the offset the counts
+/// of the chunks before it give. The scene, sensor and options must outlive it.
+class SweepScanner {
+ public:
+  /// Error for maxSurfaces outside 1..64.
+  SweepScanner(const Scene& scene, const LidarSensor& sensor, const ScanOptions& options);
+  ~SweepScanner();
+  SweepScanner(const SweepScanner&) = delete;
+  SweepScanner& operator=(const SweepScanner&) = delete;
+
+  /// Traces `rays` (one sweep of the sensor). With `rangeImage`, also fills the range image
+  /// (Error for ScanReturns::All, which has no image).
+  ScanSweep scan(const LidarRays& rays, bool rangeImage = false);
+  /// Hands back a sweep this scanner returned, once its points are written: the next scan
+  /// fills its point fields in the same memory instead of mapping (and the kernel clearing)
+  /// new pages for them.
+  void recycle(ScanSweep&& done);
+
+ private:
+  struct State;
+  const Scene& scene_;
+  const LidarSensor& sensor_;
+  ScanOptions options_;
+  std::unique_ptr<State> state_;
+};
+
+/// One sweep through a scanner of its own.
 ScanSweep scanSweep(const Scene& scene, const LidarSensor& sensor, const LidarRays& rays,
                     const ScanOptions& options, bool rangeImage = false);
 
-/// Scene options for a scan: face properties to load (the requested ones and reflectance).
+/// Scene options for a scan: withScanNeeds of the scene's.
 SceneSpec scanSceneSpec(const SceneOptions& scene, const ScanOptions& options);
+/// `spec` with what a scan of `options` needs of the scene: the face properties it carries,
+/// "reflectance" when every mesh is a PLY file that has it, and the BVH's context filter for
+/// the multi-return search (scanNeedsContextFilter). The one place that derives it (the
+/// command, job files and Python's Scene.scan call it).
+SceneSpec withScanNeeds(SceneSpec spec, const ScanOptions& options);
+/// Whether a scan of `options` is faster on a scene built with BuildOptions::contextFilter:
+/// last, strongest and all returns, when the layers' default method is Filter
+/// (core/engine/layers.h). A scene without it gives the same points through Retrace (but for
+/// surfaces closer than one float ulp, which only a returnSeparation of 0 reports apart).
+bool scanNeedsContextFilter(const ScanOptions& options);
 
 /// `pattern` with {sweep} or {sweep:0Nd} (N in 1..20) replaced by `sweep`; Error for any
 /// other brace. A pattern without {sweep} is only allowed for one sweep (checked by runScan).

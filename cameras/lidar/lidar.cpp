@@ -119,13 +119,25 @@ LidarRays sweepRays(const LidarSensor& sensor, const Trajectory& trajectory, int
                     : patternRays[i].second;
   };
 
-  // Every firing time inside the trajectory, before any pose is taken. Times grow along the
-  // firing order except where per-beam offsets reach into the next column: test them all.
+  // Every firing time inside the trajectory, before any pose is taken: the earliest and the
+  // latest (spinning: a column's time grows with its measurement id, which grows along the
+  // window's firing order, and each beam adds its offset; pattern: the rays in order).
   if (n > 0) {
     int64_t lo = timeOf(0), hi = lo;
-    for (size_t i = 1; i < n; ++i) {
-      lo = std::min(lo, timeOf(i));
-      hi = std::max(hi, timeOf(i));
+    if (spinning) {
+      int64_t first = 0, last = 0;
+      for (const LidarBeam& b : sensor.beams) {
+        first = std::min(first, b.timeOffsetNs);
+        last = std::max(last, b.timeOffsetNs);
+      }
+      const auto [earliest, latest] = std::minmax_element(ids.begin(), ids.end());
+      lo = sensor.columnTime(*earliest) + first;
+      hi = sensor.columnTime(*latest) + last;
+    } else {
+      for (size_t i = 1; i < n; ++i) {
+        lo = std::min(lo, timeOf(i));
+        hi = std::max(hi, timeOf(i));
+      }
     }
     for (int64_t t : {lo, hi})
       if (!trajectory.covers(out.sweepStartNs + t))
@@ -180,7 +192,9 @@ LidarRays sweepRays(const LidarSensor& sensor, const Trajectory& trajectory, int
   parallelFor(n / unit, spinning ? 16 : 4096, [&](size_t first, size_t last) {
     for (size_t u = first; u < last; ++u) {
       double c = 1, s = 0, columnDeg = 0;
+      int64_t columnNs = 0;
       if (spinning) {
+        columnNs = sensor.columnTime(ids[u]);
         const double turn = sensor.columnAzimuthDeg(ids[u]);
         c = std::cos(turn * kDeg);
         s = std::sin(turn * kDeg);
@@ -208,7 +222,7 @@ LidarRays sweepRays(const LidarSensor& sensor, const Trajectory& trajectory, int
           out.ring[i] = 0;
           out.column[i] = uint32_t(i);
         }
-        out.timeNs[i] = timeOf(i);
+        out.timeNs[i] = spinning ? columnNs + sensor.beams[b].timeOffsetNs : patternRays[i].second;
         out.poseIndex[i] = uint32_t(k);
         out.origin[i] = rotations[k] * o + translations[k];
         out.direction[i] = glm::normalize(rotations[k] * d);

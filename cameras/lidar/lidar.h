@@ -131,8 +131,8 @@ LidarSensor loadLidarText(const std::string& text, const std::string& source);
 /// double; they are anchored to the scene's render origin, as cameras' are, only when rounded
 /// to float (fillLidarLanes, lidarTraceRays). A flat batch rather than a Camera: rays carry
 /// their own times and poses and come from a table, not a pixel grid, so the frame loop's
-/// block walk does not fit; the scan loop packs them into Embree packets (fillLidarLanes) or
-/// traces them with traceRays (lidarTraceRays).
+/// block walk does not fit; the scan loop packs them into Embree packets (fillLidarLanes), and
+/// tests and the bench's bare-Embree baseline take them as TraceRays (lidarTraceRays).
 struct LidarRays {
   int sweep = 0;
   int64_t sweepStartNs = 0;  ///< trajectory time of the sweep's start

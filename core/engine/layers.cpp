@@ -1,5 +1,6 @@
 #include "core/engine/layers.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstddef>
@@ -96,53 +97,14 @@ LayerPlan::LayerPlan(const Scene& scene_, const Camera& camera_, Framebuffer& fb
 
 namespace {
 
-/// One surface along a ray, with Embree's raw ids (instID: RTC_INVALID_GEOMETRY_ID when the
-/// mesh is attached directly).
-struct LayerHit {
-  float t;
-  unsigned primID, geomID, instID;
-
-  bool samePrimitive(const LayerHit& o) const {
-    return primID == o.primID && geomID == o.geomID && instID == o.instID;
-  }
-  /// The object the Z/T/geomID AOVs name: the instance, or the directly attached geometry.
-  unsigned object() const { return instID == RTC_INVALID_GEOMETRY_ID ? geomID : instID; }
-  /// Order along the ray: t, then object and primID, so ties come out the same at every
-  /// packet width whatever order Embree visits them in.
-  bool before(const LayerHit& o) const {
-    if (t != o.t) return t < o.t;
-    if (object() != o.object()) return object() < o.object();
-    return primID < o.primID;
-  }
-};
-
-/// The hits of one lane, nearest first, at most `capacity`.
-struct LaneLayers {
-  LayerHit hit[kMaxLayers];
-  int count = 0;
-
-  void push(const LayerHit& h) { hit[count++] = h; }
-  bool contains(const LayerHit& h) const {
-    for (int i = 0; i < count; ++i)
-      if (hit[i].samePrimitive(h)) return true;
-    return false;
-  }
-  /// Inserts `h` in order, keeping the `capacity` nearest. Returns the index it went to, or
-  /// -1 when it was not kept (a duplicate, or beyond the nearest `capacity`).
-  int insert(const LayerHit& h, int capacity) {
-    if (contains(h)) return -1;
-    if (count == capacity && !h.before(hit[count - 1])) return -1;
-    int i = count < capacity ? count++ : capacity - 1;
-    for (; i > 0 && h.before(hit[i - 1]); --i) hit[i] = hit[i - 1];
-    hit[i] = h;
-    return i;
-  }
-};
+/// The t at or past which the next surface of a chain may begin, after one at t.
+float nextSurfaceStart(float t, float separation) {
+  return std::max(std::nextafter(t, std::numeric_limits<float>::infinity()), t + separation);
+}
 
 /// A packet of its own for the layer passes (the caller's keeps its first hits).
 template <int N>
 struct LayerPacket : PacketBuffers<N> {
-  float tfar[N];  ///< each lane's tfar as the camera generated it (a clip's far end)
   LaneLayers found[N];
 };
 
@@ -158,7 +120,7 @@ struct FilterContext {
 static_assert(offsetof(FilterContext, base) == 0, "Embree passes &base back to the filter");
 
 /// Context filter: records every hit in its lane's list (the lane is the ray's id, which
-/// traceByFilter sets: Embree may pass the filter a copy of the ray, or one ray of a packet
+/// collectNearest sets: Embree may pass the filter a copy of the ray, or one ray of a packet
 /// with the others masked off). Rejects the hit so traversal goes on, except when it became
 /// the K-th nearest of a full list: accepting it then moves the ray's tfar to it, and Embree
 /// skips what lies beyond.
@@ -167,8 +129,11 @@ void collectHit(const RTCFilterFunctionNArguments* args) {
   const unsigned n = args->N;
   for (unsigned i = 0; i < n; ++i) {
     if (args->valid[i] == 0) continue;
-    LayerHit h{RTCRayN_tfar(args->ray, n, i), RTCHitN_primID(args->hit, n, i),
-               RTCHitN_geomID(args->hit, n, i), RTCHitN_instID(args->hit, n, i, 0)};
+    LayerHit h{RTCRayN_tfar(args->ray, n, i),
+               glm::vec3(RTCHitN_Ng_x(args->hit, n, i), RTCHitN_Ng_y(args->hit, n, i),
+                         RTCHitN_Ng_z(args->hit, n, i)),
+               RTCHitN_primID(args->hit, n, i), RTCHitN_geomID(args->hit, n, i),
+               RTCHitN_instID(args->hit, n, i, 0)};
     if (ctx->scene->hasChunks()) ctx->scene->resolveChunkHits(&h.geomID, &h.primID, &h.instID, 1);
     LaneLayers& lane = ctx->lanes[RTCRayN_id(args->ray, n, i)];
     const int at = lane.insert(h, ctx->capacity);
@@ -177,72 +142,150 @@ void collectHit(const RTCFilterFunctionNArguments* args) {
   }
 }
 
-/// Regenerates the packet's rays and keeps the lanes whose first ray hit.
+/// One Filter traversal: the `capacity` nearest primitives along each lane of `valid` (a copy:
+/// the gate may clear lanes) within the lanes' [tnear, tfar], into nearest[k].
 template <int N>
-void prepareRays(const LayerPlan& plan, const PacketRequest& req, const int* hit,
-                 LayerPacket<N>& lp) {
-  plan.camera.generate(req, lp.lanes, lp.valid);
+void collectNearest(const Scene& scene, int capacity, PacketBuffers<N>& rays, const int* live,
+                    LaneLayers* nearest) {
+  alignas(64) int valid[N];
   for (int k = 0; k < N; ++k) {
-    lp.valid[k] = hit[k] ? -1 : 0;
-    lp.tfar[k] = lp.lanes.tfar[k];
-    lp.lanes.id[k] = unsigned(k);
+    valid[k] = live[k];
+    nearest[k].count = 0;
+    rays.lanes.id[k] = unsigned(k);
   }
-}
-
-/// Filter: one traversal collects the K nearest hits of each lane.
-template <int N>
-void traceByFilter(const LayerPlan& plan, LayerPacket<N>& lp) {
   FilterContext ctx;
   rtcInitIntersectContext(&ctx.base);
   ctx.base.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   ctx.base.filter = collectHit;
-  ctx.lanes = lp.found;
-  ctx.capacity = plan.layers;
-  ctx.scene = &plan.scene;
-  clearHits<N>(lp.packet);
-  intersectScene<N>(plan.scene, &ctx.base, lp.valid, lp.packet);
+  ctx.lanes = nearest;
+  ctx.capacity = capacity;
+  ctx.scene = &scene;
+  clearHits<N>(rays.packet);
+  intersectScene<N>(scene, &ctx.base, valid, rays.packet);
 }
 
-/// Retrace: from the first hit, trace the lanes short of K again just past their last hit.
+/// Filter: the K nearest primitives of each lane in one traversal (separation 0), or the chain
+/// of surfaces built from the 2K nearest, traversing again past the last of them while a
+/// chain is short of K and the list was full (more may lie beyond).
 template <int N>
-void traceByRetracing(const LayerPlan& plan, const LayerHit* first, LayerPacket<N>& lp) {
+void traceByFilter(const Scene& scene, const SurfaceSearch& search, PacketBuffers<N>& rays,
+                   LaneLayers* found) {
+  const int K = search.surfaces;
+  const float separation = search.separation;
+  const int capacity = separation > 0 ? std::min(kMaxLayers, 2 * K) : K;
+  float tfar[N];
+  int live[N];
+  for (int k = 0; k < N; ++k) {
+    tfar[k] = rays.lanes.tfar[k];
+    live[k] = rays.valid[k] ? -1 : 0;
+    found[k].count = 0;
+  }
+  LaneLayers nearest[N];
+  // Each pass either ends a lane or moves its tnear past at least one primitive; the bound is
+  // a safeguard.
+  bool any = true;
+  for (int pass = 0; any && pass < 4 * kMaxLayers; ++pass) {
+    collectNearest<N>(scene, capacity, rays, live, nearest);
+    any = false;
+    for (int k = 0; k < N; ++k) {
+      if (live[k] == 0) continue;
+      const LaneLayers& raw = nearest[k];
+      LaneLayers& chain = found[k];
+      live[k] = 0;
+      if (separation <= 0) {
+        chain = raw;
+        continue;
+      }
+      for (int i = 0; i < raw.count && chain.count < K; ++i)
+        if (chain.count == 0 ||
+            raw.hit[i].t >= nextSurfaceStart(chain.hit[chain.count - 1].t, separation))
+          chain.push(raw.hit[i]);
+      if (chain.count == K || raw.count < capacity) continue;
+      const float from =
+          std::max(std::nextafter(raw.hit[raw.count - 1].t, std::numeric_limits<float>::infinity()),
+                   nextSurfaceStart(chain.hit[chain.count - 1].t, separation));
+      if (!(from <= tfar[k])) continue;
+      rays.lanes.tnear[k] = from;
+      rays.lanes.tfar[k] = tfar[k];
+      live[k] = -1;
+      any = true;
+    }
+  }
+  for (int k = 0; k < N; ++k) rays.lanes.tfar[k] = tfar[k];
+}
+
+/// The closest hit of each valid lane (a miss: count 0), into found[k] as its first surface.
+template <int N>
+void traceClosest(const Scene& scene, PacketBuffers<N>& rays, LaneLayers* found) {
+  alignas(64) int valid[N];
+  for (int k = 0; k < N; ++k) valid[k] = rays.valid[k] ? -1 : 0;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  const float inf = std::numeric_limits<float>::infinity();
+  clearHits<N>(rays.packet);
+  intersectScene<N>(scene, &ctx, valid, rays.packet);
+  const HitLanes& h = rays.hits;
+  for (int k = 0; k < N; ++k) {
+    found[k].count = 0;
+    if (valid[k] == 0 || h.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+    found[k].push({h.tfar[k], glm::vec3(h.ngX[k], h.ngY[k], h.ngZ[k]), h.primID[k], h.geomID[k],
+                   h.instID[k]});
+  }
+}
+
+/// Retrace: from the first hit, trace the lanes short of K again from where the next surface
+/// may begin (just past their last hit, or `separation` past it).
+template <int N>
+void traceByRetracing(const Scene& scene, const SurfaceSearch& search, PacketBuffers<N>& rays,
+                      const LayerHit* first, LaneLayers* found) {
+  float tfar[N];
+  for (int k = 0; k < N; ++k) tfar[k] = rays.lanes.tfar[k];
+  if (first == nullptr) {
+    traceClosest<N>(scene, rays, found);
+  } else {
+    for (int k = 0; k < N; ++k) {
+      found[k].count = 0;
+      if (rays.valid[k]) found[k].push(first[k]);
+    }
+  }
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   float lastT[N];
+  alignas(64) int valid[N];
   int active = 0;
   for (int k = 0; k < N; ++k) {
-    if (lp.valid[k] == 0) continue;
-    lp.found[k].push(first[k]);
-    lastT[k] = first[k].t;
-    if (plan.layers == 1) lp.valid[k] = 0;
-    active += lp.valid[k] != 0;
+    valid[k] = found[k].count > 0 && found[k].count < search.surfaces ? -1 : 0;
+    lastT[k] = found[k].count > 0 ? found[k].hit[0].t : 0.0f;
+    active += valid[k] != 0;
   }
   // Each pass either adds a layer to a lane or moves its tnear on by at least one ulp (when
   // Embree reports the previous primitive again), so this ends; the bound is a safeguard.
   for (int pass = 0; active > 0 && pass < 4 * kMaxLayers; ++pass) {
     for (int k = 0; k < N; ++k) {
-      lp.lanes.tnear[k] = lp.valid[k] ? std::nextafter(lastT[k], inf) : 0.0f;
-      lp.lanes.tfar[k] = lp.tfar[k];
+      rays.lanes.tnear[k] = valid[k] ? nextSurfaceStart(lastT[k], search.separation) : 0.0f;
+      rays.lanes.tfar[k] = tfar[k];
     }
-    clearHits<N>(lp.packet);
-    intersectScene<N>(plan.scene, &ctx, lp.valid, lp.packet);
+    clearHits<N>(rays.packet);
+    intersectScene<N>(scene, &ctx, valid, rays.packet);
     active = 0;
+    const HitLanes& h = rays.hits;
     for (int k = 0; k < N; ++k) {
-      if (lp.valid[k] == 0) continue;
-      LaneLayers& lane = lp.found[k];
-      if (lp.hits.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
-        lp.valid[k] = 0;
+      if (valid[k] == 0) continue;
+      LaneLayers& lane = found[k];
+      if (h.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
+        valid[k] = 0;
         continue;
       }
-      const LayerHit h{lp.hits.tfar[k], lp.hits.primID[k], lp.hits.geomID[k], lp.hits.instID[k]};
-      lastT[k] = h.t;
-      if (!h.samePrimitive(lane.hit[lane.count - 1])) lane.push(h);
-      if (lane.count == plan.layers) lp.valid[k] = 0;
-      active += lp.valid[k] != 0;
+      const LayerHit hit{h.tfar[k], glm::vec3(h.ngX[k], h.ngY[k], h.ngZ[k]), h.primID[k],
+                         h.geomID[k], h.instID[k]};
+      lastT[k] = hit.t;
+      if (!hit.samePrimitive(lane.hit[lane.count - 1])) lane.push(hit);
+      if (lane.count == search.surfaces) valid[k] = 0;
+      active += valid[k] != 0;
     }
   }
+  for (int k = 0; k < N; ++k) rays.lanes.tfar[k] = tfar[k];
 }
 
 /// Planar depth of a hit at t on lane k: (org − eye)·axis + t·(dir·axis), the same
@@ -288,23 +331,41 @@ void storeLane(const LayerPlan& plan, const PacketRequest& req, const LayerPacke
 }  // namespace
 
 template <int N>
+void traceSurfaces(const Scene& scene, const SurfaceSearch& search, PacketBuffers<N>& rays,
+                   const LayerHit* first, LaneLayers* found) {
+  checkLayerCount(search.surfaces, "surfaces per ray");
+  const bool filter = search.method == LayerMethod::Filter && scene.options().contextFilter;
+  if (filter)
+    traceByFilter<N>(scene, search, rays, found);
+  else
+    traceByRetracing<N>(scene, search, rays, first, found);
+}
+
+template <int N>
 void traceLayers(const LayerPlan& plan, const PacketRequest& req, const HitLanes& first,
                  const int* hit) {
   LayerPacket<N> lp;
-  prepareRays<N>(plan, req, hit, lp);
+  plan.camera.generate(req, lp.lanes, lp.valid);
   LayerHit firstHit[N];
-  for (int k = 0; k < N; ++k)
-    firstHit[k] = {first.tfar[k], first.primID[k], first.geomID[k], first.instID[k]};
-  if (plan.layers > 1) {
-    if (plan.method == LayerMethod::Filter)
-      traceByFilter<N>(plan, lp);
-    else
-      traceByRetracing<N>(plan, firstHit, lp);
+  for (int k = 0; k < N; ++k) {
+    lp.valid[k] = hit[k] ? -1 : 0;
+    firstHit[k] = {first.tfar[k], glm::vec3(first.ngX[k], first.ngY[k], first.ngZ[k]),
+                   first.primID[k], first.geomID[k], first.instID[k]};
   }
+  if (plan.layers > 1)
+    traceSurfaces<N>(plan.scene, {plan.layers, 0.0f, plan.method}, lp, firstHit, lp.found);
   for (int k = 0; k < N; ++k)
     if (hit[k]) storeLane<N>(plan, req, lp, k, firstHit[k]);
 }
 
+template void traceSurfaces<1>(const Scene&, const SurfaceSearch&, PacketBuffers<1>&,
+                               const LayerHit*, LaneLayers*);
+template void traceSurfaces<4>(const Scene&, const SurfaceSearch&, PacketBuffers<4>&,
+                               const LayerHit*, LaneLayers*);
+template void traceSurfaces<8>(const Scene&, const SurfaceSearch&, PacketBuffers<8>&,
+                               const LayerHit*, LaneLayers*);
+template void traceSurfaces<16>(const Scene&, const SurfaceSearch&, PacketBuffers<16>&,
+                                const LayerHit*, LaneLayers*);
 template void traceLayers<1>(const LayerPlan&, const PacketRequest&, const HitLanes&, const int*);
 template void traceLayers<4>(const LayerPlan&, const PacketRequest&, const HitLanes&, const int*);
 template void traceLayers<8>(const LayerPlan&, const PacketRequest&, const HitLanes&, const int*);

@@ -45,6 +45,85 @@ void checkLayerCount(int layers, const std::string& source);
 /// layers are asked for and the default method is Filter.
 bool layersNeedContextFilter(const AovSet& aovs);
 
+/// One surface along a ray: Embree's t, its unnormalised geometric normal (in the space of
+/// the object's mesh, as Embree reports it) and raw ids (instID: RTC_INVALID_GEOMETRY_ID when
+/// the mesh is attached directly; chunk hits already resolved to their object).
+struct LayerHit {
+  float t;
+  glm::vec3 ng;
+  unsigned primID, geomID, instID;
+
+  bool samePrimitive(const LayerHit& o) const {
+    return primID == o.primID && geomID == o.geomID && instID == o.instID;
+  }
+  /// The object the Z/T/geomID AOVs name: the instance, or the directly attached geometry.
+  unsigned object() const { return instID == RTC_INVALID_GEOMETRY_ID ? geomID : instID; }
+  /// Order along the ray: t, then object and primID, so ties come out the same at every
+  /// packet width whatever order Embree visits them in.
+  bool before(const LayerHit& o) const {
+    if (t != o.t) return t < o.t;
+    if (object() != o.object()) return object() < o.object();
+    return primID < o.primID;
+  }
+};
+
+/// The surfaces of one ray, nearest first, at most kMaxLayers.
+struct LaneLayers {
+  LayerHit hit[kMaxLayers];
+  int count = 0;
+
+  void push(const LayerHit& h) { hit[count++] = h; }
+  bool contains(const LayerHit& h) const {
+    for (int i = 0; i < count; ++i)
+      if (hit[i].samePrimitive(h)) return true;
+    return false;
+  }
+  /// Inserts `h` in order, keeping the `capacity` nearest. Returns the index it went to, or
+  /// -1 when it was not kept (a duplicate, or beyond the nearest `capacity`).
+  int insert(const LayerHit& h, int capacity) {
+    if (contains(h)) return -1;
+    if (count == capacity && !h.before(hit[count - 1])) return -1;
+    int i = count < capacity ? count++ : capacity - 1;
+    for (; i > 0 && h.before(hit[i - 1]); --i) hit[i] = hit[i - 1];
+    hit[i] = h;
+    return i;
+  }
+};
+
+/// What traceSurfaces looks for along each ray.
+struct SurfaceSearch {
+  int surfaces = 1;  ///< K: the first K surfaces (1..kMaxLayers)
+  /// How far (in t) past a surface the next one may begin. 0: every primitive along the ray is
+  /// a surface (--layers). Above 0 (a LiDAR's returns): the surfaces are the chain t0 < t1 <
+  /// ... with t0 the nearest hit and t(k+1) the nearest hit at or past max(nextafter(tk),
+  /// tk + separation), so the two triangles of an edge, or coincident ones, are one surface.
+  float separation = 0;
+  /// Filter falls back to Retrace on a scene built without BuildOptions::contextFilter.
+  LayerMethod method = LayerMethod::Filter;
+};
+
+/// The surfaces along the valid lanes of `rays` (filled by the caller: render-space origins,
+/// directions, [tnear, tfar], time, mask; valid −1/0). found[k] gets lane k's, nearest first.
+/// `first`: the lanes' closest hits when the caller traced them already (Retrace starts from
+/// them), else nullptr. The lanes' ids and hits are overwritten; their rays are left as given
+/// except tnear (Retrace moves it on). With separation 0 and Filter, found[k] is the K nearest
+/// primitives (ties in t ordered as LayerHit::before, coincident ones all reported); Retrace
+/// loses surfaces at the same float t as the one before (see LayerMethod). With a separation,
+/// both give the chain above (Filter: one traversal collecting the 2K nearest primitives, and
+/// another from past the last of them while the chain is short of K and more may lie beyond).
+template <int N>
+void traceSurfaces(const Scene& scene, const SurfaceSearch& search, PacketBuffers<N>& rays,
+                   const LayerHit* first, LaneLayers* found);
+
+extern template void traceSurfaces<1>(const Scene&, const SurfaceSearch&, PacketBuffers<1>&,
+                                      const LayerHit*, LaneLayers*);
+extern template void traceSurfaces<4>(const Scene&, const SurfaceSearch&, PacketBuffers<4>&,
+                                      const LayerHit*, LaneLayers*);
+extern template void traceSurfaces<8>(const Scene&, const SurfaceSearch&, PacketBuffers<8>&,
+                                      const LayerHit*, LaneLayers*);
+extern template void traceSurfaces<16>(const Scene&, const SurfaceSearch&, PacketBuffers<16>&,
+                                       const LayerHit*, LaneLayers*);
+
 /// What layer tracing needs of one frame.
 struct LayerPlan {
   /// `eye` and `axis`: the camera's render-space eye and view axis (planar depth, as the Z

@@ -100,6 +100,18 @@ PointField& PointCloud::addField(const std::string& name, PointType type, bool z
   return fields.back();
 }
 
+PointField& PointCloud::addField(const std::string& name, PointType type,
+                                 LargeBuffer<unsigned char>&& storage) {
+  if (find(name)) throw Error(cat("point field '", name, "' is given twice"));
+  PointField f;
+  f.name = name;
+  f.type = type;
+  f.bytes = std::move(storage);
+  resizeOnHugePages(f.bytes, size * pointTypeSize(type));
+  fields.push_back(std::move(f));
+  return fields.back();
+}
+
 void PointCloud::check(const std::string& what) const {
   std::set<std::string> names;
   for (const PointField& f : fields) {

@@ -80,6 +80,10 @@ struct PointCloud {
     return addField(name, type, zeroed).as<T>();
   }
   PointField& addField(const std::string& name, PointType type, bool zeroed = true);
+  /// addField(name, type, false) with `storage` as the field's buffer: its memory is reused
+  /// (values left unwritten), so a cloud of the shape of the one it came from maps none anew.
+  PointField& addField(const std::string& name, PointType type,
+                       LargeBuffer<unsigned char>&& storage);
   /// Throws Error (naming `what`) unless every field holds `size` values and names differ.
   void check(const std::string& what) const;
 };

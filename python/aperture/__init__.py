@@ -29,7 +29,6 @@ from ._aperture import (
     Camera,
     __version__,
     _Scene,
-    _ScanScene,
     _is_standard_scan_field,
     _write,
     camera_parameters,
@@ -160,8 +159,6 @@ class Scene:
             v, f = _mesh_arrays(vertices, faces)
             self._spec: dict[str, Any] = dict(vertices=v, faces=f, **options)
             self._scene = _Scene._from_arrays(v, f, name="arrays", **options)
-            self._arrays = (v, f)
-            self._scan_source = ("arrays", options)
             return
         if path is None:
             paths: list[str] = []
@@ -172,7 +169,6 @@ class Scene:
         self._spec = dict(path=[_absolute_mesh_path(p) for p in paths], aovs=_aov_list(aovs),
                           gltf_scene=gltf_scene, **options)
         self._scene = _Scene._from_paths(paths, aovs=_aov_list(aovs), gltf_scene=gltf_scene, **options)
-        self._scan_source = (paths, options)
 
     @property
     def bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
@@ -357,28 +353,18 @@ class Scene:
         time (ns from the sweep's start), ring, column, azimuth (rad), incidence, intensity,
         primid, geomid, instance, return_number and returns (``returns="all"``), the face
         properties named in ``fields``, and sweep. ``fields`` keeps only the named ones (a name
-        that is no standard field is a face property of the mesh, loaded for the scan).
-        The scan traces a BVH of its own, built at the first scan that asks for these face
-        properties. The GIL is released while it loads and traces."""
+        that is no standard field is a face property of the mesh). The scan traces this
+        Scene's own BVH, so every option it was built with holds (``gltf_scene``,
+        ``bvh_chunk``, ...). What a scan reads beyond positions is loaded as a render's mesh
+        data is: the face properties of ``fields`` (and ``reflectance``, when every mesh is a
+        PLY file with it) up front with ``aovs=["face.NAME", ...]``, else the first scan that
+        needs one loads the files again with it (once); a property a file lacks is a ValueError
+        naming it, and a Scene of arrays has none (a ValueError naming the property). The first
+        scan asking for last, strongest or all returns builds the BVH again (files: loads
+        them again) with Embree's context filter, which the layers' search of surfaces uses.
+        The GIL is released while it loads and traces."""
         wanted = None if fields is None else [str(f) for f in fields]
-        properties = sorted({f for f in (wanted or []) if not _is_standard_scan_field(f)})
-        cache = self.__dict__.setdefault("_scan_scenes", {})
-        key = tuple(properties)
-        if key not in cache:
-            source, options = self._scan_source
-            scan_options = {k: v for k, v in options.items() if k != "bvh_chunk"}
-            if source == "arrays":
-                if properties:
-                    raise ValueError(f"Scene.scan: a scene of arrays has no face properties {properties}")
-                v, f = self._arrays
-                cache[key] = _ScanScene(
-                    np.ascontiguousarray(v, dtype=np.float64),
-                    np.ascontiguousarray(f, dtype=np.uint32),
-                    **scan_options,
-                )
-            else:
-                cache[key] = _ScanScene(source, properties, **scan_options)
-        return cache[key].scan(
+        return self._scene._scan(
             os.fspath(lidar),
             None if trajectory is None else os.fspath(trajectory),
             "" if trajectory_times is None else os.fspath(trajectory_times),

@@ -1,6 +1,7 @@
 // aperture.Scene: meshes through the apps' one scene set-up (apps/services/scene_setup.h) or NumPy
-// arrays through finishMesh, Scene.render over renderImages (core/engine/render.h) and the face and
-// point visibility (core/queries/visibility.h), with the GIL released for the whole computation.
+// arrays through finishMesh, Scene.render over renderImages (core/engine/render.h), the face and
+// point visibility (core/queries/visibility.h) and LiDAR scans (scan_binding.h), with the GIL
+// released for the whole computation.
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/function.h>
 #include <nanobind/stl/optional.h>
@@ -27,6 +28,7 @@
 #include "named_arrays.h"
 #include "query_binding.h"
 #include "render_storage.h"
+#include "scan_binding.h"
 
 namespace aperture::python {
 
@@ -234,6 +236,23 @@ class PyScene {
     return namedArrays(result, app::pointVisibilityArrays(*result));
   }
 
+  /// Scene.scan: LiDAR sweeps through this scene, once it holds what the scan needs
+  /// (app::withScanNeeds: the face properties named in `fields`, reflectance, the context
+  /// filter of multi-returns), loaded as a render's mesh data is.
+  nb::dict scan(const std::string& lidar, const std::optional<std::string>& trajectory,
+                const std::string& trajectoryTimes, int sweeps, std::optional<double> start,
+                const std::string& frame, const std::string& returns, int surfaces,
+                const std::optional<std::vector<std::string>>& fields, double sigma, double dropout,
+                uint64_t seed, int threads) {
+    const ScanCall call = scanCallOf(lidar, trajectory, trajectoryTimes, sweeps, start, frame,
+                                     returns, surfaces, fields, sigma, dropout, seed, threads);
+    if (!fromFiles_ && !call.options.faceProperties.empty())
+      throw Error(cat("Scene.scan: face property '", call.options.faceProperties[0],
+                      "' asked for in fields, but a Scene of arrays has no face properties"));
+    provide(app::withScanNeeds(spec_, call.options));
+    return scanArrays(*loaded_.scene, call);
+  }
+
   nb::dict lastRender() const {
     nb::dict d;
     d["seconds"] = last_.seconds;
@@ -305,8 +324,10 @@ class PyScene {
   /// Makes the scene hold what `aovs` read (withAovNeeds): files are loaded again with the
   /// mesh data added, an array scene is rebuilt with the BVH flags added (its mesh has no
   /// properties or vertex normals to load: the render then names what is missing).
-  void provide(const AovSet& aovs) {
-    const app::SceneSpec need = app::withAovNeeds(spec_, aovs);
+  void provide(const AovSet& aovs) { provide(app::withAovNeeds(spec_, aovs)); }
+
+  /// Makes the scene hold what `need` asks for beyond spec_ (the same way).
+  void provide(const app::SceneSpec& need) {
     if (holdsEverything(spec_, need)) return;
     spec_ = unionOf(spec_, need);
     nb::gil_scoped_release release;
@@ -434,6 +455,10 @@ void bindScene(nb::module_& m) {
            nb::arg("out").none() = nb::none())
       .def("_face_visibility", &PyScene::faceVisibility, nb::arg("cameras"), nb::arg("front_only"),
            nb::arg("threads"), nb::arg("method"))
+      .def("_scan", &PyScene::scan, nb::arg("lidar"), nb::arg("trajectory").none(),
+           nb::arg("trajectory_times"), nb::arg("sweeps"), nb::arg("start").none(),
+           nb::arg("frame"), nb::arg("returns"), nb::arg("surfaces"), nb::arg("fields").none(),
+           nb::arg("noise_sigma"), nb::arg("dropout"), nb::arg("seed"), nb::arg("threads"))
       .def("_point_visibility", &PyScene::pointVisibility, nb::arg("points"), nb::arg("cameras"),
            nb::arg("tolerance"), nb::arg("threads"))
       .def_prop_ro("last_render", &PyScene::lastRender,

@@ -2,7 +2,8 @@
 pypcd4 the PCD, NumPy the KITTI .bin and .label, all equal to the binary PLY of the same sweep;
 ouster-sdk turns aperture's RANGE image into aperture's points (XYZLut, to its 1 mm quantum)
 and destaggers it into aperture's destaggered image exactly; Scene.scan returns the PLY's
-fields. The clients skip the tests they need when missing (scripts/venv.sh installs them)."""
+fields; bad specs and trajectories exit 1 before the scene loads. The clients skip the tests
+they need when missing (scripts/venv.sh installs them)."""
 
 from __future__ import annotations
 
@@ -174,3 +175,29 @@ def test_bad_input_writes_nothing(cli: Path, room: Path, tmp_path: Path) -> None
     poses.write_text("0 0 0 0 0 0 0 1\n0.05 1 0 0 0 0 0 1\n")
     assert "outside the trajectory" in cli_error(cli, "scan", "--mesh", str(room), "--lidar", "OS1-64", "--trajectory", str(poses), "--out", str(out))
     assert list(tmp_path.glob("s.*")) == []
+
+
+def test_bad_specs_and_trajectories_exit_1_before_loading_the_scene(cli: Path, tmp_path: Path) -> None:
+    """Issue 42's bad input: a malformed spec, a beam table of the wrong length, non-increasing
+    trajectory times are refused with the file and the field (or line) named, exit status 1,
+    no output, before any work: the mesh given does not exist, and the error is not about it."""
+    out = tmp_path / "s.ply"
+    wrong = tmp_path / "wrong.json"
+    wrong.write_text('{"sweep_rate_hz": 10, "columns": 4, "beams": {"elevation_deg": [-1, 0, 1], "azimuth_deg": [0, 0]}}')
+    truncated = tmp_path / "truncated.json"
+    truncated.write_text('{"sweep_rate_hz": 10, "columns": ')
+    back = tmp_path / "back.txt"
+    back.write_text("1 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n")
+    cases = [
+        (["--lidar", str(wrong)], [str(wrong), "beams.azimuth_deg", "2 entries"]),
+        (["--lidar", str(truncated)], [str(truncated), "not valid JSON"]),
+        (["--lidar", "VLP-16", "--trajectory", str(back)], [f"{back} line 2", "must increase"]),
+        (["--lidar", "VLP16"], ["did you mean 'VLP-16'"]),
+    ]
+    for args, words in cases:
+        done = run_cli(cli, "scan", "--mesh", str(tmp_path / "no_such_mesh.ply"), *args, "--out", str(out))
+        assert done.returncode == 1, (args, done.returncode, done.stderr)
+        for word in words:
+            assert word in done.stderr, (word, done.stderr)
+        assert "no_such_mesh" not in done.stderr
+        assert list(tmp_path.glob("s.*")) == []

@@ -3,10 +3,12 @@
 // job's scene beside its images: the cloud equals `aperture scan`'s of the same sensor.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 
 #include "apps/jobs/job.h"
+#include "core/engine/layers.h"
 #include "tests/job_support.h"
 #include "tests/support.h"
 
@@ -38,6 +40,25 @@ TEST(JobLidar, EntriesAreReadAsTheScanFlags) {
   EXPECT_EQ(job.lidars[0].prepared.paths,
             (std::vector<std::string>{dir + "/scans/000.ply", dir + "/scans/001.ply"}));
   EXPECT_EQ(job.lidars[0].prepared.sensor.beams.size(), 16u);
+}
+
+TEST(JobLidar, TheJobsSceneHoldsWhatTheScansNeed) {
+  const std::string dir = test::scratchDir();
+  std::filesystem::create_directories(dir + "/scans");
+  nlohmann::json j = jobWithLidar();
+  j["lidars"][0]["properties"] = nlohmann::json::array({"semantic"});
+  const app::Job job = test::parseJobJson(j, dir);
+  const app::SceneSpec spec = job.sceneSpec();
+  // The same as `aperture scan` asks for (withScanNeeds): the properties carried and, for
+  // strongest returns, the context filter of the layers' search.
+  const PropertyAov semantic{PropertyDomain::Face, "semantic"};
+  EXPECT_NE(std::find(spec.properties.begin(), spec.properties.end(), semantic),
+            spec.properties.end());
+  EXPECT_EQ(spec.build.contextFilter, app::scanNeedsContextFilter(job.lidars[0].request.options));
+  EXPECT_TRUE(app::scanNeedsContextFilter(job.lidars[0].request.options) ||
+              defaultLayerMethod() != LayerMethod::Filter);
+  j["lidars"][0]["returns"] = "first";
+  EXPECT_FALSE(test::parseJobJson(j, dir).sceneSpec().build.contextFilter);
 }
 
 TEST(JobLidar, BadEntriesNameTheKeyPath) {

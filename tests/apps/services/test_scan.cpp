@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <memory>
 #include <set>
@@ -20,6 +21,7 @@
 #include "core/engine/scene.h"
 #include "core/mesh/mesh.h"
 #include "core/mesh/ply.h"
+#include "core/queries/trace.h"
 #include "core/util/error.h"
 #include "tests/support.h"
 
@@ -31,9 +33,9 @@ namespace pf = point_fields;
 constexpr double kLo[3] = {-2.0, -1.5, -1.0}, kHi[3] = {3.0, 2.0, 1.25};
 
 /// An ASCII PLY of the box [kLo, kHi] (12 triangles) with face properties "semantic" (the wall:
-/// 0 -x, 1 +x, 2 -y, 3 +y, 4 -z, 5 +z) and "reflectance" (percent: 10·(wall + 1)), and, with
-/// `pane`, a square at x = 1 (y, z in [-1, 1]) of wall 6.
-std::string boxRoomPly(bool pane) {
+/// 0 -x, 1 +x, 2 -y, 3 +y, 4 -z, 5 +z) and "reflectance" (percent: 10·(wall + 1)), and
+/// `panes` squares at x = 1, 1.001, 1.002, ... (y, z in [-1, 1]) of wall 6.
+std::string boxRoomPly(int panes) {
   std::vector<std::array<double, 3>> v;
   std::vector<std::array<int, 4>> f;  // a, b, c, wall
   auto quad = [&](std::array<double, 3> a, std::array<double, 3> b, std::array<double, 3> c,
@@ -50,7 +52,10 @@ std::string boxRoomPly(bool pane) {
   quad({x0, y1, z0}, {x1, y1, z0}, {x1, y1, z1}, {x0, y1, z1}, 3);
   quad({x0, y0, z0}, {x1, y0, z0}, {x1, y1, z0}, {x0, y1, z0}, 4);
   quad({x0, y0, z1}, {x1, y0, z1}, {x1, y1, z1}, {x0, y1, z1}, 5);
-  if (pane) quad({1, -1, -1}, {1, 1, -1}, {1, 1, 1}, {1, -1, 1}, 6);
+  for (int k = 0; k < panes; ++k) {
+    const double x = 1 + 0.001 * k;
+    quad({x, -1, -1}, {x, 1, -1}, {x, 1, 1}, {x, -1, 1}, 6);
+  }
   std::string s =
       cat("ply\nformat ascii 1.0\nelement vertex ", v.size(),
           "\nproperty double x\nproperty double y\nproperty double z\nelement face ", f.size(),
@@ -66,13 +71,15 @@ struct BoxRoom {
   Device device;
   Mesh mesh;
   std::unique_ptr<Scene> scene;
-  explicit BoxRoom(bool pane = false) {
-    const std::string ply = boxRoomPly(pane);
+  /// `contextFilter`: the BVH the layers' Filter method needs (without it, Retrace).
+  explicit BoxRoom(int panes = 0, bool contextFilter = false) {
+    const std::string ply = boxRoomPly(panes);
     LoadOptions o;
     o.properties = {{PropertyDomain::Face, "semantic"}, {PropertyDomain::Face, "reflectance"}};
     mesh = loadPlyFromMemory(ply.data(), ply.size(), "box.ply", o);
     finishMesh(mesh, o);
     BuildOptions b;
+    b.contextFilter = contextFilter;
     scene = std::make_unique<Scene>(device, std::vector<const Mesh*>{&mesh}, b);
   }
 };
@@ -284,7 +291,7 @@ TEST(Scan, MovingSensorPointsLandOnTheWallsThroughTheirOwnPose) {
 }
 
 TEST(Scan, SurfacesAlongARayAsFirstLastStrongestAndAll) {
-  BoxRoom room(true);  // a pane at x = 1 in front of the +x wall at x = 3
+  BoxRoom room(1);  // a pane at x = 1 in front of the +x wall at x = 3
   const LidarSensor sensor = roomSensor(360);
   const LidarRays rays = staticRoomRays(sensor);
   auto run = [&](ScanReturns returns) {
@@ -337,6 +344,124 @@ TEST(Scan, SurfacesAlongARayAsFirstLastStrongestAndAll) {
   }
   EXPECT_GE(seconds, throughPane);
   EXPECT_LE(seconds, throughPane + rim);
+}
+
+/// The surfaces along ray i found independently of the scan loop, by tracing again and again
+/// with traceRays: the nearest hit, then the nearest at or past max(nextafter(t), t + sep).
+std::vector<TraceHit> retracedSurfaces(const Scene& scene, const LidarRays& rays, size_t i,
+                                       int surfaces, float sep) {
+  TraceRay r;
+  r.org = glm::vec3(rays.origin[i] - scene.renderOrigin());
+  r.dir = glm::vec3(rays.direction[i]);
+  r.tnear = rays.tnear[i];
+  r.tfar = rays.tfar[i];
+  std::vector<TraceHit> out;
+  while (int(out.size()) < surfaces && r.tnear <= r.tfar) {
+    const TraceHit h = traceRays(scene, {r}, 1)[0];
+    if (!h.hit()) break;
+    out.push_back(h);
+    r.tnear = std::max(std::nextafter(h.t, std::numeric_limits<float>::infinity()), h.t + sep);
+  }
+  return out;
+}
+
+TEST(Scan, MultiReturnsThroughTheLayersAreTheAnalyticSurfacesAndTheRetracedOnes) {
+  for (bool contextFilter : {true, false}) {  // the layers' Filter method, and Retrace
+    BoxRoom room(1, contextFilter);           // a pane at x = 1 in front of the +x wall at x = 3
+    const LidarSensor sensor = roomSensor(360);
+    const LidarRays rays = staticRoomRays(sensor);
+    ScanOptions o;
+    o.returns = ScanReturns::All;
+    o.maxSurfaces = 4;
+    o.faceProperties = {"semantic"};
+    const PointCloud all = scanSweep(*room.scene, sensor, rays, o).cloud;
+    const float* range = fieldOf<float>(all, pf::kRange);
+    const uint32_t* primid = fieldOf<uint32_t>(all, pf::kPrimId);
+    const uint32_t* semantic = fieldOf<uint32_t>(all, "semantic");
+    const uint8_t* number = fieldOf<uint8_t>(all, pf::kReturnNumber);
+    const uint8_t* count = fieldOf<uint8_t>(all, pf::kReturns);
+    const uint16_t* ring = fieldOf<uint16_t>(all, pf::kRing);
+    const uint32_t* column = fieldOf<uint32_t>(all, pf::kColumn);
+    size_t at = 0, twoReturns = 0;
+    double worst = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+      const std::vector<TraceHit> expected =
+          retracedSurfaces(*room.scene, rays, i, o.maxSurfaces, float(o.returnSeparation));
+      ASSERT_FALSE(expected.empty()) << i;
+      for (size_t j = 0; j < expected.size(); ++j, ++at) {
+        ASSERT_LT(at, all.size);
+        EXPECT_EQ(ring[at], rays.ring[i]) << i;
+        EXPECT_EQ(column[at], rays.column[i]) << i;
+        EXPECT_EQ(number[at], j + 1) << i;
+        EXPECT_EQ(count[at], expected.size()) << i;
+        EXPECT_EQ(range[at], float(double(expected[j].t))) << i << " surface " << j;
+        // A ray through an edge meets both its triangles at one t: either may be reported
+        // (Filter orders ties by primID, Embree's closest hit need not).
+        const TraceHit& h = expected[j];
+        const bool onEdge = std::min({h.u, h.v, 1.0f - h.u - h.v}) < 1e-5f;
+        if (!onEdge) {
+          EXPECT_EQ(primid[at], h.primId) << i << " surface " << j;
+        }
+      }
+      // Analytic: through the pane (x = 1, |y|, |z| < 1, away from its rim), the pane then the
+      // wall; elsewhere the wall alone.
+      const glm::dvec3 d = rays.direction[i];
+      bool edge = false;
+      const double wall = wallDistance(d, nullptr, &edge);
+      const double py = d.x > 0 ? std::fabs(d.y / d.x) : 2, pz = d.x > 0 ? std::fabs(d.z / d.x) : 2;
+      if (edge || std::fabs(py - 1) < 1e-6 || std::fabs(pz - 1) < 1e-6) continue;
+      const bool pane = py < 1 && pz < 1;
+      ASSERT_EQ(count[at - 1], pane ? 2u : 1u) << i;
+      if (pane) {
+        ++twoReturns;
+        EXPECT_EQ(semantic[at - 2], 6u) << i;
+        worst = std::max(worst, std::fabs(range[at - 2] - 1 / d.x) * d.x);
+      }
+      worst = std::max(worst, std::fabs(range[at - 1] - wall) / wall);
+    }
+    EXPECT_EQ(at, all.size);
+    EXPECT_GT(twoReturns, 100u);
+    EXPECT_LE(worst, 1e-5);
+  }
+}
+
+TEST(Scan, MultiReturnsSkipSurfacesWithinTheSeparationAsRetracingDoes) {
+  // 12 panes 1 mm apart (x = 1 .. 1.011) with a separation of 1 cm: the first pane, then the
+  // first pane at least 1 cm past it along the ray. Filter collects 2K = 4 primitives a
+  // traversal (the first two panes, 2 triangles each): it must traverse again past them.
+  for (bool contextFilter : {true, false}) {
+    BoxRoom room(12, contextFilter);
+    const LidarSensor sensor = roomSensor(90);
+    const LidarRays rays = staticRoomRays(sensor);
+    ScanOptions o;
+    o.returns = ScanReturns::All;
+    o.maxSurfaces = 2;
+    const PointCloud all = scanSweep(*room.scene, sensor, rays, o).cloud;
+    const float* range = fieldOf<float>(all, pf::kRange);
+    size_t at = 0, throughPanes = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+      const std::vector<TraceHit> expected =
+          retracedSurfaces(*room.scene, rays, i, o.maxSurfaces, float(o.returnSeparation));
+      const glm::dvec3 d = rays.direction[i];
+      const bool panes = d.x > 0 && std::fabs(d.y / d.x) < 0.99 && std::fabs(d.z / d.x) < 0.99;
+      if (panes) {
+        ++throughPanes;
+        ASSERT_EQ(expected.size(), 2u) << i;
+        // Pane k lies 0.001·k / d.x past the first along the ray: the second surface is the
+        // first pane with k >= 10·d.x (rays where that is a near tie are left out).
+        const double k = std::ceil(10 * d.x);
+        if (k - 10 * d.x > 1e-4) {
+          EXPECT_NEAR(double(expected[1].t) * d.x, 1 + 0.001 * k, 1e-5) << i;
+        }
+      }
+      for (size_t j = 0; j < expected.size(); ++j, ++at) {
+        ASSERT_LT(at, all.size);
+        EXPECT_EQ(range[at], float(double(expected[j].t))) << i << " surface " << j;
+      }
+    }
+    EXPECT_EQ(at, all.size);
+    EXPECT_GT(throughPanes, 10u);
+  }
 }
 
 TEST(Scan, NoiseIsTheSameOnOneAndTwoThreadsAndHasItsSigma) {
