@@ -4,14 +4,19 @@
 // mesh's box (enlarged by 10 % on each side, fixed seed); and countIntersections
 // (core/queries/ray_hits.h) both ways on rays from those points in random directions. In
 // alternating rounds; medians in points (rays) per second (bench/RESULTS.md).
-//   aperture_inside_speed MESH [POINTS=1000000] [ROUNDS=3] [BETA=2; 0: no winding]
+//   aperture_inside_speed MESH [POINTS=1000000] [ROUNDS=3] [BETA=2; 0: no winding] [winding]
+// A fifth argument `winding` times the winding number alone (for profiling it). The CPU
+// seconds (all threads) are steadier than wall time on a loaded machine with one thread
+// (taskset -c 0).
 #include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <optional>
 #include <random>
 #include <string>
@@ -40,12 +45,13 @@ double median(std::vector<double> v) {
 int main(int argc, char** argv) {
   using namespace aperture;
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s MESH [POINTS] [ROUNDS] [BETA]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s MESH [POINTS] [ROUNDS] [BETA] [winding]\n", argv[0]);
     return 2;
   }
   const size_t count = argc > 2 ? size_t(std::atoll(argv[2])) : 1000000;
   const int rounds = argc > 3 ? std::atoi(argv[3]) : 3;
   const double beta = argc > 4 ? std::atof(argv[4]) : 2.0;
+  const bool windingOnly = argc > 5 && std::string(argv[5]) == "winding";
   try {
     Device device;
     const Mesh mesh = loadMesh(argv[1]);
@@ -95,7 +101,7 @@ int main(int argc, char** argv) {
       const char* name;
       const Scene* scene;
       InsideOptions options;
-      std::vector<double> times;
+      std::vector<double> times, cpu;  // wall and process CPU seconds
       InsideResult last;
     };
     std::vector<Variant> variants(winding ? 5 : 4);
@@ -115,15 +121,18 @@ int main(int argc, char** argv) {
       variants[4].options.windingTree = &*tree;
     }
     for (Variant& v : variants) v.options.windingBeta = winding ? beta : 2.0;
+    if (windingOnly && winding) variants.erase(variants.begin(), variants.begin() + 4);
     std::vector<double> countTimes[2];
     std::vector<uint32_t> counts[2];
     for (int r = 0; r < rounds; ++r) {
       for (Variant& v : variants) {
         start = std::chrono::steady_clock::now();
+        const std::clock_t cpuStart = std::clock();
         v.last = insideOf(*v.scene, points.data(), count, v.options);
         v.times.push_back(seconds(start));
+        v.cpu.push_back(double(std::clock() - cpuStart) / CLOCKS_PER_SEC);
       }
-      for (int k = 0; k < 2; ++k) {
+      for (int k = 0; k < 2 && !windingOnly; ++k) {
         start = std::chrono::steady_clock::now();
         counts[k] =
             countIntersections(k ? filterScene : scene, points.data(), directions.data(), count);
@@ -138,18 +147,18 @@ int main(int argc, char** argv) {
         agree += v.last.inside[i] == reference.last.inside[i];
       }
       std::printf(
-          "%-32s median %.3f s  %.3g points/s  inside %.4f  differs from %s at %zu"
+          "%-32s median %.3f s (CPU %.3f s)  %.3g points/s  inside %.4f  differs from %s at %zu"
           "  discarded rays %zu%s\n",
-          v.name, median(v.times), double(count) / median(v.times), double(inside) / double(count),
-          reference.name, count - agree, v.last.discardedRays,
-          &v - variants.data() == 1 || &v - variants.data() == 3
+          v.name, median(v.times), median(v.cpu), double(count) / median(v.times),
+          double(inside) / double(count), reference.name, count - agree, v.last.discardedRays,
+          !windingOnly && (&v - variants.data() == 1 || &v - variants.data() == 3)
               ? (v.last.inside == (&v - 1)->last.inside ? "  equals retrace"
                                                         : "  DIFFERS from retrace")
               : "");
     }
     size_t hits = 0;
     for (uint32_t c : counts[0]) hits += c;
-    for (int k = 0; k < 2; ++k)
+    for (int k = 0; k < 2 && !windingOnly; ++k)
       std::printf("%-32s median %.3f s  %.3g points/s  inside %.4f  hits %zu  equal %d\n",
                   k ? "count_intersections, one trav." : "count_intersections, retrace",
                   median(countTimes[k]), double(count) / median(countTimes[k]),
@@ -160,8 +169,12 @@ int main(int argc, char** argv) {
     size_t uncertain = 0;
     for (size_t i = 0; i < count; ++i)
       uncertain += std::abs(reference.last.winding[i] - 0.5) <= reference.last.windingErrorBound[i];
-    std::printf("winding: largest error bound %.3g; points whose |w - 0.5| <= bound: %.4f\n",
-                worstBound, double(uncertain) / double(count));
+    uint64_t sides = 1469598103934665603ull;  // FNV-1a of the winding sides, to compare builds
+    for (uint8_t in : reference.last.inside) sides = (sides ^ in) * 1099511628211ull;
+    std::printf(
+        "winding: largest error bound %.3g; points whose |w - 0.5| <= bound: %.4f; sides hash "
+        "%016llx\n",
+        worstBound, double(uncertain) / double(count), (unsigned long long)sides);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;

@@ -89,28 +89,52 @@ class WindingNumberTree {
                 double* errorBound, double refineBand = kWindingRefineBand) const;
 
  private:
+  /// What traversal reads at every node it visits (48 bytes, so a cache line holds one).
   struct Node {
     glm::dvec3 centre{0.0};
     double radius = 0;
-    double area = 0;         ///< Σ |vector area|
-    glm::dvec3 normal{0.0};  ///< Σ vector area: the dipole moment
-    double moment[9] = {};   ///< M_ij = Σ a_i (g − c)_j, row-major: the second-order term
-    /// T_ijk = Σ ∫ n_i (x − c)_j (x − c)_k dA, i major, (j, k) as xx xy xz yy yz zz: the
-    /// third-order term.
-    double third[18] = {};
-    uint32_t first = 0;  ///< leaf: first index into order_
+    uint32_t first = 0;  ///< first of its triangles in leaf order (corners_ after the build)
     uint32_t count = 0;  ///< leaf: triangles; 0 for an inner node
     uint32_t right = 0;  ///< inner node: the right child (the left one follows the node)
   };
+  /// What a node contributes when it is far (read only then): the Taylor terms contracted
+  /// ahead of time, so that evaluating them is a few polynomials in r = c − p.
+  struct FarTerms {
+    double normal[3] = {};     ///< Σ vector area: the dipole moment N
+    double area = 0;           ///< Σ |vector area|: for the error bound
+    double trace = 0;          ///< Σ_i M_ii, M_ij = Σ a_i (g − c)_j the second-order moment
+    double quadratic[6] = {};  ///< r·M·r = Σ quadratic[q]·(xx, xy, xz, yy, yz, zz)[q]
+    /// Σ_ik r_k (2 T_iik + T_kii): the third-order term's part in 1/d⁵, T_ijk = Σ ∫ n_i
+    /// (x − c)_j (x − c)_k dA.
+    double linear[3] = {};
+    /// Σ_ijk r_i r_j r_k T_ijk = Σ cubic[m]·(xxx, xxy, xxz, xyy, xyz, xzz, yyy, yyz, yzz, zzz)[m].
+    double cubic[10] = {};
+  };
+  struct Moments;  // a subtree's raw moments while the tree is built
   std::vector<glm::dvec3> corners_;
   glm::dvec3 lo_{INFINITY}, hi_{-INFINITY};  ///< the corners' box
   std::vector<uint32_t> order_;              ///< triangles in leaf order
   std::vector<Node> nodes_;
+  std::vector<FarTerms> far_;  ///< parallel to nodes_
 
-  uint32_t build(uint32_t begin, uint32_t end, const std::vector<glm::dvec3>& centroids,
-                 const std::vector<glm::dvec3>& vectorAreas);
-  void summarise(Node& node, uint32_t begin, uint32_t end, const std::vector<glm::dvec3>& centroids,
-                 const std::vector<glm::dvec3>& vectorAreas) const;
+  /// Builds the subtree over order_[begin, end) into `nodes` and `far` (indices relative to
+  /// their start); halves of at least kParallelBuildFrom triangles are built at once.
+  static constexpr uint32_t kParallelBuildFrom = 1 << 15;
+  Moments build(uint32_t begin, uint32_t end, const std::vector<glm::dvec3>& centroids,
+                const std::vector<glm::dvec3>& vectorAreas, std::vector<Node>& nodes,
+                std::vector<FarTerms>& far);
+  Moments leafMoments(uint32_t begin, uint32_t end, const std::vector<glm::dvec3>& centroids,
+                      const std::vector<glm::dvec3>& vectorAreas) const;
+  /// The largest distance from `centre` to a corner of triangles [begin, end) of corners_.
+  double radiusAbout(const glm::dvec3& centre, uint32_t begin, uint32_t end) const;
+  static FarTerms farTerms(const Moments& m);
+  /// How many points evaluatePacket takes at once.
+  static constexpr int kPacket = 8;
+  /// 4π times the winding number and its bound at the points of `lanes` (a bit per point of
+  /// `points`), exactly as evaluate(p, beta) computes them.
+  void evaluatePacket(const glm::dvec3* points, unsigned lanes, double beta, double* sum,
+                      double* bound) const;
+  static double farField4Pi(const FarTerms& f, const glm::dvec3& r, double d);
 };
 
 }  // namespace aperture

@@ -221,5 +221,104 @@ TEST(WindingNumber, WorldCornersFollowThePlacement) {
   EXPECT_NEAR(exactWindingNumber(corners, glm::dvec3(0.0)), 1.0, 1e-9);
 }
 
+TEST(WindingNumber, TreeKeepsTheExactSumOfTheSoup) {
+  // The tree stores the corners in leaf order: its exact sum must still be the soup's.
+  const std::vector<glm::dvec3> corners = cornersOf(subdividedBox(16, true));
+  const WindingNumberTree tree(corners);
+  ASSERT_GT(tree.nodeCount(), 1u);
+  for (const glm::dvec3& p : randomPoints(200, glm::dvec3(-2.0), glm::dvec3(2.0), 17))
+    EXPECT_NEAR(tree.exact(p), exactWindingNumber(corners, p), 1e-12);
+}
+
+/// The far-field terms of the whole soup about its area-weighted centroid c, computed directly
+/// from the triangles (no tree): (1/4π)·[G(r)·N + Σ_ij ∂_j G_i(r) M_ij + ½ Σ_ijk ∂_j ∂_k G_i(r)
+/// T_ijk], r = c − p, with M_ij = Σ a_i (g − c)_j and T_ijk = Σ ∫ n_i (x − c)_j (x − c)_k dA.
+double directFarField(const std::vector<glm::dvec3>& corners, const glm::dvec3& p) {
+  glm::dvec3 weighted(0.0);
+  double area = 0;
+  for (size_t k = 0; k < corners.size(); k += 3) {
+    const double a =
+        0.5 * glm::length(glm::cross(corners[k + 1] - corners[k], corners[k + 2] - corners[k]));
+    weighted += a * (corners[k] + corners[k + 1] + corners[k + 2]) / 3.0;
+    area += a;
+  }
+  const glm::dvec3 c = weighted / area;
+  glm::dvec3 n(0.0);
+  double m[3][3] = {}, t[3][3][3] = {};
+  for (size_t k = 0; k < corners.size(); k += 3) {
+    const glm::dvec3 v = 0.5 * glm::cross(corners[k + 1] - corners[k], corners[k + 2] - corners[k]);
+    const glm::dvec3 q[3] = {corners[k] - c, corners[k + 1] - c, corners[k + 2] - c};
+    const glm::dvec3 g = (q[0] + q[1] + q[2]) / 3.0, s = q[0] + q[1] + q[2];
+    n += v;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        m[i][j] += v[i] * g[j];
+        for (int l = 0; l < 3; ++l)  // ∫ δ_j δ_l dA = (a/12)(Σ q_j q_l + s_j s_l)
+          t[i][j][l] += v[i] / 12.0 *
+                        (q[0][j] * q[0][l] + q[1][j] * q[1][l] + q[2][j] * q[2][l] + s[j] * s[l]);
+      }
+  }
+  const glm::dvec3 r = c - p;
+  const double d = glm::length(r), d3 = d * d * d, d5 = d3 * d * d, d7 = d5 * d * d;
+  double sum = glm::dot(r, n) / d3;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      sum += m[i][j] * ((i == j ? 1.0 : 0.0) / d3 - 3.0 * r[i] * r[j] / d5);
+      for (int l = 0; l < 3; ++l) {
+        const double dd = -3.0 * ((i == j) * r[l] + (i == l) * r[j] + (j == l) * r[i]) / d5 +
+                          15.0 * r[i] * r[j] * r[l] / d7;
+        sum += 0.5 * t[i][j][l] * dd;
+      }
+    }
+  return sum / (4.0 * kPi);
+}
+
+TEST(WindingNumber, TreeFarFromTheSoupIsTheDirectTaylorExpansion) {
+  // Far enough away the root alone is used: the moments the tree gathers bottom-up and the
+  // terms it contracts ahead of time must give the expansion computed from the triangles.
+  // 64,000 triangles: the tree's halves are built in parallel (kParallelBuildFrom).
+  for (const int cells : {12, 80})
+    for (const bool open : {true, false}) {
+      const std::vector<glm::dvec3> corners = cornersOf(subdividedBox(cells, open));
+      const WindingNumberTree tree(corners);
+      for (const glm::dvec3& direction : randomPoints(20, glm::dvec3(-1.0), glm::dvec3(1.0), 19)) {
+        const glm::dvec3 p = 20.0 * glm::normalize(direction);  // the box's radius is below 2
+        const WindingValue v = tree.evaluate(p, 2.0);
+        const double direct = directFarField(corners, p);
+        EXPECT_NEAR(v.winding, direct, 1e-12 + 1e-9 * std::abs(direct));
+        EXPECT_GT(v.errorBound, 0.0);
+      }
+    }
+}
+
+TEST(WindingNumber, ManyPointsGetTheValuesOfOnePointAtATime) {
+  // The array form goes through the tree several points at a time (and re-evaluates near 0.5
+  // with a larger beta): each point must get what evaluate(p, beta) gives it, to the bit.
+  const std::vector<glm::dvec3> corners = cornersOf(subdividedBox(16, true));
+  const WindingNumberTree tree(corners);
+  std::vector<glm::dvec3> points = randomPoints(3001, glm::dvec3(-1.5), glm::dvec3(1.5), 23);
+  points[5] = glm::dvec3(std::nan(""), 0.0, 0.0);
+  for (int k = 0; k < 40; ++k) points.push_back(glm::dvec3(0.01 * k, -0.02 * k, 1.0));  // w ≈ 0.5
+  std::vector<double> flat;
+  for (const glm::dvec3& p : points) flat.insert(flat.end(), {p.x, p.y, p.z});
+  std::vector<double> w(points.size()), bound(points.size());
+  tree.evaluate(flat.data(), points.size(), 2.0, w.data(), bound.data());
+  size_t refined = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    WindingValue v = tree.evaluate(points[i], 2.0);
+    if (std::abs(v.winding - 0.5) < kWindingRefineBand) {
+      v = tree.evaluate(points[i], kWindingRefineFactor * 2.0);
+      ++refined;
+    }
+    if (std::isnan(v.winding)) {
+      EXPECT_TRUE(std::isnan(w[i]) && std::isnan(bound[i])) << i;
+      continue;
+    }
+    EXPECT_EQ(w[i], v.winding) << i;
+    EXPECT_EQ(bound[i], v.errorBound) << i;
+  }
+  EXPECT_GE(refined, 40u);
+}
+
 }  // namespace winding_test
 }  // namespace aperture
