@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <sstream>
 
+#include "core/queries/world_triangles.h"
 #include "core/util/error.h"
 #include "core/util/spelling.h"
 
@@ -36,6 +37,29 @@ PointQueryRequest parsePointQueries(const std::string& what, const std::string& 
   if (!any)
     throw Error(cat(flag, ": nothing to compute (known: ", join(pointQueryNames(), ", "), ")"));
   return r;
+}
+
+InsideOptions KeptInsideAnswers::prepare(const Scene& scene, InsideOptions options) {
+  if (scene.stats().triangles == 0) return options;  // insideOf refuses it, naming why
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (options.method == InsideMethod::Automatic && !options.closed) {
+    if (!closed_) closed_ = checkClosed(scene);
+    options.closed = &*closed_;
+  }
+  const bool winding =
+      options.method == InsideMethod::Winding ||
+      (options.method == InsideMethod::Automatic && options.closed && !options.closed->closed);
+  if (winding && !options.windingTree) {
+    if (!tree_) tree_ = std::make_unique<WindingNumberTree>(worldTriangleCorners(scene));
+    options.windingTree = tree_.get();
+  }
+  return options;
+}
+
+void KeptInsideAnswers::forget() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  closed_.reset();
+  tree_.reset();
 }
 
 PointQueryResults runPointQueries(const Scene& scene, const double* points, size_t count,

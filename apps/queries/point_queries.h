@@ -5,6 +5,9 @@
 // core/queries/inside.h) and the arrays it gives, under the one set of names the .npz and
 // Python share.
 #include <cstddef>
+#include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +15,7 @@
 #include "core/io/npz.h"
 #include "core/queries/closest_points.h"
 #include "core/queries/inside.h"
+#include "core/queries/winding_number.h"
 
 namespace aperture::app {
 
@@ -39,6 +43,23 @@ struct PointQueryResults {
   std::vector<double> signedDistance;  ///< filled when sign
   InsideResult inside;                 ///< filled when needsInside()
   size_t nonFinite = 0;                ///< points that got NaN (or 0 occupancy)
+};
+
+/// What insideOf derives from a scene alone, kept across the queries of one scene (Python's
+/// Scene): the closedness check (run when the method is automatic) and the winding tree (built
+/// when winding runs, ~150 bytes a triangle), each made at the first query that needs it.
+/// Thread-safe; forget() before the scene it was made from changes.
+class KeptInsideAnswers {
+ public:
+  /// `options` with InsideOptions::closed and windingTree pointing at what is kept, made now
+  /// when this call needs it and nothing is kept yet.
+  InsideOptions prepare(const Scene& scene, InsideOptions options);
+  void forget();
+
+ private:
+  std::mutex mutex_;
+  std::optional<ClosedCheck> closed_;
+  std::unique_ptr<WindingNumberTree> tree_;
 };
 
 /// Runs `request` on the `count` world points (x, y, z each) on every core.

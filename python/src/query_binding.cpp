@@ -32,14 +32,18 @@ void checkSameCount(const Points& origins, const Points& directions, const char*
 
 }  // namespace
 
-nb::tuple pointQueries(const Scene& scene, const Points& points, const std::string& what,
-                       const std::string& method, int parityDirections, int threads) {
+nb::tuple pointQueries(const Scene& scene, app::KeptInsideAnswers& kept, const Points& points,
+                       const std::string& what, const std::string& method, int parityDirections,
+                       int threads) {
   app::PointQueryRequest request = app::parsePointQueries(what, "what");
   request.inside.method = parseInsideMethod(method);
   request.inside.parityDirections = parityDirections;
   auto r = std::make_shared<app::PointQueryResults>();
   const size_t n = points.shape(0);
-  released(threads, [&] { *r = app::runPointQueries(scene, points.data(), n, request); });
+  released(threads, [&] {
+    if (request.needsInside()) request.inside = kept.prepare(scene, request.inside);
+    *r = app::runPointQueries(scene, points.data(), n, request);
+  });
   const std::string used = request.needsInside() ? app::insideMethodOf(*r) : std::string();
   nb::dict arrays = namedArrays(r, app::pointQueryArrays(*r, request));
   return nb::make_tuple(arrays, r->nonFinite, used);

@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "apps/queries/point_queries.h"
 #include "core/engine/scene.h"
 
 namespace aperture::python {
@@ -19,9 +20,11 @@ namespace nb = nanobind;
 using Points = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
 
 /// (dict of arrays, non-finite count, method name or "") for `what`
-/// ("closest,distance,sign,occupancy" items), `method` "automatic", "parity" or "winding".
-nb::tuple pointQueries(const Scene& scene, const Points& points, const std::string& what,
-                       const std::string& method, int parityDirections, int threads);
+/// ("closest,distance,sign,occupancy" items), `method` "automatic", "parity" or "winding";
+/// the closedness check and winding tree are taken from (and made into) `kept`.
+nb::tuple pointQueries(const Scene& scene, app::KeptInsideAnswers& kept, const Points& points,
+                       const std::string& what, const std::string& method, int parityDirections,
+                       int threads);
 /// (counts (N) uint32, non-finite count).
 nb::tuple countIntersections(const Scene& scene, const Points& origins, const Points& directions,
                              int threads);
@@ -29,14 +32,16 @@ nb::tuple countIntersections(const Scene& scene, const Points& origins, const Po
 nb::tuple listIntersections(const Scene& scene, const Points& origins, const Points& directions,
                             int threads);
 
-/// The query methods of `c`, whose instances give their Scene by `scene()`.
+/// The query methods of `c`, whose instances give their Scene by `scene()` and what the sign
+/// keeps of it by `keptInsideAnswers()`.
 template <class PyScene>
 void bindSceneQueries(nb::class_<PyScene>& c) {
   c.def(
        "_point_queries",
        [](const PyScene& s, const Points& points, const std::string& what,
           const std::string& method, int parityDirections, int threads) {
-         return pointQueries(s.scene(), points, what, method, parityDirections, threads);
+         return pointQueries(s.scene(), s.keptInsideAnswers(), points, what, method,
+                             parityDirections, threads);
        },
        nb::arg("points"), nb::arg("what"), nb::arg("method"), nb::arg("parity_directions"),
        nb::arg("threads"))

@@ -275,6 +275,8 @@ class PyScene {
   const std::vector<std::string>& meshNames() const { return loaded_.names; }
   /// The built scene (the point and ray queries, query_binding.h).
   const Scene& scene() const { return *loaded_.scene; }
+  /// The closedness check and winding tree of the sign queries, kept until the scene changes.
+  app::KeptInsideAnswers& keptInsideAnswers() const { return keptInside_; }
 
   /// Scene.ids: the names behind the instance, mesh and material ids (SceneIds).
   nb::dict ids() const {
@@ -331,6 +333,7 @@ class PyScene {
     if (holdsEverything(spec_, need)) return;
     spec_ = unionOf(spec_, need);
     nb::gil_scoped_release release;
+    keptInside_.forget();
     if (fromFiles_) {
       loaded_.scene.reset();
       load();
@@ -391,6 +394,7 @@ class PyScene {
   std::vector<std::string> files_;  // the mesh files, for messages of readingFiles
   app::SceneSpec spec_;
   app::LoadedScene loaded_;
+  mutable app::KeptInsideAnswers keptInside_;  ///< keptInsideAnswers()
   RenderTotals last_;
 };
 
