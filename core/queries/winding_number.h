@@ -30,7 +30,7 @@
 // triangle). A priori each node's share is below A·(4β − 3) / (4π·β⁴·(β − 1)²·R²) (Q < 1/β):
 // for beta = 2 and a flat node (A ≈ πR²) 5/64, and the shares of farther nodes fall as
 // 1/d⁵. The bound is rigorous but not tight: the tests measure errors of a few percent of it
-// (docs/queries_sign.md).
+// (docs/queries.md, "Sign and occupancy").
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -46,8 +46,8 @@ inline constexpr size_t kWindingLeafTriangles = 8;
 
 /// WindingNumberTree::evaluate's default band about 0.5 in which a point is evaluated again,
 /// and the factor on beta it is evaluated with. The band is 8 times the worst error measured
-/// at beta = 2 (docs/queries_sign.md): near an open mesh's holes w passes through 0.5 away
-/// from the surface, and there the refined value decides the side.
+/// at beta = 2 (docs/queries.md, "Sign and occupancy"): near an open mesh's holes w passes through
+/// 0.5 away from the surface, and there the refined value decides the side.
 inline constexpr double kWindingRefineBand = 0.05;
 inline constexpr double kWindingRefineFactor = 4.0;
 
