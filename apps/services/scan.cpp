@@ -298,43 +298,77 @@ PointSink addPointFields(PointCloud& cloud, const ScanOptions& options,
 }
 
 /// Points [at, at + count) of the cloud: surfaces `s` with the fields of `f` (those not null),
-/// one field at a time (short loops the compiler vectorises, over surfaces still in cache).
+/// a few fields at a time (short loops the compiler vectorises, over surfaces still in cache):
+/// each group in one loop when every field of it is there, else field by field.
 void writePoints(const SweepContext& c, const PointSink& f, size_t at, const Surface* s,
                  size_t count) {
   const LidarRays& rays = c.rays;
-  if (f.xyzDouble[0] || f.xyzDouble[1] || f.xyzDouble[2])
+  if (f.xyzDouble[0] || f.xyzDouble[1] || f.xyzDouble[2] || f.xyzFloat[0] || f.xyzFloat[1] ||
+      f.xyzFloat[2])
     for (size_t q = 0; q < count; ++q) {
       const glm::dvec3 point = c.pointOf(s[q]);
-      for (int a = 0; a < 3; ++a)
+      for (int a = 0; a < 3; ++a) {
         if (f.xyzDouble[a]) f.xyzDouble[a][at + q] = point[a];
-    }
-  if (f.xyzFloat[0] || f.xyzFloat[1] || f.xyzFloat[2])
-    for (size_t q = 0; q < count; ++q) {
-      const glm::dvec3 point = c.pointOf(s[q]);
-      for (int a = 0; a < 3; ++a)
         if (f.xyzFloat[a]) f.xyzFloat[a][at + q] = float(point[a]);
+      }
     }
-  if (float* __restrict range = f.range ? f.range + at : nullptr)
-    for (size_t q = 0; q < count; ++q) range[q] = float(s[q].range);
-  if (float* __restrict incidence = f.incidence ? f.incidence + at : nullptr)
-    for (size_t q = 0; q < count; ++q) incidence[q] = s[q].incidence;
-  if (uint32_t* __restrict geomid = f.geomid ? f.geomid + at : nullptr)
-    for (size_t q = 0; q < count; ++q) geomid[q] = s[q].object;
-  if (float* __restrict intensity = f.intensity ? f.intensity + at : nullptr)
-    for (size_t q = 0; q < count; ++q) intensity[q] = c.intensityOf(s[q]);
-  if (uint32_t* __restrict primid = f.primid ? f.primid + at : nullptr)
-    for (size_t q = 0; q < count; ++q) primid[q] = c.primIdOf(s[q]);
-  if (uint32_t* __restrict instance = f.instance ? f.instance + at : nullptr)
-    for (size_t q = 0; q < count; ++q) instance[q] = c.instanceOf(s[q]);
-  if (uint32_t* __restrict time = f.time ? f.time + at : nullptr)
-    for (size_t q = 0; q < count; ++q) time[q] = uint32_t(rays.timeNs[s[q].ray]);
-  if (uint16_t* __restrict ring = f.ring ? f.ring + at : nullptr)
-    for (size_t q = 0; q < count; ++q) ring[q] = uint16_t(rays.ring[s[q].ray]);
-  if (uint32_t* __restrict column = f.column ? f.column + at : nullptr)
-    for (size_t q = 0; q < count; ++q) column[q] = rays.column[s[q].ray];
-  if (float* __restrict azimuth = f.azimuth ? f.azimuth + at : nullptr)
-    for (size_t q = 0; q < count; ++q)
-      azimuth[q] = float(double(rays.azimuthDeg[s[q].ray]) * M_PI / 180.0);
+  float* __restrict range = f.range ? f.range + at : nullptr;
+  float* __restrict incidence = f.incidence ? f.incidence + at : nullptr;
+  uint32_t* __restrict geomid = f.geomid ? f.geomid + at : nullptr;
+  if (range && incidence && geomid) {
+    for (size_t q = 0; q < count; ++q) {
+      range[q] = float(s[q].range);
+      incidence[q] = s[q].incidence;
+      geomid[q] = s[q].object;
+    }
+  } else {
+    if (range)
+      for (size_t q = 0; q < count; ++q) range[q] = float(s[q].range);
+    if (incidence)
+      for (size_t q = 0; q < count; ++q) incidence[q] = s[q].incidence;
+    if (geomid)
+      for (size_t q = 0; q < count; ++q) geomid[q] = s[q].object;
+  }
+  float* __restrict intensity = f.intensity ? f.intensity + at : nullptr;
+  uint32_t* __restrict primid = f.primid ? f.primid + at : nullptr;
+  uint32_t* __restrict instance = f.instance ? f.instance + at : nullptr;
+  if (intensity && primid && instance) {
+    for (size_t q = 0; q < count; ++q) {
+      intensity[q] = c.intensityOf(s[q]);
+      primid[q] = c.primIdOf(s[q]);
+      instance[q] = c.instanceOf(s[q]);
+    }
+  } else {
+    if (intensity)
+      for (size_t q = 0; q < count; ++q) intensity[q] = c.intensityOf(s[q]);
+    if (primid)
+      for (size_t q = 0; q < count; ++q) primid[q] = c.primIdOf(s[q]);
+    if (instance)
+      for (size_t q = 0; q < count; ++q) instance[q] = c.instanceOf(s[q]);
+  }
+  uint32_t* __restrict time = f.time ? f.time + at : nullptr;
+  uint16_t* __restrict ring = f.ring ? f.ring + at : nullptr;
+  uint32_t* __restrict column = f.column ? f.column + at : nullptr;
+  float* __restrict azimuth = f.azimuth ? f.azimuth + at : nullptr;
+  auto azimuthOf = [&](size_t i) { return float(double(rays.azimuthDeg[i]) * M_PI / 180.0); };
+  if (time && ring && column && azimuth) {
+    for (size_t q = 0; q < count; ++q) {
+      const size_t i = s[q].ray;
+      time[q] = uint32_t(rays.timeNs[i]);
+      ring[q] = uint16_t(rays.ring[i]);
+      column[q] = rays.column[i];
+      azimuth[q] = azimuthOf(i);
+    }
+  } else {
+    if (time)
+      for (size_t q = 0; q < count; ++q) time[q] = uint32_t(rays.timeNs[s[q].ray]);
+    if (ring)
+      for (size_t q = 0; q < count; ++q) ring[q] = uint16_t(rays.ring[s[q].ray]);
+    if (column)
+      for (size_t q = 0; q < count; ++q) column[q] = rays.column[s[q].ray];
+    if (azimuth)
+      for (size_t q = 0; q < count; ++q) azimuth[q] = azimuthOf(s[q].ray);
+  }
   if (f.returnNumber)
     for (size_t q = 0; q < count; ++q) f.returnNumber[at + q] = s[q].number;
   if (f.returns)
