@@ -72,7 +72,13 @@ int runQuery(const QueryArgs& a) {
   const std::vector<double> points = coordinatesOf(file);
   ThreadLimit threads(a.threads);
   Device device;
-  const LoadedScene loaded = loadScene(device, a.scene.spec(), a.quiet);
+  SceneSpec spec = a.scene.spec();
+  // The scene is only queried: built with the context filter, parity traces each ray once
+  // (core/queries/inside.h) instead of once per crossing.
+  spec.build.contextFilter =
+      spec.build.contextFilter ||
+      (request.needsInside() && request.inside.method != InsideMethod::Winding);
+  const LoadedScene loaded = loadScene(device, spec, a.quiet);
   const auto start = std::chrono::steady_clock::now();
   const PointQueryResults r =
       runPointQueries(*loaded.scene, points.data(), file.positions.size(), request);

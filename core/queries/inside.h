@@ -4,14 +4,16 @@
 //  - parity: the number of surface crossings along a ray from the point, odd = inside; the
 //    majority over parityDirections fixed directions (parityDirection). Each crossing is
 //    counted once by retracing from the next float past each hit (Embree's closest hit, through
-//    intersectScene), and a ray whose hit is ambiguous is not counted at all but replaced by the
-//    next fixed direction: a hit within a few float ulps of an edge or a vertex (where Embree's
-//    robust test may report both triangles of an edge, at the same t or one float apart, or a
-//    silhouette's two triangles at one t, which the retrace would count once), a grazing hit, or
-//    one at the ray's own origin. A point outside the scene's box is outside without a ray
-//    (nothing can enclose it), so every ray starts within a box diagonal of the surface and
-//    Embree's rounding (relative to the distance from the origin) stays at the scene's scale.
-//    Needs the scene built robust (BuildOptions::robust, the default): without it a ray can
+//    intersectScene) or, on a scene built with BuildOptions::contextFilter, in one traversal
+//    whose filter collects every hit, walked in order of t as the retrace meets them (the same
+//    answers: docs/queries_sign.md); a ray whose hit is ambiguous is not counted at all but
+//    replaced by the next fixed direction: a hit within a few float ulps of an edge or a vertex
+//    (where Embree's robust test may report both triangles of an edge, at the same t or one float
+//    apart, or a silhouette's two triangles at one t, which the retrace would count once), a
+//    grazing hit, or one at the ray's own origin. A point outside the scene's box is outside
+//    without a ray (nothing can enclose it), so every ray starts within a box diagonal of the
+//    surface and Embree's rounding (relative to the distance from the origin) stays at the scene's
+//    scale. Needs the scene built robust (BuildOptions::robust, the default): without it a ray can
 //    slip between two triangles of an edge without any hit to tell.
 //  - winding: the generalized winding number (Jacobson, Kavan and Sorkine-Hornung 2013),
 //    inside when w > 0.5, evaluated through a hierarchy of far-field terms with a documented

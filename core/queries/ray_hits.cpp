@@ -1,6 +1,8 @@
 #include "core/queries/ray_hits.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 
 #include "core/engine/intersect_scene.h"
@@ -59,6 +61,47 @@ bool forEachHit(const Scene& scene, const double* origin, const double* directio
   }
 }
 
+/// The intersection context of countByFilter: the t of every hit, behind the
+/// RTCIntersectContext that must come first.
+struct CountContext {
+  RTCIntersectContext base;
+  std::vector<float>* t = nullptr;
+};
+static_assert(offsetof(CountContext, base) == 0, "Embree passes &base back to the filter");
+
+/// Context filter: records the hit's t and rejects the hit, so that traversal goes on.
+void collectHitDistance(const RTCFilterFunctionNArguments* args) {
+  const auto* ctx = reinterpret_cast<const CountContext*>(args->context);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] == 0) continue;
+    args->valid[i] = 0;
+    ctx->t->push_back(RTCRayN_tfar(args->ray, args->N, i));
+  }
+}
+
+/// The number of hits forEachHit reports, in one traversal of a scene built with
+/// BuildOptions::contextFilter: the number of distinct t among every hit along the ray (the
+/// retrace moves tnear to the next float past each hit, so it finds each distinct t once, and
+/// one triangle has one t). `t` is scratch space. False when the ray cannot be traced.
+bool countByFilter(const Scene& scene, const double* origin, const double* direction,
+                   std::vector<float>& t, uint32_t& count) {
+  RTCRayHit p;
+  count = 0;
+  if (!renderRay(scene, origin, direction, p)) return false;
+  CountContext ctx;
+  rtcInitIntersectContext(&ctx.base);
+  ctx.base.filter = collectHitDistance;
+  t.clear();
+  ctx.t = &t;
+  p.ray.tnear = 0.0f, p.ray.tfar = std::numeric_limits<float>::infinity();
+  clearHits<1>(p);
+  int valid = -1;
+  intersectScene<1>(scene, &ctx.base, &valid, p, true);
+  std::sort(t.begin(), t.end());
+  count = uint32_t(std::unique(t.begin(), t.end()) - t.begin());
+  return true;
+}
+
 constexpr size_t kRayChunk = 256;
 
 }  // namespace
@@ -68,11 +111,15 @@ std::vector<uint32_t> countIntersections(const Scene& scene, const double* origi
                                          size_t* nonFinite) {
   std::vector<uint32_t> counts(count, 0);
   std::vector<size_t> skipped((count + kRayChunk - 1) / kRayChunk, 0);
+  const bool byFilter = scene.options().contextFilter;
   parallelForChunks(count, kRayChunk, [&](size_t c, size_t first, size_t last) {
+    std::vector<float> t;
     for (size_t k = first; k < last; ++k) {
       uint32_t n = 0;
-      if (!forEachHit(scene, origins + 3 * k, directions + 3 * k, [&](const RayHit&) { ++n; }))
-        ++skipped[c];
+      const bool traced = byFilter ? countByFilter(scene, origins + 3 * k, directions + 3 * k, t, n)
+                                   : forEachHit(scene, origins + 3 * k, directions + 3 * k,
+                                                [&](const RayHit&) { ++n; });
+      if (!traced) ++skipped[c];
       counts[k] = n;
     }
   });

@@ -3,7 +3,9 @@
 // (count_intersections) and their list. Each ray is traced again just past its last hit
 // (tnear moved to the next float after it) until it leaves the scene, so this works on any
 // Scene, without the context filter the layers' one-traversal method needs
-// (BuildOptions::contextFilter), and for any number of hits.
+// (BuildOptions::contextFilter), and for any number of hits. countIntersections on a scene
+// built with contextFilter traces each ray once, its filter recording every hit's t: the
+// number of distinct t is what the retrace counts.
 //
 // What counts as a hit: each triangle Embree reports, once. Triangles hit at exactly the same
 // float t as the previous hit are not reported again (a ray through the shared edge of two

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -308,6 +309,77 @@ TEST(InsideParity, AnswersAreDeterministicOnTheSurfaceAndAlonePerPoint) {
     const InsideResult one = insideOf(*cube.scene, &points[3 * i], 1, o);
     EXPECT_EQ(one.inside[0], all.inside[i]) << i;
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// One traversal per ray (a scene built with BuildOptions::contextFilter) against the retrace
+
+/// The scene's objects built again with the context filter: parity then collects every hit of
+/// a ray in one traversal.
+std::unique_ptr<Scene> filterTwin(const Scene& scene, BuildOptions options = {}) {
+  options.contextFilter = true;
+  return std::make_unique<Scene>(test::numericsDevice(), scene.objects(), options);
+}
+
+/// insideOf by the retrace (`scene`) and by one traversal (its filterTwin) agree bit for bit
+/// on insides, discarded rays and undecided points.
+void expectOneTraversalEqualsRetrace(const Scene& scene, const std::vector<double>& points,
+                                     const char* what) {
+  ASSERT_FALSE(scene.options().contextFilter);
+  const std::unique_ptr<Scene> twin = filterTwin(scene, scene.options());
+  for (int directions : {1, 3, 7}) {
+    InsideOptions o;
+    o.method = InsideMethod::Parity;
+    o.parityDirections = directions;
+    const InsideResult retrace = insideOf(scene, points.data(), points.size() / 3, o);
+    const InsideResult filter = insideOf(*twin, points.data(), points.size() / 3, o);
+    EXPECT_EQ(filter.inside, retrace.inside) << what << ", " << directions << " directions";
+    EXPECT_EQ(filter.discardedRays, retrace.discardedRays) << what << ", " << directions;
+    EXPECT_EQ(filter.undecided, retrace.undecided) << what << ", " << directions;
+    EXPECT_GT(retrace.discardedRays, 0u) << what;  // the points do meet edges and vertices
+  }
+}
+
+TEST(InsideParity, OneTraversalEqualsRetraceThroughEdgesAndVertices) {
+  const SceneOf cube = sceneOf(loadMesh("procedural:cube?size=2"));
+  std::vector<double> cubePoints = cubeGrid();
+  for (int k : {0, 1, 2}) cubePoints = joined(cubePoints, pointsAimedAt(cubeTargets(), k, 2.0));
+  expectOneTraversalEqualsRetrace(*cube.scene, cubePoints, "cube");
+
+  const SceneOf sphere = sceneOf(loadMesh("procedural:sphere?segments=32&rings=16"));
+  std::vector<glm::dvec3> targets;
+  for (size_t v = 0; v < sphere.mesh->vertexCount; ++v)
+    targets.push_back(sphere.mesh->anchor + glm::dvec3(sphere.mesh->vertex(v)));
+  std::vector<double> spherePoints = gridPoints(-1.25, 1.25, 11);
+  for (int k : {0, 1, 2}) spherePoints = joined(spherePoints, pointsAimedAt(targets, k, 2.0));
+  for (int k = -10; k <= 10; ++k) spherePoints.insert(spherePoints.end(), {0.0, k * 0.13, 0.0});
+  expectOneTraversalEqualsRetrace(*sphere.scene, spherePoints, "sphere");
+}
+
+TEST(InsideParity, OneTraversalEqualsRetraceOnChunksAndInstances) {
+  const Mesh sphere = loadMesh("procedural:sphere?segments=64&rings=48");
+  BuildOptions chunks;
+  chunks.bvhChunkTriangles = 1024;
+  chunks.maxChunksPerCell = INFINITY;
+  const Scene chunked(test::numericsDevice(), std::vector<const Mesh*>{&sphere}, chunks);
+  ASSERT_GT(chunked.stats().chunks, 1u);
+  std::vector<glm::dvec3> targets;
+  for (size_t v = 0; v < sphere.vertexCount; v += 5)
+    targets.push_back(sphere.anchor + glm::dvec3(sphere.vertex(v)));
+  const std::vector<double> points =
+      joined(gridPoints(-1.25, 1.25, 9), pointsAimedAt(targets, 0, 2.0));
+  expectOneTraversalEqualsRetrace(chunked, points, "chunked sphere");
+
+  const Mesh cube = loadMesh("procedural:cube?size=2");
+  const glm::dvec3 offset(6.0, 1.0, -2.0);
+  const Scene twice(test::numericsDevice(), test::placedTwice(cube, offset));
+  ASSERT_GT(twice.instanceCount(), 0u);
+  std::vector<double> both = joined(cubeGrid(), pointsAimedAt(cubeTargets(), 0, 2.0));
+  const size_t n = both.size() / 3;
+  for (size_t i = 0; i < n; ++i)
+    both.insert(both.end(),
+                {both[3 * i] + offset.x, both[3 * i + 1] + offset.y, both[3 * i + 2] + offset.z});
+  expectOneTraversalEqualsRetrace(twice, both, "instanced cubes");
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -4,6 +4,7 @@
 // and as instances counts the same.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -131,6 +132,56 @@ TEST(RayHits, RaysThatCannotBeTracedCountNothing) {
       countIntersections(scene, origins.data(), dirs.data(), 4, &nonFinite);
   EXPECT_EQ(c, (std::vector<uint32_t>{2, 0, 0, 2}));
   EXPECT_EQ(nonFinite, 2u);
+}
+
+/// Rays from a grid around [-1, 1]³ along the axes, the faces' and the cube's diagonals, and
+/// rays from random origins aimed exactly at the mesh's vertices and edge midpoints: many run
+/// through edges and vertices, where two triangles may be hit at one t or a float apart.
+void edgeAndVertexRays(const Mesh& mesh, std::vector<double>& origins, std::vector<double>& dirs) {
+  const std::vector<glm::dvec3> axes = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 0},
+                                        {0, 1, 1}, {1, 0, 1}, {1, 1, 1}, {1, -1, 1}};
+  for (int i = 0; i <= 12; ++i)
+    for (int j = 0; j <= 12; ++j)
+      for (const glm::dvec3& a : axes) {
+        const double u = -1.5 + 0.25 * i, v = -1.5 + 0.25 * j;
+        const glm::dvec3 o = glm::dvec3(u, v, -1.5 + 0.125 * (i + j) / 2.0) - 3.0 * a;
+        origins.insert(origins.end(), {o.x, o.y, o.z});
+        dirs.insert(dirs.end(), {a.x, a.y, a.z});
+      }
+  std::mt19937_64 rng(44);
+  std::vector<glm::dvec3> targets;
+  for (size_t v = 0; v < mesh.vertexCount; ++v)
+    targets.push_back(mesh.anchor + glm::dvec3(mesh.vertex(v)));
+  for (size_t t = 0; t < mesh.triangleCount(); t += 3)
+    targets.push_back(mesh.anchor + 0.5 * glm::dvec3(mesh.vertex(mesh.indices[3 * t]) +
+                                                     mesh.vertex(mesh.indices[3 * t + 1])));
+  for (const glm::dvec3& target : targets) {
+    const glm::dvec3 d = randomDirection(rng), o = target - 4.0 * d;
+    origins.insert(origins.end(), {o.x, o.y, o.z});
+    dirs.insert(dirs.end(), {d.x, d.y, d.z});
+  }
+}
+
+TEST(RayHits, OneTraversalCountsEqualRetraceThroughEdgesAndVertices) {
+  for (const char* spec : {"procedural:cube?size=2", "procedural:sphere?segments=32&rings=16"}) {
+    const Mesh mesh = loadMesh(spec);
+    BuildOptions filter;
+    filter.contextFilter = true;
+    const Scene retraced(test::numericsDevice(), std::vector<const Mesh*>{&mesh});
+    const Scene oneTraversal(test::numericsDevice(), std::vector<const Mesh*>{&mesh}, filter);
+    std::vector<double> origins, dirs;
+    edgeAndVertexRays(mesh, origins, dirs);
+    const size_t n = origins.size() / 3;
+    size_t skippedA = 0, skippedB = 0;
+    const std::vector<uint32_t> a =
+        countIntersections(retraced, origins.data(), dirs.data(), n, &skippedA);
+    const std::vector<uint32_t> b =
+        countIntersections(oneTraversal, origins.data(), dirs.data(), n, &skippedB);
+    EXPECT_EQ(b, a) << spec;
+    EXPECT_EQ(skippedB, skippedA) << spec;
+    // The rays do cross the surface: counts are not all zero.
+    EXPECT_GT(std::count_if(a.begin(), a.end(), [](uint32_t c) { return c >= 2; }), 100) << spec;
+  }
 }
 
 }  // namespace ray_hits_test
