@@ -1,8 +1,8 @@
 #pragma once
 // The LiDAR scan loop (issue 42): a sweep's rays (cameras/lidar/lidar.h) traced through the
-// scene, each hit turned into a point with every field of docs/lidar.md, and the sweeps of a
-// command written as point clouds or range images (core/points/point_writers.h). `aperture
-// scan`, job files and Python's Scene.scan share it.
+// scene, each hit turned into a point with the fields of docs/lidar.md its output needs, and the
+// sweeps of a command written as point clouds or range images (core/points/point_writers.h).
+// `aperture scan`, job files and Python's Scene.scan share it.
 #include <cstdint>
 #include <memory>
 #include <optional>
