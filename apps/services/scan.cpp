@@ -241,104 +241,145 @@ PointType positionType(ScanFrame frame) {
 struct PointSink {
   float* xyzFloat[3] = {};    ///< x, y, z as float (frames sensor, sweep-start), or null
   double* xyzDouble[3] = {};  ///< x, y, z as double (frame world), or null
-  float *range, *azimuth, *incidence, *intensity;
-  uint32_t *time, *column, *primid, *geomid, *instance;
-  uint16_t* ring;
-  uint8_t *returnNumber, *returns;  ///< null unless ScanReturns::All
-  std::vector<uint32_t*> properties;
-  const std::vector<const MeshProperty*>* propertyOf;  ///< object-major: [object · P + p]
+  float *range = nullptr, *azimuth = nullptr, *incidence = nullptr, *intensity = nullptr;
+  uint32_t *time = nullptr, *column = nullptr, *primid = nullptr, *geomid = nullptr,
+           *instance = nullptr;
+  uint16_t* ring = nullptr;
+  uint8_t *returnNumber = nullptr, *returns = nullptr;  ///< null unless ScanReturns::All
+  std::vector<uint32_t*> properties;                    ///< per face property, null when left out
+  const std::vector<const MeshProperty*>* propertyOf;   ///< object-major: [object · P + p]
 };
 
-/// Adds every field of a sweep to `cloud` (cloud.size values each, left unwritten; in the
-/// buffers of a recycled sweep, `spare`, when there are some) and returns them.
+/// Adds the fields of a sweep that `selected` selects to `cloud` (cloud.size values each, left
+/// unwritten; in the buffers of a recycled sweep, `spare`, when there are some) and returns
+/// them (null for those left out).
 PointSink addPointFields(PointCloud& cloud, const ScanOptions& options,
+                         const PointFieldSelection& selected,
                          std::vector<LargeBuffer<unsigned char>>& spare,
                          const std::vector<const MeshProperty*>& propertyOf) {
   PointSink sink;
   FieldAdder fields(cloud, spare);
+  auto add = [&](auto*& to, const char* name, PointType type) {
+    using T = std::remove_reference_t<decltype(*to)>;
+    to = selected.selects(name) ? fields.add<T>(name, type) : nullptr;
+  };
   const PointType xyzType = positionType(options.frame);
   const char* xyz[3] = {pf::kX, pf::kY, pf::kZ};
   for (int a = 0; a < 3; ++a) {
-    PointField& f = fields.add(xyz[a], xyzType);
     if (xyzType == PointType::Float64)
-      sink.xyzDouble[a] = f.as<double>();
+      add(sink.xyzDouble[a], xyz[a], xyzType);
     else
-      sink.xyzFloat[a] = f.as<float>();
+      add(sink.xyzFloat[a], xyz[a], xyzType);
   }
-  sink.range = fields.add<float>(pf::kRange, PointType::Float32);
-  sink.time = fields.add<uint32_t>(pf::kTime, PointType::UInt32);
-  sink.ring = fields.add<uint16_t>(pf::kRing, PointType::UInt16);
-  sink.column = fields.add<uint32_t>(pf::kColumn, PointType::UInt32);
-  sink.azimuth = fields.add<float>(pf::kAzimuth, PointType::Float32);
-  sink.incidence = fields.add<float>(pf::kIncidence, PointType::Float32);
-  sink.intensity = fields.add<float>(pf::kIntensity, PointType::Float32);
-  sink.primid = fields.add<uint32_t>(pf::kPrimId, PointType::UInt32);
-  sink.geomid = fields.add<uint32_t>(pf::kGeomId, PointType::UInt32);
-  sink.instance = fields.add<uint32_t>(pf::kInstance, PointType::UInt32);
-  const bool all = options.returns == ScanReturns::All;
-  sink.returnNumber = all ? fields.add<uint8_t>(pf::kReturnNumber, PointType::UInt8) : nullptr;
-  sink.returns = all ? fields.add<uint8_t>(pf::kReturns, PointType::UInt8) : nullptr;
+  add(sink.range, pf::kRange, PointType::Float32);
+  add(sink.time, pf::kTime, PointType::UInt32);
+  add(sink.ring, pf::kRing, PointType::UInt16);
+  add(sink.column, pf::kColumn, PointType::UInt32);
+  add(sink.azimuth, pf::kAzimuth, PointType::Float32);
+  add(sink.incidence, pf::kIncidence, PointType::Float32);
+  add(sink.intensity, pf::kIntensity, PointType::Float32);
+  add(sink.primid, pf::kPrimId, PointType::UInt32);
+  add(sink.geomid, pf::kGeomId, PointType::UInt32);
+  add(sink.instance, pf::kInstance, PointType::UInt32);
+  if (options.returns == ScanReturns::All) {
+    add(sink.returnNumber, pf::kReturnNumber, PointType::UInt8);
+    add(sink.returns, pf::kReturns, PointType::UInt8);
+  }
   for (const std::string& name : options.faceProperties) {
-    if (cloud.find(name))
+    if (isStandardPointField(name))
       throw Error(cat("face property '", name, "' has the name of a standard point field"));
-    sink.properties.push_back(fields.add<uint32_t>(name, PointType::UInt32));
+    uint32_t* p = nullptr;
+    add(p, name.c_str(), PointType::UInt32);
+    sink.properties.push_back(p);
   }
   sink.propertyOf = &propertyOf;
   // Adding a field may move the PointFields (not their values): the pointers above stay.
   return sink;
 }
 
-/// Points [at, at + count) of the cloud: surfaces `s` with every field, one field at a time
-/// (short loops the compiler vectorises, over surfaces still in cache).
+/// Points [at, at + count) of the cloud: surfaces `s` with the fields of `f` (those not null),
+/// a few fields at a time (short loops the compiler vectorises, over surfaces still in cache):
+/// each group in one loop when every field of it is there, else field by field.
 void writePoints(const SweepContext& c, const PointSink& f, size_t at, const Surface* s,
                  size_t count) {
   const LidarRays& rays = c.rays;
-  for (size_t q = 0; q < count; ++q) {
-    const glm::dvec3 point = c.pointOf(s[q]);
-    if (f.xyzDouble[0]) {
-      for (int a = 0; a < 3; ++a) f.xyzDouble[a][at + q] = point[a];
-    } else {
-      for (int a = 0; a < 3; ++a) f.xyzFloat[a][at + q] = float(point[a]);
+  if (f.xyzDouble[0] || f.xyzDouble[1] || f.xyzDouble[2] || f.xyzFloat[0] || f.xyzFloat[1] ||
+      f.xyzFloat[2])
+    for (size_t q = 0; q < count; ++q) {
+      const glm::dvec3 point = c.pointOf(s[q]);
+      for (int a = 0; a < 3; ++a) {
+        if (f.xyzDouble[a]) f.xyzDouble[a][at + q] = point[a];
+        if (f.xyzFloat[a]) f.xyzFloat[a][at + q] = float(point[a]);
+      }
     }
+  float* __restrict range = f.range ? f.range + at : nullptr;
+  float* __restrict incidence = f.incidence ? f.incidence + at : nullptr;
+  uint32_t* __restrict geomid = f.geomid ? f.geomid + at : nullptr;
+  if (range && incidence && geomid) {
+    for (size_t q = 0; q < count; ++q) {
+      range[q] = float(s[q].range);
+      incidence[q] = s[q].incidence;
+      geomid[q] = s[q].object;
+    }
+  } else {
+    if (range)
+      for (size_t q = 0; q < count; ++q) range[q] = float(s[q].range);
+    if (incidence)
+      for (size_t q = 0; q < count; ++q) incidence[q] = s[q].incidence;
+    if (geomid)
+      for (size_t q = 0; q < count; ++q) geomid[q] = s[q].object;
   }
-  float* __restrict range = f.range + at;
-  float* __restrict incidence = f.incidence + at;
-  uint32_t* __restrict geomid = f.geomid + at;
-  for (size_t q = 0; q < count; ++q) {
-    range[q] = float(s[q].range);
-    incidence[q] = s[q].incidence;
-    geomid[q] = s[q].object;
+  float* __restrict intensity = f.intensity ? f.intensity + at : nullptr;
+  uint32_t* __restrict primid = f.primid ? f.primid + at : nullptr;
+  uint32_t* __restrict instance = f.instance ? f.instance + at : nullptr;
+  if (intensity && primid && instance) {
+    for (size_t q = 0; q < count; ++q) {
+      intensity[q] = c.intensityOf(s[q]);
+      primid[q] = c.primIdOf(s[q]);
+      instance[q] = c.instanceOf(s[q]);
+    }
+  } else {
+    if (intensity)
+      for (size_t q = 0; q < count; ++q) intensity[q] = c.intensityOf(s[q]);
+    if (primid)
+      for (size_t q = 0; q < count; ++q) primid[q] = c.primIdOf(s[q]);
+    if (instance)
+      for (size_t q = 0; q < count; ++q) instance[q] = c.instanceOf(s[q]);
   }
-  float* __restrict intensity = f.intensity + at;
-  uint32_t* __restrict primid = f.primid + at;
-  uint32_t* __restrict instance = f.instance + at;
-  for (size_t q = 0; q < count; ++q) {
-    intensity[q] = c.intensityOf(s[q]);
-    primid[q] = c.primIdOf(s[q]);
-    instance[q] = c.instanceOf(s[q]);
-  }
-  uint32_t* __restrict time = f.time + at;
-  uint16_t* __restrict ring = f.ring + at;
-  uint32_t* __restrict column = f.column + at;
-  float* __restrict azimuth = f.azimuth + at;
-  for (size_t q = 0; q < count; ++q) {
-    const size_t i = s[q].ray;
-    time[q] = uint32_t(rays.timeNs[i]);
-    ring[q] = uint16_t(rays.ring[i]);
-    column[q] = rays.column[i];
-    azimuth[q] = float(double(rays.azimuthDeg[i]) * M_PI / 180.0);
+  uint32_t* __restrict time = f.time ? f.time + at : nullptr;
+  uint16_t* __restrict ring = f.ring ? f.ring + at : nullptr;
+  uint32_t* __restrict column = f.column ? f.column + at : nullptr;
+  float* __restrict azimuth = f.azimuth ? f.azimuth + at : nullptr;
+  auto azimuthOf = [&](size_t i) { return float(double(rays.azimuthDeg[i]) * M_PI / 180.0); };
+  if (time && ring && column && azimuth) {
+    for (size_t q = 0; q < count; ++q) {
+      const size_t i = s[q].ray;
+      time[q] = uint32_t(rays.timeNs[i]);
+      ring[q] = uint16_t(rays.ring[i]);
+      column[q] = rays.column[i];
+      azimuth[q] = azimuthOf(i);
+    }
+  } else {
+    if (time)
+      for (size_t q = 0; q < count; ++q) time[q] = uint32_t(rays.timeNs[s[q].ray]);
+    if (ring)
+      for (size_t q = 0; q < count; ++q) ring[q] = uint16_t(rays.ring[s[q].ray]);
+    if (column)
+      for (size_t q = 0; q < count; ++q) column[q] = rays.column[s[q].ray];
+    if (azimuth)
+      for (size_t q = 0; q < count; ++q) azimuth[q] = azimuthOf(s[q].ray);
   }
   if (f.returnNumber)
-    for (size_t q = 0; q < count; ++q) {
-      f.returnNumber[at + q] = s[q].number;
-      f.returns[at + q] = s[q].returns;
-    }
+    for (size_t q = 0; q < count; ++q) f.returnNumber[at + q] = s[q].number;
+  if (f.returns)
+    for (size_t q = 0; q < count; ++q) f.returns[at + q] = s[q].returns;
   const size_t P = f.properties.size();
   for (size_t p = 0; p < P; ++p)
-    for (size_t q = 0; q < count; ++q) {
-      const MeshProperty* m = (*f.propertyOf)[s[q].object * P + p];
-      f.properties[p][at + q] = m ? m->values[s[q].triangle] : TraceHit::kNoHit;
-    }
+    if (uint32_t* out = f.properties[p])
+      for (size_t q = 0; q < count; ++q) {
+        const MeshProperty* m = (*f.propertyOf)[s[q].object * P + p];
+        out[at + q] = m ? m->values[s[q].triangle] : TraceHit::kNoHit;
+      }
 }
 
 /// The range image of a sweep from its cloud: each point at its (ring, column) pixel
@@ -494,8 +535,11 @@ ScanSweep SweepScanner::scan(const LidarRays& rays, bool rangeImage) {
   PointCloud& cloud = result.cloud;
   cloud.size = n;
   cloud.startSeconds = double(rays.sweepStartNs) * 1e-9;
+  // The fields asked for, and those a range image is made from.
+  PointFieldSelection selected = options.fields;
+  if (rangeImage) selected.add(pointFieldsWrittenAs(PointFormat::Npz, {}));
   PointSink sink;
-  if (!all) sink = addPointFields(cloud, options, state_->spare, state_->properties);
+  if (!all) sink = addPointFields(cloud, options, selected, state_->spare, state_->properties);
 
   // Trace in fixed chunks, counting each chunk's points (the cloud is the same on any thread
   // count).
@@ -529,7 +573,7 @@ ScanSweep SweepScanner::scan(const LidarRays& rays, bool rangeImage) {
 
   if (all) {
     cloud.size = points;
-    sink = addPointFields(cloud, options, state_->spare, state_->properties);
+    sink = addPointFields(cloud, options, selected, state_->spare, state_->properties);
     parallelForChunks(n, kScanChunk, [&](size_t chunk, size_t first, size_t) {
       const Surface* in = surfaces.data() + first * perRay;
       writePoints(c, sink, offset[chunk], in, counts[chunk]);
@@ -747,8 +791,11 @@ void writeScans(const Scene& scene, const ScanRequest& r, const PreparedScan& pr
       r.labelField,
       {cat("aperture scan: ", sensor.name, ", frame ", scanFrameName(r.options.frame), ", returns ",
            scanReturnsName(r.options.returns))}};
-  SweepScanner scanner(scene, sensor, r.options);
-  ScanOptions firstOnly = r.options;
+  // Only the fields the output's format writes are computed.
+  ScanOptions options = r.options;
+  options.fields = pointFieldsWrittenAs(pointFormatOf(r.out), writeOptions);
+  SweepScanner scanner(scene, sensor, options);
+  ScanOptions firstOnly = options;
   firstOnly.returns = ScanReturns::First;
   SweepScanner firstScanner(scene, sensor, firstOnly);
   for (int k = 0; k < r.sweeps; ++k) {

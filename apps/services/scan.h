@@ -1,8 +1,8 @@
 #pragma once
 // The LiDAR scan loop (issue 42): a sweep's rays (cameras/lidar/lidar.h) traced through the
-// scene, each hit turned into a point with every field of docs/lidar.md, and the sweeps of a
-// command written as point clouds or range images (core/points/point_writers.h). `aperture
-// scan`, job files and Python's Scene.scan share it.
+// scene, each hit turned into a point with the fields of docs/lidar.md its output needs, and the
+// sweeps of a command written as point clouds or range images (core/points/point_writers.h).
+// `aperture scan`, job files and Python's Scene.scan share it.
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -12,6 +12,7 @@
 #include "apps/services/scene_setup.h"
 #include "cameras/lidar/lidar.h"
 #include "core/points/point_cloud.h"
+#include "core/points/point_writers.h"
 
 namespace aperture::app {
 
@@ -46,6 +47,9 @@ struct ScanOptions {
   /// Face properties carried as uint32 fields of the same name (0xFFFFFFFF where the mesh
   /// lacks them).
   std::vector<std::string> faceProperties;
+  /// The fields computed and stored (pointFieldsWrittenAs of the output's format; Python's
+  /// fields=): the others are left out of the cloud. A range image adds what it is made from.
+  PointFieldSelection fields;
 };
 
 /// One traced sweep: its point cloud (hits only, firing order) and its range image (rows ×

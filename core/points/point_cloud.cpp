@@ -6,6 +6,15 @@
 
 namespace aperture {
 
+bool isStandardPointField(const std::string& name) {
+  namespace pf = point_fields;
+  for (const char* f : {pf::kX, pf::kY, pf::kZ, pf::kRange, pf::kTime, pf::kRing, pf::kColumn,
+                        pf::kAzimuth, pf::kIncidence, pf::kPrimId, pf::kGeomId, pf::kInstance,
+                        pf::kIntensity, pf::kReturnNumber, pf::kReturns})
+    if (name == f) return true;
+  return false;
+}
+
 const char* npyDescrOf(PointType type) {
   switch (type) {
     case PointType::UInt8:

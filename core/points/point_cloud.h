@@ -63,6 +63,9 @@ inline constexpr const char* kReturnNumber = "return_number";
 inline constexpr const char* kReturns = "returns";
 }  // namespace point_fields
 
+/// Whether `name` is one of the standard fields above (else a face property's).
+bool isStandardPointField(const std::string& name);
+
 /// Points as columns: every field holds `size` values.
 struct PointCloud {
   size_t size = 0;

@@ -156,4 +156,44 @@ void writePointsPcd(const std::string& path, const PointCloud& cloud,
   writePiecesAtomically(path, {{header.data(), header.size()}, {body.data(), body.size()}});
 }
 
+bool PointFieldSelection::selects(const std::string& name) const {
+  return everyField || std::find(names.begin(), names.end(), name) != names.end() ||
+         (faceProperties && !isStandardPointField(name));
+}
+
+void PointFieldSelection::add(const PointFieldSelection& other) {
+  everyField = everyField || other.everyField;
+  faceProperties = faceProperties || other.faceProperties;
+  for (const std::string& name : other.names)
+    if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+}
+
+PointFieldSelection pointFieldsWrittenAs(PointFormat format, const PointWriteOptions& options) {
+  namespace pf = point_fields;
+  PointFieldSelection s;
+  s.everyField = false;
+  switch (format) {
+    case PointFormat::Ply:
+    case PointFormat::Pcd:
+      s.everyField = true;
+      break;
+    case PointFormat::Las:
+      s.names = {
+          pf::kX,      pf::kY, pf::kZ, pf::kIntensity, pf::kTime, pf::kRing, pf::kReturnNumber,
+          pf::kReturns};
+      break;
+    case PointFormat::KittiBin:
+      s.names = {pf::kX, pf::kY, pf::kZ, pf::kIntensity, pf::kInstance};
+      break;
+    case PointFormat::Npz:
+    case PointFormat::Exr:
+      s.names = {pf::kRing, pf::kColumn, pf::kRange,  pf::kIntensity, pf::kIncidence, pf::kX,
+                 pf::kY,    pf::kZ,      pf::kPrimId, pf::kGeomId,    pf::kInstance};
+      s.faceProperties = true;
+      break;
+  }
+  if (!options.labelField.empty()) s.names.push_back(options.labelField);
+  return s;
+}
+
 }  // namespace aperture

@@ -35,6 +35,26 @@ struct PointWriteOptions {
   std::vector<std::string> comments;
 };
 
+/// Which fields of a cloud a file holds, so that a scan computes only those: every field, or
+/// the standard fields `names` (those a cloud has) and, with `faceProperties`, every field
+/// that is not a standard one.
+struct PointFieldSelection {
+  bool everyField = true;
+  bool faceProperties = false;
+  std::vector<std::string> names;
+
+  bool selects(const std::string& name) const;
+  /// The fields either selects.
+  void add(const PointFieldSelection& other);
+};
+
+/// The fields a file of `format` is written from (the one owner of it, beside the writers):
+/// PLY and PCD every field; LAS x y z intensity time ring return_number returns and the label
+/// field; KITTI x y z intensity instance and the label field; the range images (.npz, .exr)
+/// ring and column (each point's pixel), their channels range intensity incidence x y z primid
+/// geomid instance and every face property.
+PointFieldSelection pointFieldsWrittenAs(PointFormat format, const PointWriteOptions& options);
+
 /// Writes `cloud` to `path` in the point-cloud format of its extension (.ply, .pcd, .las, .bin).
 void writePointCloud(const std::string& path, const PointCloud& cloud,
                      const PointWriteOptions& options = {});

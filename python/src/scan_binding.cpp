@@ -24,14 +24,10 @@ namespace aperture::python {
 
 namespace {
 
-/// The standard fields a scan fills (for `fields` checks and the face properties' names).
+/// The standard fields a scan fills and "sweep" (for `fields` checks and the face properties'
+/// names).
 bool isStandardField(const std::string& name) {
-  namespace pf = point_fields;
-  for (const char* f : {pf::kX, pf::kY, pf::kZ, pf::kRange, pf::kTime, pf::kRing, pf::kColumn,
-                        pf::kAzimuth, pf::kIncidence, pf::kPrimId, pf::kGeomId, pf::kInstance,
-                        pf::kIntensity, pf::kReturnNumber, pf::kReturns, "sweep"})
-    if (name == f) return true;
-  return false;
+  return name == "sweep" || isStandardPointField(name);
 }
 
 /// The sweeps' clouds as one: every field concatenated, plus "sweep" (uint32).
@@ -79,6 +75,11 @@ ScanCall scanCallOf(const std::string& lidar, const std::optional<std::string>& 
   o.noise = {sigma, dropout, seed};
   applyRangeNoise(o.noise, 1.0, 0, 0);  // checks σ and the dropout
   call.fields = fields;
+  if (fields) {
+    // Only the fields asked for are computed.
+    o.fields.everyField = false;
+    o.fields.names = *fields;
+  }
   if (fields)
     for (const std::string& name : *fields)
       if (!isStandardField(name) && std::find(o.faceProperties.begin(), o.faceProperties.end(),

@@ -93,3 +93,22 @@ def test_all_returns_and_properties_equal_the_command(cli: Path, tmp_path: Path)
     assert_same_fields(got, want)
     with pytest.raises(ValueError, match="nosuch"):
         aperture.Scene(room).scan("VLP-16", fields=["x", "nosuch"])
+
+
+@pytest.mark.parametrize("returns", ["first", "all"])
+def test_field_subsets_equal_the_full_scans_columns(tmp_path: Path, returns: str) -> None:
+    # fields= computes only the fields asked for: each subset's columns are bit for bit those
+    # of the scan that computes every field.
+    scene = aperture.Scene(room_ply(tmp_path / "room.ply"), aovs=["face.semantic"])
+    full = scene.scan("VLP-16", returns=returns, sweeps=2, fields=None)
+    every = scene.scan("VLP-16", returns=returns, sweeps=2, fields=[*full.keys(), "semantic"])
+    subsets = [["x", "intensity"], ["range", "semantic", "ring"], ["azimuth", "time", "sweep"], ["z", "instance"]]
+    if returns == "all":
+        subsets.append(["returns", "primid", "return_number"])
+    for names in subsets:
+        got = scene.scan("VLP-16", returns=returns, sweeps=2, fields=names)
+        assert list(got.keys()) == names
+        for name in names:
+            want = every[name] if name == "semantic" else full[name]
+            assert got[name].dtype == want.dtype, name
+            assert got[name].tobytes() == want.tobytes(), name

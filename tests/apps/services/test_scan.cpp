@@ -5,10 +5,12 @@
 // moving sensor land on the walls, range limits and noise behave, and multiple surfaces come
 // back as first, last and all returns.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <memory>
@@ -21,6 +23,7 @@
 #include "core/engine/scene.h"
 #include "core/mesh/mesh.h"
 #include "core/mesh/ply.h"
+#include "core/points/point_writers.h"
 #include "core/queries/trace.h"
 #include "core/util/error.h"
 #include "tests/support.h"
@@ -503,6 +506,91 @@ TEST(Scan, SweepPatterns) {
   EXPECT_NE(test::errorOf([] { parseScanFrame("wrld"); }).find("world"), std::string::npos);
   EXPECT_NE(test::errorOf([] { parseScanReturns("strongst"); }).find("strongest"),
             std::string::npos);
+}
+
+// Each format's file from a scan that computes only the fields the format writes
+// (pointFieldsWrittenAs) is byte for byte the file of a scan that computes every field, for
+// every frame and first and all returns (all: point clouds only), with a face property as label.
+TEST(Scan, OnlyTheFieldsAFormatWritesGiveTheSameFileAsEveryField) {
+  BoxRoom room(2, true);
+  const LidarSensor sensor = roomSensor(360);
+  auto poseAt = [](int64_t t) {
+    Pose p;
+    p.translation = glm::dvec3(-0.4 + 0.8 * double(t) / 1e8, 0.2, 0.1);
+    return p;
+  };
+  const LidarRays rays = roomRays(sensor, poseAt);
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / cat("aperture_scan_fields_", ::getpid());
+  std::filesystem::create_directories(dir);
+  const PointWriteOptions writeOptions{"semantic", {"comment"}};
+  for (const char* ext : {".ply", ".pcd", ".las", ".bin", ".npz", ".exr"}) {
+    const PointFormat format = pointFormatOf(cat("a", ext));
+    const bool image = isRangeImageFormat(format);
+    for (ScanFrame frame : {ScanFrame::Sensor, ScanFrame::World, ScanFrame::SweepStart})
+      for (ScanReturns returns : {ScanReturns::First, ScanReturns::All}) {
+        if (image && returns == ScanReturns::All) continue;
+        const std::string what = cat(ext, " ", scanFrameName(frame), " ", scanReturnsName(returns));
+        ScanOptions o;
+        o.frame = frame;
+        o.returns = returns;
+        o.faceProperties = {"semantic"};
+        auto write = [&](const std::string& name, const ScanSweep& sweep) {
+          const std::string path = (dir / (name + ext)).string();
+          if (image)
+            writeRangeImage(path, sweep.image);
+          else
+            writePointCloud(path, sweep.cloud, writeOptions);
+          return path;
+        };
+        const ScanSweep every = scanSweep(*room.scene, sensor, rays, o, image);
+        o.fields = pointFieldsWrittenAs(format, writeOptions);
+        const ScanSweep only = scanSweep(*room.scene, sensor, rays, o, image);
+        ASSERT_GT(only.points, 0u) << what;
+        EXPECT_EQ(only.points, every.points) << what;
+        const std::string a = write("every", every), b = write("only", only);
+        EXPECT_EQ(test::readFile(a), test::readFile(b)) << what;
+        if (format == PointFormat::KittiBin) {
+          EXPECT_EQ(test::readFile(kittiLabelPathOf(a)), test::readFile(kittiLabelPathOf(b)))
+              << what;
+          // x y z intensity instance and the label: nothing else is computed.
+          EXPECT_EQ(only.cloud.fields.size(), 6u) << what;
+        }
+        if (format == PointFormat::Las) {
+          EXPECT_LT(only.cloud.fields.size(), every.cloud.fields.size()) << what;
+        }
+        if (format == PointFormat::Ply) {
+          EXPECT_EQ(only.cloud.fields.size(), every.cloud.fields.size()) << what;
+        }
+      }
+  }
+  std::filesystem::remove_all(dir);
+}
+
+// A scanner that recycles its sweeps (the command's) gives the same subset on every sweep.
+TEST(Scan, ARecyclingScannerKeepsItsFieldSubsetSweepAfterSweep) {
+  BoxRoom room;
+  const LidarSensor sensor = roomSensor(360);
+  const LidarRays rays = staticRoomRays(sensor);
+  ScanOptions o;
+  o.faceProperties = {"semantic"};
+  const PointCloud every = scanSweep(*room.scene, sensor, rays, o).cloud;
+  o.fields.everyField = false;
+  o.fields.names = {pf::kRange, "semantic", pf::kRing};
+  SweepScanner scanner(*room.scene, sensor, o);
+  for (int k = 0; k < 3; ++k) {
+    ScanSweep sweep = scanner.scan(rays);
+    ASSERT_EQ(sweep.cloud.fields.size(), 3u);
+    for (const PointField& f : sweep.cloud.fields) {
+      const PointField* g = every.find(f.name);
+      ASSERT_NE(g, nullptr) << f.name;
+      EXPECT_EQ(f.type, g->type) << f.name;
+      EXPECT_TRUE(f.bytes.size() == g->bytes.size() &&
+                  std::memcmp(f.bytes.data(), g->bytes.data(), f.bytes.size()) == 0)
+          << f.name << " sweep " << k;
+    }
+    scanner.recycle(std::move(sweep));
+  }
 }
 
 }  // namespace
