@@ -49,3 +49,10 @@ def pinhole_rays(eye, up, fov_deg, width, height, at=None, view=None, fov_axis="
     rays[..., :3] = np.asarray(eye, dtype=np.float64)
     rays[..., 3:] = d
     return rays
+
+
+def orbit(eye, at, n):
+    """n eyes on the circle through `eye` around the vertical (y) axis through `at`: the dragon
+    orbit of bench/python_batch.py and bench/python_wall.py."""
+    r = math.hypot(eye[0] - at[0], eye[2] - at[2])
+    return [(at[0] + r * math.sin(2 * math.pi * k / n), eye[1], at[2] + r * math.cos(2 * math.pi * k / n)) for k in range(n)]

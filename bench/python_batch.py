@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import statistics
 import subprocess
 import sys
@@ -32,14 +31,14 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "build" / "python"))  # the CMake tree's module, if built there
 
 import aperture  # noqa: E402
+import peer_rays  # noqa: E402  (bench/, the script's own folder)
 
 EYE, AT, FOV = (0.0, 0.12, 0.45), (0.0, 0.12, 0.0), 30.0
 
 
 def orbit(n: int) -> list[tuple[float, float, float]]:
     """n eyes on the circle through the reference eye around the vertical axis through AT."""
-    r = math.hypot(EYE[0] - AT[0], EYE[2] - AT[2])
-    return [(AT[0] + r * math.sin(2 * math.pi * k / n), EYE[1], AT[2] + r * math.cos(2 * math.pi * k / n)) for k in range(n)]
+    return peer_rays.orbit(EYE, AT, n)
 
 
 def main() -> int:

@@ -23,7 +23,6 @@ Run it against the module `pip install .` built:
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import statistics
 import sys
@@ -34,6 +33,7 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.append(str(REPO / "bench"))
+import peer_rays  # noqa: E402
 from peer_rays import pinhole_rays  # noqa: E402
 from peers import cpu_model  # noqa: E402
 
@@ -42,8 +42,7 @@ EYE, AT, UP, FOV = (0.0, 0.12, 0.45), (0.0, 0.12, 0.0), (0.0, 1.0, 0.0), 30.0
 
 def orbit(n: int) -> list[tuple[float, float, float]]:
     """n eyes on the circle through the reference eye around the vertical axis through AT."""
-    r = math.hypot(EYE[0] - AT[0], EYE[2] - AT[2])
-    return [(AT[0] + r * math.sin(2 * math.pi * k / n), EYE[1], AT[2] + r * math.cos(2 * math.pi * k / n)) for k in range(n)]
+    return peer_rays.orbit(EYE, AT, n)
 
 
 def main() -> int:

@@ -49,6 +49,18 @@ CameraParams cameraOf(const char* type, int width, int height, int spp) {
 
 const AovSet kEveryFixedAov = parseAovSet("all");
 
+/// The cameras of `params` placed for the scene's render origin, and their pointers in order.
+struct CamerasOf {
+  CamerasOf(const std::vector<CameraParams>& params, const glm::dvec3& renderOrigin) {
+    for (const CameraParams& p : params) {
+      owned.push_back(makeCamera(p, renderOrigin));
+      cameras.push_back(owned.back().get());
+    }
+  }
+  std::vector<std::unique_ptr<Camera>> owned;
+  std::vector<const Camera*> cameras;
+};
+
 }  // namespace
 
 TEST(RenderImages, EachFrameEqualsRenderImageForMixedSizesAndTypes) {
@@ -157,12 +169,8 @@ TEST(RenderImages, StackedFramesEqualRenderImageOfEach) {
   const std::vector<CameraParams> params = {
       cameraOf("perspective", w, h, 1), cameraOf("thinlens", w, h, 4),
       cameraOf("orthographic", w, h, 1), cameraOf("fisheye", w, h, 1)};
-  std::vector<std::unique_ptr<Camera>> owned;
-  std::vector<const Camera*> cameras;
-  for (const CameraParams& p : params) {
-    owned.push_back(makeCamera(p, s.scene->renderOrigin()));
-    cameras.push_back(owned.back().get());
-  }
+  const CamerasOf placed(params, s.scene->renderOrigin());
+  const std::vector<const Camera*>& cameras = placed.cameras;
   AovSet aovs = kEveryFixedAov;
   aovs.layers = 2;
   Framebuffer stacked(w, h * int(params.size()), aovs);
@@ -229,12 +237,8 @@ TEST(RenderImages, StorageNothingWroteGetsEveryValueOfAFramebuffer) {
   const std::vector<CameraParams> params = {cameraOf("perspective", w, h, 1),
                                             cameraOf("thinlens", w, h, 4),
                                             cameraOf("orthographic", w, h, 1)};
-  std::vector<std::unique_ptr<Camera>> owned;
-  std::vector<const Camera*> cameras;
-  for (const CameraParams& p : params) {
-    owned.push_back(makeCamera(p, s.scene->renderOrigin()));
-    cameras.push_back(owned.back().get());
-  }
+  const CamerasOf placed(params, s.scene->renderOrigin());
+  const std::vector<const Camera*>& cameras = placed.cameras;
   AovSet aovs = kEveryFixedAov;
   aovs.layers = 2;
   RenderSettings settings;
