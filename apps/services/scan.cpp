@@ -765,7 +765,7 @@ PreparedScan prepareScan(const ScanRequest& r) {
   std::vector<std::string> paths;
   for (int k = 0; k < r.sweeps; ++k) {
     const int64_t start =
-        r.startNs ? *r.startNs + int64_t(k) * period : trajectory.startNs() + int64_t(k) * period;
+        sweepStartNs(r.startNs, k, period).value_or(trajectory.startNs() + int64_t(k) * period);
     for (int64_t t : {start, start + period - 1})
       if (!trajectory.covers(t))
         throw Error(cat("sweep ", k, " fires at ", formatTimeNs(t), " s, outside the trajectory '",
@@ -799,9 +799,7 @@ void writeScans(const Scene& scene, const ScanRequest& r, const PreparedScan& pr
   firstOnly.returns = ScanReturns::First;
   SweepScanner firstScanner(scene, sensor, firstOnly);
   for (int k = 0; k < r.sweeps; ++k) {
-    const LidarRays rays = sweepRays(
-        sensor, trajectory, k,
-        r.startNs ? std::optional<int64_t>(*r.startNs + int64_t(k) * period) : std::nullopt);
+    const LidarRays rays = sweepRays(sensor, trajectory, k, sweepStartNs(r.startNs, k, period));
     // With an explicit start the sweep index only numbers the output; the rays' noise stays
     // a function of (seed, sweep, ray).
     ScanSweep sweep = scanner.scan(rays, image);
@@ -832,9 +830,7 @@ void writeScans(const Scene& scene, const ScanRequest& r, const PreparedScan& pr
       double bestRays = 1e30;
       for (int round = 0; round < 5; ++round) {
         const auto t0 = Clock::now();
-        sweepRays(
-            sensor, trajectory, k,
-            r.startNs ? std::optional<int64_t>(*r.startNs + int64_t(k) * period) : std::nullopt);
+        sweepRays(sensor, trajectory, k, sweepStartNs(r.startNs, k, period));
         bestRays = std::min(bestRays, secondsSince(t0));
       }
       std::printf(

@@ -112,6 +112,15 @@ bool scanNeedsContextFilter(const ScanOptions& options);
 std::string expandSweepPattern(const std::string& pattern, int sweep);
 
 /// `aperture scan`.
+/// The start of sweep `sweep` when the first one starts at `firstStartNs` (--start): that plus
+/// `sweep` periods; nullopt without it (sweepRays then starts at the trajectory's first time
+/// plus `sweep` periods).
+inline std::optional<int64_t> sweepStartNs(std::optional<int64_t> firstStartNs, int sweep,
+                                           int64_t periodNs) {
+  if (!firstStartNs) return std::nullopt;
+  return *firstStartNs + int64_t(sweep) * periodNs;
+}
+
 struct ScanRequest {
   SceneOptions scene;
   std::string lidar;            ///< spec file or preset name

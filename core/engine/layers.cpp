@@ -52,7 +52,7 @@ void setLayerMethod(LayerMethod method) {
   chosenMethod.store(int(method), std::memory_order_relaxed);
 }
 
-void checkLayerCount(int layers, const std::string& source) {
+void checkLayerCount(int layers, const char* source) {
   if (layers < 1 || layers > kMaxLayers)
     throw Error(cat(source, " ", layers, " must be in [1, ", kMaxLayers, "]"));
 }

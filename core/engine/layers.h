@@ -39,7 +39,7 @@ void setLayerMethod(LayerMethod method);
 
 /// Throws Error unless 1 <= layers <= kMaxLayers; `source` names where the value came from
 /// ("--layers", "job.json: layers").
-void checkLayerCount(int layers, const std::string& source);
+void checkLayerCount(int layers, const char* source);
 
 /// Whether a scene rendered with `aovs` should be built with BuildOptions::contextFilter: when
 /// layers are asked for and the default method is Filter.

@@ -46,41 +46,37 @@ size_t pointTypeSize(PointType type) {
   return 4;
 }
 
+namespace {
+
+/// The value of type T stored at `p` (which need not be aligned for T).
+template <class T>
+T loadAs(const unsigned char* p) {
+  T v;
+  std::memcpy(&v, p, sizeof(T));
+  return v;
+}
+
+}  // namespace
+
 double PointField::value(size_t i) const {
   const unsigned char* p = bytes.data() + i * pointTypeSize(type);
   switch (type) {
     case PointType::UInt8:
       return double(*p);
-    case PointType::UInt16: {
-      uint16_t v;
-      std::memcpy(&v, p, 2);
-      return double(v);
-    }
-    case PointType::UInt32: {
-      uint32_t v;
-      std::memcpy(&v, p, 4);
-      return double(v);
-    }
-    case PointType::Float32: {
-      float v;
-      std::memcpy(&v, p, 4);
-      return double(v);
-    }
-    case PointType::Float64: {
-      double v;
-      std::memcpy(&v, p, 8);
-      return v;
-    }
+    case PointType::UInt16:
+      return double(loadAs<uint16_t>(p));
+    case PointType::UInt32:
+      return double(loadAs<uint32_t>(p));
+    case PointType::Float32:
+      return double(loadAs<float>(p));
+    case PointType::Float64:
+      return loadAs<double>(p);
   }
   return 0;
 }
 
 uint32_t PointField::uintValue(size_t i) const {
-  if (type == PointType::UInt32) {
-    uint32_t v;
-    std::memcpy(&v, bytes.data() + 4 * i, 4);
-    return v;
-  }
+  if (type == PointType::UInt32) return loadAs<uint32_t>(bytes.data() + 4 * i);
   return uint32_t(value(i));
 }
 

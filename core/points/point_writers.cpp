@@ -8,17 +8,11 @@
 
 #include "core/io/atomic_file.h"
 #include "core/util/error.h"
+#include "core/util/spelling.h"
 
 namespace aperture {
 
 namespace {
-
-std::string lowerExtension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return char(std::tolower(c)); });
-  return ext;
-}
 
 /// PLY's original type names (every reader knows them).
 const char* plyTypeName(PointType type) {
@@ -81,7 +75,7 @@ std::vector<std::string> pointFormatExtensions() {
 }
 
 PointFormat pointFormatOf(const std::string& path) {
-  const std::string ext = lowerExtension(path);
+  const std::string ext = toLowerAscii(std::filesystem::path(path).extension().string());
   if (ext == ".ply") return PointFormat::Ply;
   if (ext == ".pcd") return PointFormat::Pcd;
   if (ext == ".las") return PointFormat::Las;

@@ -11,6 +11,7 @@
 
 #include "core/engine/intersect_scene.h"
 #include "core/engine/packet.h"
+#include "core/queries/morton_order.h"
 #include "core/queries/winding_number.h"
 #include "core/queries/world_triangles.h"
 #include "core/util/error.h"
@@ -329,7 +330,10 @@ class ParityStream {
         live += lane.live;
       }
       if (live == 0) break;
-      if (byFilter && traceByFilter(packet, valid)) continue;
+      if (byFilter) {
+        traceByFilter(packet, valid);
+        continue;
+      }
       clearHits<N>(packet);
       intersectScene<N>(scene_, &ctx, valid, packet);
       for (int k = 0; k < N; ++k) {
@@ -432,7 +436,7 @@ class ParityStream {
   /// One traversal per direction: the context filter records every hit of each lane (its t
   /// and whether it is ambiguous) and rejects it, so the ray goes on to the scene's end. The
   /// lane's hits, in order of t, then give what the retrace would have found.
-  bool traceByFilter(typename PacketOf<N>::type& packet, int* valid) {
+  void traceByFilter(typename PacketOf<N>::type& packet, int* valid) {
     static_assert(N <= 16, "ParityFilterContext holds 16 lanes");
     ParityFilterContext ctx;
     rtcInitIntersectContext(&ctx.base);
@@ -463,7 +467,6 @@ class ParityStream {
       }
       if (decided) start(lane);
     }
-    return true;
   }
 };
 
@@ -484,13 +487,6 @@ void checkOptions(const InsideOptions& options) {
 
 /// Cells per axis of parityOrder's grid over the scene's box (64³ cells, 18-bit Morton keys).
 constexpr int kParityOrderBits = 6;
-
-/// Spreads the low kParityOrderBits bits of x to every third bit.
-uint32_t spreadCellBits(uint32_t x) {
-  uint32_t spread = 0;
-  for (int b = 0; b < kParityOrderBits; ++b) spread |= ((x >> b) & 1u) << (3 * b);
-  return spread;
-}
 
 /// The order parity takes the points in: those inside the scene's box (the only ones that
 /// trace rays) by cell of a 64³ grid over the box, cells in Morton order, so that a packet's
@@ -514,7 +510,7 @@ std::vector<size_t> parityOrder(const Scene& scene, const double* points, size_t
         for (int a = 0; a < 3; ++a) {
           const double c =
               std::min((org[a] - lo[a]) * scale[a], double((1 << kParityOrderBits) - 1));
-          k |= spreadCellBits(uint32_t(c)) << a;
+          k |= uint32_t(spreadBits(uint64_t(c))) << a;
         }
         key[i] = k;
       }

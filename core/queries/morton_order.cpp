@@ -11,9 +11,6 @@
 
 namespace aperture {
 
-namespace {
-
-/// Spreads the low 21 bits of x to every third bit.
 uint64_t spreadBits(uint64_t x) {
   x &= 0x1fffff;
   x = (x | x << 32) & 0x1f00000000ffffull;
@@ -23,8 +20,6 @@ uint64_t spreadBits(uint64_t x) {
   x = (x | x << 2) & 0x1249249249249249ull;
   return x;
 }
-
-}  // namespace
 
 std::vector<size_t> mortonOrder(const double* points, size_t count, const glm::dvec3& lo,
                                 const glm::dvec3& hi) {

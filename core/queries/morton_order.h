@@ -12,6 +12,9 @@ namespace aperture {
 /// 2^21-per-axis grid over the box [lo, hi] (points outside it clamped to it, non-finite
 /// coordinates to its low side). Parallel; ties keep index order, so the result is the same
 /// for any thread count.
+/// x's low 21 bits spread to every third bit (bit b to bit 3b): one axis of a Morton code.
+uint64_t spreadBits(uint64_t x);
+
 std::vector<size_t> mortonOrder(const double* points, size_t count, const glm::dvec3& lo,
                                 const glm::dvec3& hi);
 

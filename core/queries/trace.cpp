@@ -51,8 +51,7 @@ void traceAll(const Scene& scene, const std::vector<TraceRay>& rays, std::vector
         hit.u = packet.hit.u[k], hit.v = packet.hit.v[k];
       }
       hit.geomId = h.instID[k] == RTC_INVALID_GEOMETRY_ID ? h.geomID[k] : h.instID[k];
-      hit.meshTriangle = scene.meshTriangle(hit.geomId, h.primID[k]);
-      hit.primId = scene.objectMesh(hit.geomId).sourceTriangle(hit.meshTriangle);
+      hit.primId = scene.sourcePrimId(hit.geomId, h.primID[k]);
     }
   }
 }

@@ -27,8 +27,6 @@ struct TraceHit {
   glm::vec3 ng{0.0f};        ///< unnormalised geometric normal as Embree reports it
   uint32_t geomId = kNoHit;  ///< the object (top-level geomID, or the instance's)
   uint32_t primId = kNoHit;  ///< the triangle in the object's mesh, loaded order
-  /// The stored triangle (Scene::meshTriangle): what the mesh's face properties are indexed by.
-  uint32_t meshTriangle = kNoHit;
   bool hit() const { return geomId != kNoHit; }
 };
 

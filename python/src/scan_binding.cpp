@@ -101,10 +101,7 @@ nb::dict scanArrays(const Scene& scene, const ScanCall& call) {
     app::SweepScanner scanner(scene, sensor, call.options);
     std::vector<app::ScanSweep> results;
     for (int k = 0; k < call.sweeps; ++k) {
-      const LidarRays rays =
-          sweepRays(sensor, path, k,
-                    call.startNs ? std::optional<int64_t>(*call.startNs + int64_t(k) * period)
-                                 : std::nullopt);
+      const LidarRays rays = sweepRays(sensor, path, k, app::sweepStartNs(call.startNs, k, period));
       results.push_back(scanner.scan(rays));
     }
     cloud = std::make_shared<PointCloud>(concatenated(results));
