@@ -51,6 +51,7 @@ struct ScanObjectFields {
   const uint32_t* sourceTriangles;  ///< Mesh::sourceTriangles; null: the identity
   const uint32_t* faceGroups;       ///< Mesh::faceGroups; null: none
   uint32_t instance;                ///< ObjectIds::instance
+  const glm::mat3* normalFromMesh;  ///< Scene::normalFromMesh; null: the identity
 };
 
 /// One point-to-be as a chunk's trace leaves it, before the point's fields are derived from it
@@ -76,8 +77,8 @@ struct SweepContext {
   const LidarRays& rays;
   const ScanOptions& options;
   const std::vector<ScanObjectFields>& objects;
-  Pose sweepStartFromWorld;
-  std::vector<Pose> sensorFromWorld;  ///< per pose of `rays`
+  PoseMatrix sweepStartFromWorld;
+  std::vector<PoseMatrix> sensorFromWorld;  ///< per pose of `rays`
 
   /// The documented intensity model: reflectance (the face property in percent, else 1) ·
   /// incidence / range².
@@ -95,22 +96,44 @@ struct SweepContext {
     const ScanObjectFields& o = objects[s.object];
     return o.instance + (o.faceGroups ? o.faceGroups[s.triangle] : 0u);
   }
-  /// The point of `s` in the frame asked for.
-  glm::dvec3 pointOf(const Surface& s) const {
+  /// Where the ray of `s` met the surface, in world coordinates.
+  glm::dvec3 worldPointOf(const Surface& s) const {
     const size_t i = s.ray;
     const double travel = s.range - double(rays.rangeOffset[i]);
-    const glm::dvec3 world = rays.origin[i] + rays.direction[i] * travel;
+    return rays.origin[i] + rays.direction[i] * travel;
+  }
+  /// Calls f(toFrame) with toFrame(s, world) giving the world point of `s` in the frame asked
+  /// for: the frame is chosen once, outside the caller's loop over points.
+  template <class F>
+  void withFrame(const F& f) const {
     switch (options.frame) {
       case ScanFrame::Sensor:
-        return sensorFromWorld[rays.poseIndex[i]].apply(world);
+        return f([this](const Surface& s, const glm::dvec3& world) {
+          return sensorFromWorld[rays.poseIndex[s.ray]].apply(world);
+        });
       case ScanFrame::World:
-        return world;
+        return f([](const Surface&, const glm::dvec3& world) { return world; });
       case ScanFrame::SweepStart:
-        return sweepStartFromWorld.apply(world);
+        return f([this](const Surface&, const glm::dvec3& world) {
+          return sweepStartFromWorld.apply(world);
+        });
     }
-    return world;
   }
 };
+
+/// Refuses a ray of [first, last) that fires before the sweep's start or past what the uint32
+/// time field holds (chunk by chunk, inside the parallel loop, rather than in a serial pass
+/// over the sweep's rays before it).
+void checkFiringTimes(const SweepContext& c, size_t first, size_t last) {
+  const int64_t* t = c.rays.timeNs.data();
+  bool inRange = true;
+  for (size_t i = first; i < last; ++i) inRange &= t[i] >= 0 && t[i] <= int64_t(UINT32_MAX);
+  if (inRange) return;
+  for (size_t i = first; i < last; ++i)
+    if (t[i] < 0 || t[i] > int64_t(UINT32_MAX))
+      throw Error(cat(c.sensor.source.path, ": ray ", i, " fires ", t[i],
+                      " ns after the sweep's start, past the uint32 time field (4.29 s)"));
+}
 
 /// Surface k (0 nearest) along ray i, hit at `h`; false when noise drops it or its range falls
 /// outside [minRange, maxRange].
@@ -124,10 +147,11 @@ bool surfaceOf(const SweepContext& c, size_t i, const LayerHit& h, int k, Surfac
   }
   if (range < c.sensor.minRange || range > c.sensor.maxRange || range <= 0) return false;
   const unsigned object = h.object();
-  const glm::vec3 n = c.scene.normalFromMesh(object) * h.ng;
+  const glm::mat3* toWorld = c.objects[object].normalFromMesh;
+  const glm::vec3 n = toWorld ? *toWorld * h.ng : h.ng;
   const float len = glm::length(n);
   s.range = range;
-  s.incidence = len > 0 ? std::fabs(glm::dot(n / len, glm::vec3(c.rays.direction[i]))) : 0.0f;
+  s.incidence = len > 0 ? std::fabs(glm::dot(n, glm::vec3(c.rays.direction[i]))) / len : 0.0f;
   s.object = object;
   s.triangle = c.scene.meshTriangle(object, h.primID);
   s.ray = uint32_t(i);
@@ -149,7 +173,7 @@ size_t traceFirstReturns(const SweepContext& c, size_t first, size_t last, const
   for (size_t p = first; p < last; p += kScanPacket) {
     fillLidarLanes(c.rays, p, renderOrigin, pb.lanes, pb.valid);
     clearHits<kScanPacket>(pb.packet);
-    intersectScene<kScanPacket>(c.scene, &ctx, pb.valid, pb.packet);
+    intersectScene<kScanPacket>(c.scene, &ctx, pb.valid, pb.packet, /*activeTraceable=*/true);
     const int lanes = int(std::min(size_t(kScanPacket), last - p));
     for (int k = 0; k < lanes; ++k) {
       if (!pb.valid[k] || h.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
@@ -297,21 +321,39 @@ PointSink addPointFields(PointCloud& cloud, const ScanOptions& options,
   return sink;
 }
 
+/// The positions of points [at, at + count) of the cloud, those of `xyz` not null: surfaces `s`
+/// in the frame `toFrame` takes them to (SweepContext::withFrame).
+template <class ToFrame, typename T>
+void writePositions(const SweepContext& c, const ToFrame& toFrame, T* const (&xyz)[3], size_t at,
+                    const Surface* s, size_t count) {
+  if (xyz[0] && xyz[1] && xyz[2]) {
+    T* __restrict x = xyz[0] + at;
+    T* __restrict y = xyz[1] + at;
+    T* __restrict z = xyz[2] + at;
+    for (size_t q = 0; q < count; ++q) {
+      const glm::dvec3 p = toFrame(s[q], c.worldPointOf(s[q]));
+      x[q] = T(p.x), y[q] = T(p.y), z[q] = T(p.z);
+    }
+    return;
+  }
+  if (!xyz[0] && !xyz[1] && !xyz[2]) return;
+  for (size_t q = 0; q < count; ++q) {
+    const glm::dvec3 p = toFrame(s[q], c.worldPointOf(s[q]));
+    for (int a = 0; a < 3; ++a)
+      if (xyz[a]) xyz[a][at + q] = T(p[a]);
+  }
+}
+
 /// Points [at, at + count) of the cloud: surfaces `s` with the fields of `f` (those not null),
 /// a few fields at a time (short loops the compiler vectorises, over surfaces still in cache):
 /// each group in one loop when every field of it is there, else field by field.
 void writePoints(const SweepContext& c, const PointSink& f, size_t at, const Surface* s,
                  size_t count) {
   const LidarRays& rays = c.rays;
-  if (f.xyzDouble[0] || f.xyzDouble[1] || f.xyzDouble[2] || f.xyzFloat[0] || f.xyzFloat[1] ||
-      f.xyzFloat[2])
-    for (size_t q = 0; q < count; ++q) {
-      const glm::dvec3 point = c.pointOf(s[q]);
-      for (int a = 0; a < 3; ++a) {
-        if (f.xyzDouble[a]) f.xyzDouble[a][at + q] = point[a];
-        if (f.xyzFloat[a]) f.xyzFloat[a][at + q] = float(point[a]);
-      }
-    }
+  c.withFrame([&](const auto& toFrame) {
+    writePositions(c, toFrame, f.xyzFloat, at, s, count);
+    writePositions(c, toFrame, f.xyzDouble, at, s, count);
+  });
   float* __restrict range = f.range ? f.range + at : nullptr;
   float* __restrict incidence = f.incidence ? f.incidence + at : nullptr;
   uint32_t* __restrict geomid = f.geomid ? f.geomid + at : nullptr;
@@ -502,7 +544,10 @@ SweepScanner::SweepScanner(const Scene& scene, const LidarSensor& sensor,
     state_->objects.push_back({r ? r->values.data() : nullptr,
                                mesh.sourceTriangles.empty() ? nullptr : mesh.sourceTriangles.data(),
                                mesh.faceGroups.empty() ? nullptr : mesh.faceGroups.data(),
-                               scene.objectIds(unsigned(o)).instance});
+                               scene.objectIds(unsigned(o)).instance,
+                               scene.normalFromMesh(unsigned(o)) == glm::mat3(1.0f)
+                                   ? nullptr
+                                   : &scene.normalFromMesh(unsigned(o))});
     for (const std::string& name : options.faceProperties)
       state_->properties.push_back(mesh.property(PropertyDomain::Face, name));
   }
@@ -517,14 +562,11 @@ ScanSweep SweepScanner::scan(const LidarRays& rays, bool rangeImage) {
   if (rangeImage && options.returns == ScanReturns::All)
     throw Error("a range image holds one return per ray: --returns all needs a point cloud");
   const auto t0 = Clock::now();
-  SweepContext c{scene, sensor, rays, options, state_->objects, rays.sweepStartPose.inverse(), {}};
-  for (const Pose& p : rays.poses) c.sensorFromWorld.push_back(p.inverse());
+  SweepContext c{
+      scene, sensor, rays, options, state_->objects, PoseMatrix(rays.sweepStartPose.inverse()), {}};
+  for (const Pose& p : rays.poses) c.sensorFromWorld.emplace_back(p.inverse());
   const size_t n = rays.size();
   const bool all = options.returns == ScanReturns::All;
-  for (size_t i = 0; i < n; ++i)
-    if (rays.timeNs[i] < 0 || rays.timeNs[i] > int64_t(UINT32_MAX))
-      throw Error(cat(sensor.source.path, ": ray ", i, " fires ", rays.timeNs[i],
-                      " ns after the sweep's start, past the uint32 time field (4.29 s)"));
 
   // The cloud's fields, left unwritten: every value is written below. One return per ray
   // (first, last, strongest): sized for every ray, each chunk writes its points straight into
@@ -550,6 +592,7 @@ ScanSweep SweepScanner::scan(const LidarRays& rays, bool rangeImage) {
   LargeBuffer<Surface>& surfaces = state_->surfaces;
   if (all && surfaces.size() < n * perRay) resizeOnHugePages(surfaces, n * perRay);
   parallelForChunks(n, kScanChunk, [&](size_t chunk, size_t first, size_t last) {
+    checkFiringTimes(c, first, last);
     if (all) {
       Surface* out = surfaces.data() + first * perRay;
       offset[chunk + 1] =

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/engine/packet.h"
 #include "core/util/error.h"
 #include "core/util/parallel.h"
 
@@ -244,19 +245,25 @@ void fillLidarLanes(const LidarRays& rays, size_t first, const glm::dvec3& rende
     const bool in = i < rays.size();
     const glm::dvec3 o = in ? rays.origin[i] - renderOrigin : glm::dvec3(0.0);
     const glm::dvec3 d = in ? rays.direction[i] : glm::dvec3(0.0, 0.0, 1.0);
-    out.orgX[k] = float(o.x);
-    out.orgY[k] = float(o.y);
-    out.orgZ[k] = float(o.z);
-    out.dirX[k] = float(d.x);
-    out.dirY[k] = float(d.y);
-    out.dirZ[k] = float(d.z);
-    out.tnear[k] = in ? rays.tnear[i] : 0.0f;
-    out.tfar[k] = in ? rays.tfar[i] : 0.0f;
+    const float ox = float(o.x), oy = float(o.y), oz = float(o.z);
+    const float dx = float(d.x), dy = float(d.y), dz = float(d.z);
+    const float tnear = in ? rays.tnear[i] : 1.0f, tfar = in ? rays.tfar[i] : 0.0f;
+    // Sealed here, from the values in registers (sealLanes would read the lanes back right
+    // after these scalar stores, each vector load waiting for the stores it spans).
+    const int live = int(in) & traceableRay(ox, oy, oz, dx, dy, dz, tnear, tfar);
+    out.orgX[k] = ox;
+    out.orgY[k] = oy;
+    out.orgZ[k] = oz;
+    out.dirX[k] = dx;
+    out.dirY[k] = dy;
+    out.dirZ[k] = dz;
+    out.tnear[k] = live ? tnear : 1.0f;
+    out.tfar[k] = live ? tfar : 0.0f;
     out.time[k] = 0.0f;
     out.mask[k] = 0xFFFFFFFFu;
     out.id[k] = unsigned(k);
     out.flags[k] = 0;
-    valid[k] = in ? -1 : 0;
+    valid[k] = -live;
   }
 }
 

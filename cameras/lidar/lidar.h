@@ -170,7 +170,9 @@ LidarRays sweepRays(const LidarSensor& sensor, const Trajectory& trajectory, int
 
 /// Writes rays [first, first + lanes) of `rays` into packet lanes (render space: origin minus
 /// `renderOrigin`, rounded once; unit directions; tnear/tfar from the ray; time 0, mask −1,
-/// id = lane), valid[k] = −1; lanes past the end are invalid with finite values.
+/// id = lane), sealed as sealLanes would: valid[k] = −1 for a ray Embree can take
+/// (traceableRay), else 0 with the empty segment tnear 1, tfar 0 (lanes past the end too, with
+/// finite values). The packet may go to intersect<N> with `activeTraceable`.
 void fillLidarLanes(const LidarRays& rays, size_t first, const glm::dvec3& renderOrigin,
                     RayLanes& out, int* valid);
 

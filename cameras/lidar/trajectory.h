@@ -24,6 +24,18 @@ struct Pose {
   /// The pose of a rigid 4x4 matrix (its rotation block orthonormalised to a quaternion).
   static Pose fromMatrix(const glm::dmat4& m);
 };
+/// A pose as a rotation matrix and a translation, for applying it to many points: 9 products a
+/// point, half what the quaternion takes (the two agree to rounding, not bit for bit).
+struct PoseMatrix {
+  glm::dmat3 rotation{1.0};
+  glm::dvec3 translation{0.0};
+
+  PoseMatrix() = default;
+  explicit PoseMatrix(const Pose& pose)
+      : rotation(glm::mat3_cast(pose.rotation)), translation(pose.translation) {}
+  glm::dvec3 apply(const glm::dvec3& p) const { return rotation * p + translation; }
+};
+
 /// a · b: first b, then a (aFromC = aFromB · bFromC).
 Pose operator*(const Pose& a, const Pose& b);
 

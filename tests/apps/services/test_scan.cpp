@@ -252,6 +252,29 @@ TEST(Scan, RangeLimitsDropPointsAndZeroPixels) {
   EXPECT_EQ(zeros, rays.size() - inside);
 }
 
+TEST(Scan, ARayPastTheTimeFieldOrBeforeTheSweepIsRefusedByName) {
+  BoxRoom room;
+  const LidarSensor sensor = roomSensor(3000);  // 21000 rays: past the first chunk of 4096
+  for (const int64_t bad : {int64_t(UINT32_MAX) + 1, int64_t(-1)}) {
+    LidarRays rays = staticRoomRays(sensor);
+    const size_t late = rays.size() - 7;
+    rays.timeNs[late] = bad;
+    try {
+      scanSweep(*room.scene, sensor, rays, {});
+      FAIL() << "a ray firing at " << bad << " ns was taken";
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(cat("ray ", late, " fires ", bad, " ns")), std::string::npos) << what;
+      EXPECT_NE(what.find("room (test)"), std::string::npos) << what;
+    }
+  }
+  // The last time the field holds is taken.
+  LidarRays rays = staticRoomRays(sensor);
+  rays.timeNs.back() = int64_t(UINT32_MAX);
+  const ScanSweep sweep = scanSweep(*room.scene, sensor, rays, {});
+  EXPECT_EQ(fieldOf<uint32_t>(sweep.cloud, pf::kTime)[sweep.cloud.size - 1], UINT32_MAX);
+}
+
 TEST(Scan, MovingSensorPointsLandOnTheWallsThroughTheirOwnPose) {
   BoxRoom room;
   const LidarSensor sensor = roomSensor(360);

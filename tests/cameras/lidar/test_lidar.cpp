@@ -4,13 +4,16 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <glm/gtc/quaternion.hpp>
+#include <limits>
 #include <map>
 #include <set>
 
 #include "cameras/lidar/lidar.h"
+#include "core/engine/packet.h"
 #include "core/queries/trace.h"
 #include "core/util/error.h"
 #include "core/util/parallel.h"
@@ -245,6 +248,21 @@ TEST(LidarSweep, PacketLanesAreTheTraceRays) {
     EXPECT_EQ(tn[k], trace[i].tnear);
     EXPECT_EQ(tf[k], trace[i].tfar);
   }
+  // A ray Embree cannot take is sealed as sealLanes seals it: inactive, the empty segment.
+  LidarRays bad = rays;
+  bad.direction[first].x = std::numeric_limits<double>::quiet_NaN();
+  bad.tfar[first + 1] = bad.tnear[first + 1] - 1.0f;
+  fillLidarLanes(bad, first, renderOrigin, lanes, valid);
+  for (int k : {0, 1}) {
+    EXPECT_EQ(valid[k], 0) << k;
+    EXPECT_EQ(tn[k], 1.0f) << k;
+    EXPECT_EQ(tf[k], 0.0f) << k;
+  }
+  EXPECT_EQ(valid[2], -1);
+  int sealed[16];
+  std::copy(valid, valid + 16, sealed);
+  sealLanes<16>(sealed, lanes);
+  EXPECT_TRUE(std::equal(valid, valid + 16, sealed));
 }
 
 // Noisy ranges of rays [0, n) computed on `threads` threads.
