@@ -59,12 +59,14 @@ struct ScanObjectFields {
 struct ScanSurface {
   double range;       ///< metres, reported (with the beam's range offset and noise)
   float incidence;    ///< |cos| between the ray and the surface's normal
+  float intensity;    ///< SweepContext::intensityOf, computed once (it also picks the strongest)
   uint32_t object;    ///< the object hit
   uint32_t triangle;  ///< the stored triangle (Scene::meshTriangle), for the face properties
   uint32_t ray;       ///< its ray's index in the sweep
   uint8_t number;     ///< its return number along the ray, from 1 (ScanReturns::All)
   uint8_t returns;    ///< the ray's returns (ScanReturns::All)
 };
+static_assert(sizeof(ScanSurface) == 32, "the documented size");
 
 namespace {
 
@@ -157,6 +159,7 @@ bool surfaceOf(const SweepContext& c, size_t i, const LayerHit& h, int k, Surfac
   s.ray = uint32_t(i);
   s.number = 1;
   s.returns = 1;
+  s.intensity = c.intensityOf(s);
   return true;
 }
 
@@ -210,8 +213,7 @@ size_t traceReturns(const SweepContext& c, size_t first, size_t last, const Emit
         Surface& s = kept[n];
         if (!surfaceOf(c, i, found[size_t(k)].hit[j], j, s)) continue;
         if (o.returns == ScanReturns::Strongest) {
-          const float intensity = c.intensityOf(s);
-          if (intensity > best) best = intensity, chosen = n;
+          if (s.intensity > best) best = s.intensity, chosen = n;
         } else {
           chosen = n;  // last: the farthest kept
         }
@@ -376,13 +378,13 @@ void writePoints(const SweepContext& c, const PointSink& f, size_t at, const Sur
   uint32_t* __restrict instance = f.instance ? f.instance + at : nullptr;
   if (intensity && primid && instance) {
     for (size_t q = 0; q < count; ++q) {
-      intensity[q] = c.intensityOf(s[q]);
+      intensity[q] = s[q].intensity;
       primid[q] = c.primIdOf(s[q]);
       instance[q] = c.instanceOf(s[q]);
     }
   } else {
     if (intensity)
-      for (size_t q = 0; q < count; ++q) intensity[q] = c.intensityOf(s[q]);
+      for (size_t q = 0; q < count; ++q) intensity[q] = s[q].intensity;
     if (primid)
       for (size_t q = 0; q < count; ++q) primid[q] = c.primIdOf(s[q]);
     if (instance)

@@ -164,22 +164,15 @@ void collectNearest(const Scene& scene, int capacity, PacketBuffers<N>& rays, co
   intersectScene<N>(scene, &ctx.base, valid, rays.packet);
 }
 
-/// Filter: the K nearest primitives of each lane in one traversal (separation 0), or the chain
-/// of surfaces built from the 2K nearest, traversing again past the last of them while a
-/// chain is short of K and the list was full (more may lie beyond).
+/// traceByFilter with a separation: the chain of surfaces each lane of `live` builds from the
+/// 2K nearest primitives, traversing again past the last of them while the chain is short of K
+/// and the list was full (more may lie beyond). `tfar`: the lanes' own.
 template <int N>
-void traceByFilter(const Scene& scene, const SurfaceSearch& search, PacketBuffers<N>& rays,
-                   LaneLayers* found) {
+void chainSurfaces(const Scene& scene, const SurfaceSearch& search, PacketBuffers<N>& rays,
+                   const float* tfar, int* live, LaneLayers* found) {
   const int K = search.surfaces;
   const float separation = search.separation;
-  const int capacity = separation > 0 ? std::min(kMaxLayers, 2 * K) : K;
-  float tfar[N];
-  int live[N];
-  for (int k = 0; k < N; ++k) {
-    tfar[k] = rays.lanes.tfar[k];
-    live[k] = rays.valid[k] ? -1 : 0;
-    found[k].count = 0;
-  }
+  const int capacity = std::min(kMaxLayers, 2 * K);
   LaneLayers nearest[N];
   // Each pass either ends a lane or moves its tnear past at least one primitive; the bound is
   // a safeguard.
@@ -192,10 +185,6 @@ void traceByFilter(const Scene& scene, const SurfaceSearch& search, PacketBuffer
       const LaneLayers& raw = nearest[k];
       LaneLayers& chain = found[k];
       live[k] = 0;
-      if (separation <= 0) {
-        chain = raw;
-        continue;
-      }
       for (int i = 0; i < raw.count && chain.count < K; ++i)
         if (chain.count == 0 ||
             raw.hit[i].t >= nextSurfaceStart(chain.hit[chain.count - 1].t, separation))
@@ -210,6 +199,26 @@ void traceByFilter(const Scene& scene, const SurfaceSearch& search, PacketBuffer
       live[k] = -1;
       any = true;
     }
+  }
+}
+
+/// Filter: the K nearest primitives of each lane in one traversal (separation 0), or the chain
+/// of surfaces a separation apart (chainSurfaces).
+template <int N>
+void traceByFilter(const Scene& scene, const SurfaceSearch& search, PacketBuffers<N>& rays,
+                   LaneLayers* found) {
+  float tfar[N];
+  int live[N];
+  for (int k = 0; k < N; ++k) {
+    tfar[k] = rays.lanes.tfar[k];
+    live[k] = rays.valid[k] ? -1 : 0;
+    found[k].count = 0;
+  }
+  if (search.separation <= 0) {
+    // Every primitive is a surface: the K nearest, straight into found.
+    collectNearest<N>(scene, search.surfaces, rays, live, found);
+  } else {
+    chainSurfaces<N>(scene, search, rays, tfar, live, found);
   }
   for (int k = 0; k < N; ++k) rays.lanes.tfar[k] = tfar[k];
 }
