@@ -36,6 +36,9 @@ double truncationBound4Pi(double area, double radius, double d) {
   return area * q * q * q * (4.0 - 3.0 * q) / (d * d * rest * rest);
 }
 
+/// The winding number and its bound from their sums times 4π (what traversal adds up).
+WindingValue valueOf4Pi(double sum, double bound) { return {sum / kFourPi, bound / kFourPi}; }
+
 }  // namespace
 
 double triangleSolidAngle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
@@ -285,52 +288,24 @@ inline double WindingNumberTree::farField4Pi(const FarTerms& f, const glm::dvec3
 }
 
 WindingValue WindingNumberTree::evaluate(const glm::dvec3& p, double beta) const {
-  WindingValue value;
   if (!finitePoint(p)) {
-    value.winding = value.errorBound = std::numeric_limits<double>::quiet_NaN();
-    return value;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return {nan, nan};
   }
-  if (nodes_.empty()) {
-    value.winding = exact(p);
-    return value;
-  }
-  double sum = 0, bound = 0;  // both times 4π
-  uint32_t stack[128];
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const uint32_t index = stack[--top];
-    const Node& node = nodes_[index];
-    const glm::dvec3 r = node.centre - p;
-    const double d = glm::length(r);
-    if (d > beta * node.radius) {
-      const FarTerms& f = far_[index];
-      sum += farField4Pi(f, r, d);
-      bound += truncationBound4Pi(f.area, node.radius, d);
-    } else if (node.count > 0) {
-      const glm::dvec3* c = corners_.data() + 3 * size_t(node.first);
-      for (uint32_t k = 0; k < node.count; ++k, c += 3)
-        sum += triangleSolidAngle(c[0], c[1], c[2], p);
-    } else {
-      // The children's far-field terms are read if they are far: start loading them now.
-      for (const uint32_t child : {node.right, index + 1})
-        for (int line = 0; line < int(sizeof(FarTerms)); line += 64)
-          __builtin_prefetch(reinterpret_cast<const char*>(&far_[child]) + line);
-      stack[top++] = node.right;
-      stack[top++] = index + 1;
-    }
-  }
-  value.winding = sum / kFourPi;
-  value.errorBound = bound / kFourPi;
-  return value;
+  if (nodes_.empty()) return {exact(p), 0.0};
+  // A packet of one: lane 0 alone reads `points`.
+  double sum[kPacket], bound[kPacket];
+  evaluatePacket(&p, 1u, beta, sum, bound);
+  return valueOf4Pi(sum[0], bound[0]);
 }
 
 void WindingNumberTree::evaluatePacket(const glm::dvec3* points, unsigned lanes, double beta,
                                        double* sum, double* bound) const {
-  // The traversal of evaluate(p, beta) for up to kPacket points at once: a node is visited
-  // with the lanes that reach it, each lane opens or uses it as evaluate would, and each adds
-  // its terms in the same order, so every lane gets evaluate's value to the bit. The points
-  // share each node's loads.
+  // Depth first, left child first, for up to kPacket points at once: a node is visited with
+  // the lanes that reach it; a lane farther than beta·radius from its centre adds its
+  // far-field terms, the others open it (or sum its triangles, at a leaf). Each lane adds its
+  // terms in the same order whichever lanes share its packet, so a point's value does not
+  // depend on them (a packet of one is evaluate(p, beta)). The points share each node's loads.
   for (int l = 0; l < kPacket; ++l) sum[l] = bound[l] = 0;
   struct Entry {
     uint32_t index;
@@ -406,7 +381,7 @@ void WindingNumberTree::evaluate(const double* points, size_t count, double beta
       unsigned refine = 0;
       for (int l = 0; l < n; ++l)
         if (lanes >> l & 1u) {
-          const WindingValue v{sum[l] / kFourPi, bound[l] / kFourPi};
+          const WindingValue v = valueOf4Pi(sum[l], bound[l]);
           if (std::abs(v.winding - 0.5) < refineBand)
             refine |= 1u << l;
           else
@@ -415,7 +390,7 @@ void WindingNumberTree::evaluate(const double* points, size_t count, double beta
       if (!refine) continue;
       evaluatePacket(p, refine, kWindingRefineFactor * beta, sum, bound);
       for (int l = 0; l < n; ++l)
-        if (refine >> l & 1u) store(order[at + size_t(l)], {sum[l] / kFourPi, bound[l] / kFourPi});
+        if (refine >> l & 1u) store(order[at + size_t(l)], valueOf4Pi(sum[l], bound[l]));
     }
   });
 }

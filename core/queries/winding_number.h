@@ -131,7 +131,8 @@ class WindingNumberTree {
   /// How many points evaluatePacket takes at once.
   static constexpr int kPacket = 8;
   /// 4π times the winding number and its bound at the points of `lanes` (a bit per point of
-  /// `points`), exactly as evaluate(p, beta) computes them.
+  /// `points`; only those are read): the one traversal of the tree, which evaluate(p, beta)
+  /// runs with one lane. A lane's value does not depend on the other lanes.
   void evaluatePacket(const glm::dvec3* points, unsigned lanes, double beta, double* sum,
                       double* bound) const;
   static double farField4Pi(const FarTerms& f, const glm::dvec3& r, double d);

@@ -293,7 +293,9 @@ TEST(WindingNumber, TreeFarFromTheSoupIsTheDirectTaylorExpansion) {
 
 TEST(WindingNumber, ManyPointsGetTheValuesOfOnePointAtATime) {
   // The array form goes through the tree several points at a time (and re-evaluates near 0.5
-  // with a larger beta): each point must get what evaluate(p, beta) gives it, to the bit.
+  // with a larger beta): each point must get what evaluate(p, beta), a packet of one, gives
+  // it, to the bit (a point's value does not depend on the points beside it), and that value
+  // must be the exact sum within its bound (the traversal itself, checked independently).
   const std::vector<glm::dvec3> corners = cornersOf(subdividedBox(16, true));
   const WindingNumberTree tree(corners);
   std::vector<glm::dvec3> points = randomPoints(3001, glm::dvec3(-1.5), glm::dvec3(1.5), 23);
@@ -303,7 +305,7 @@ TEST(WindingNumber, ManyPointsGetTheValuesOfOnePointAtATime) {
   for (const glm::dvec3& p : points) flat.insert(flat.end(), {p.x, p.y, p.z});
   std::vector<double> w(points.size()), bound(points.size());
   tree.evaluate(flat.data(), points.size(), 2.0, w.data(), bound.data());
-  size_t refined = 0;
+  size_t refined = 0, far = 0;
   for (size_t i = 0; i < points.size(); ++i) {
     WindingValue v = tree.evaluate(points[i], 2.0);
     if (std::abs(v.winding - 0.5) < kWindingRefineBand) {
@@ -316,8 +318,11 @@ TEST(WindingNumber, ManyPointsGetTheValuesOfOnePointAtATime) {
     }
     EXPECT_EQ(w[i], v.winding) << i;
     EXPECT_EQ(bound[i], v.errorBound) << i;
+    EXPECT_LE(std::abs(w[i] - exactWindingNumber(corners, points[i])), bound[i] + 1e-10) << i;
+    far += bound[i] > 0;
   }
   EXPECT_GE(refined, 40u);
+  EXPECT_GT(far, points.size() / 2);  // the far field was used
 }
 
 }  // namespace winding_test
