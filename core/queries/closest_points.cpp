@@ -6,6 +6,7 @@
 
 #include "core/engine/packet.h"
 #include "core/queries/morton_order.h"
+#include "core/queries/world_triangles.h"
 #include "core/util/error.h"
 #include "core/util/parallel.h"
 
@@ -170,16 +171,15 @@ QueryScene queryScene(const Scene& scene) {
   QueryScene qs;
   qs.scene = &scene;
   qs.origin = scene.renderOrigin();
-  size_t triangles = 0;
   for (const SceneObject& o : scene.objects()) {
     ObjectFrame f;
     f.mesh = o.mesh;
     f.worldFromMesh = o.worldFromMesh;
     f.identity = o.worldFromMesh == glm::dmat4(1.0);
     qs.objects.push_back(f);
-    triangles += o.subset ? o.subset->triangleCount() : o.mesh->triangleCount();
   }
-  if (triangles == 0) throw Error("closest points: the scene holds no triangle");
+  if (worldObjects(scene).triangles == 0)
+    throw Error("closest points: the scene holds no triangle");
   return qs;
 }
 

@@ -73,34 +73,21 @@ std::vector<uint32_t> weldedIds(const std::vector<glm::dvec3>& positions) {
 /// (x = worldFromMesh · (anchor + position), double), and vertices at one position share an
 /// id. Welding the vertices, not the corners, sorts a sixth as many positions.
 std::vector<uint32_t> weldedTriangles(const Scene& scene) {
-  const std::vector<SceneObject>& objects = scene.objects();
-  std::vector<size_t> firstVertex(objects.size() + 1, 0);
-  for (size_t o = 0; o < objects.size(); ++o)
-    firstVertex[o + 1] = firstVertex[o] + objects[o].mesh->vertexCount;
-  if (firstVertex.back() >= (size_t(1) << 31))
-    throw Error(cat("checkClosed: ", firstVertex.back(), " vertices is more than it handles"));
-  std::vector<glm::dvec3> positions(firstVertex.back());
-  for (size_t o = 0; o < objects.size(); ++o) {
-    const Mesh& m = *objects[o].mesh;
-    const glm::dmat4 worldFromMesh = objects[o].worldFromMesh;
-    parallelFor(m.vertexCount, 1 << 16, [&](size_t begin, size_t end) {
-      for (size_t v = begin; v < end; ++v)
-        positions[firstVertex[o] + v] =
-            glm::dvec3(worldFromMesh * glm::dvec4(m.anchor + glm::dvec3(m.vertex(v)), 1.0));
+  const WorldObjects all = worldObjects(scene);
+  if (all.vertices >= (size_t(1) << 31))
+    throw Error(cat("checkClosed: ", all.vertices, " vertices is more than it handles"));
+  std::vector<glm::dvec3> positions(all.vertices);
+  for (const WorldObject& o : all.objects)
+    parallelFor(o.mesh->vertexCount, 1 << 16, [&](size_t begin, size_t end) {
+      const WorldObject placed = o;  // local: `positions` cannot alias it
+      for (size_t v = begin; v < end; ++v) positions[placed.firstVertex + v] = placed.vertex(v);
     });
-  }
   const std::vector<uint32_t> ids = weldedIds(positions);
-  std::vector<uint32_t> triangles;
-  for (size_t o = 0; o < objects.size(); ++o) {
-    const SceneObject& object = objects[o];
-    const uint32_t* indices =
-        object.subset ? object.subset->indices.data() : object.mesh->indices.data();
-    const size_t corners =
-        3 * (object.subset ? object.subset->triangleCount() : object.mesh->triangleCount());
-    const size_t first = triangles.size();
-    triangles.resize(first + corners);
-    parallelFor(corners, 1 << 16, [&](size_t begin, size_t end) {
-      for (size_t k = begin; k < end; ++k) triangles[first + k] = ids[firstVertex[o] + indices[k]];
+  std::vector<uint32_t> triangles(3 * all.triangles);
+  for (const WorldObject& o : all.objects) {
+    uint32_t* out = triangles.data() + 3 * o.firstTriangle;
+    parallelFor(3 * o.triangles, 1 << 16, [&](size_t begin, size_t end) {
+      for (size_t k = begin; k < end; ++k) out[k] = ids[o.firstVertex + o.indices[k]];
     });
   }
   return triangles;
@@ -558,13 +545,6 @@ void insideByWinding(const Scene& scene, const double* points, size_t count,
   result.nonFinite = nonFinite;
 }
 
-size_t placedTriangles(const Scene& scene) {
-  size_t total = 0;
-  for (const SceneObject& o : scene.objects())
-    total += o.subset ? o.subset->triangleCount() : o.mesh->triangleCount();
-  return total;
-}
-
 }  // namespace
 
 glm::vec3 parityDirection(int k) {
@@ -576,7 +556,7 @@ glm::vec3 parityDirection(int k) {
 InsideResult insideOf(const Scene& scene, const double* points, size_t count,
                       const InsideOptions& options) {
   checkOptions(options);
-  if (placedTriangles(scene) == 0) throw Error("insideOf: the scene has no triangles");
+  if (worldObjects(scene).triangles == 0) throw Error("insideOf: the scene has no triangles");
   InsideResult result;
   result.method = options.method;
   if (result.method == InsideMethod::Automatic)
