@@ -229,26 +229,16 @@ ParityWalk walkParityHits(std::vector<ParityHit>& hits) {
   return walk;
 }
 
-/// The intersection context of parity's filter: Embree hands the filter the context pointer
-/// it was given, so the lanes' lists ride behind the RTCIntersectContext that must come first.
-struct ParityFilterContext {
-  RTCIntersectContext base;
+/// Parity's collector (CollectingContext): each hit, with whether it is ambiguous, in its
+/// lane's list.
+struct ParityHitCollector {
   const Scene* scene = nullptr;
   float diagonal = 0, band = 0;
   std::vector<ParityHit>* lanes[16] = {};
   glm::vec3 dir[16];
-};
-static_assert(offsetof(ParityFilterContext, base) == 0, "Embree passes &base back to the filter");
 
-/// Context filter: records each hit in its lane's list (the lane is the ray's id: Embree may
-/// pass the filter one ray of a packet or a copy of it) and rejects it so that traversal goes
-/// on.
-void collectParityHit(const RTCFilterFunctionNArguments* args) {
-  const auto* ctx = reinterpret_cast<const ParityFilterContext*>(args->context);
-  const unsigned n = args->N;
-  for (unsigned i = 0; i < n; ++i) {
-    if (args->valid[i] == 0) continue;
-    args->valid[i] = 0;
+  void operator()(const RTCFilterFunctionNArguments* args, unsigned i) const {
+    const unsigned n = args->N;
     ParityHitView h{RTCRayN_tfar(args->ray, n, i),
                     glm::vec3(RTCHitN_Ng_x(args->hit, n, i), RTCHitN_Ng_y(args->hit, n, i),
                               RTCHitN_Ng_z(args->hit, n, i)),
@@ -257,12 +247,11 @@ void collectParityHit(const RTCFilterFunctionNArguments* args) {
                     RTCHitN_geomID(args->hit, n, i),
                     RTCHitN_instID(args->hit, n, i, 0),
                     RTCHitN_primID(args->hit, n, i)};
-    if (ctx->scene->hasChunks()) ctx->scene->resolveChunkHits(&h.geomID, &h.primID, &h.instID, 1);
+    if (scene->hasChunks()) scene->resolveChunkHits(&h.geomID, &h.primID, &h.instID, 1);
     const unsigned lane = RTCRayN_id(args->ray, n, i);
-    ctx->lanes[lane]->push_back(
-        {h.t, ambiguousParityHit(*ctx->scene, ctx->diagonal, ctx->band, h, ctx->dir[lane])});
+    lanes[lane]->push_back({h.t, ambiguousParityHit(*scene, diagonal, band, h, dir[lane])});
   }
-}
+};
 
 /// Parity's packet width.
 constexpr int kParityPacket = 8;
@@ -424,15 +413,14 @@ class ParityStream {
   /// and whether it is ambiguous) and rejects it, so the ray goes on to the scene's end. The
   /// lane's hits, in order of t, then give what the retrace would have found.
   void traceByFilter(typename PacketOf<N>::type& packet, int* valid) {
-    static_assert(N <= 16, "ParityFilterContext holds 16 lanes");
-    ParityFilterContext ctx;
-    rtcInitIntersectContext(&ctx.base);
-    ctx.base.filter = collectParityHit;
-    ctx.scene = &scene_;
-    ctx.diagonal = diagonal_, ctx.band = band_;
+    static_assert(N <= 16, "ParityHitCollector holds 16 lanes");
+    CollectingContext<ParityHitCollector> ctx;
+    ParityHitCollector& collector = ctx.collector;
+    collector.scene = &scene_;
+    collector.diagonal = diagonal_, collector.band = band_;
     for (int k = 0; k < N; ++k) {
-      ctx.lanes[k] = &hits_[k];
-      ctx.dir[k] = parityDirections().d[lanes_[k].direction];
+      collector.lanes[k] = &hits_[k];
+      collector.dir[k] = parityDirections().d[lanes_[k].direction];
       hits_[k].clear();
     }
     clearHits<N>(packet);

@@ -61,23 +61,13 @@ bool forEachHit(const Scene& scene, const double* origin, const double* directio
   }
 }
 
-/// The intersection context of countByFilter: the t of every hit, behind the
-/// RTCIntersectContext that must come first.
-struct CountContext {
-  RTCIntersectContext base;
-  std::vector<float>* t = nullptr;
-};
-static_assert(offsetof(CountContext, base) == 0, "Embree passes &base back to the filter");
-
-/// Context filter: records the hit's t and rejects the hit, so that traversal goes on.
-void collectHitDistance(const RTCFilterFunctionNArguments* args) {
-  const auto* ctx = reinterpret_cast<const CountContext*>(args->context);
-  for (unsigned i = 0; i < args->N; ++i) {
-    if (args->valid[i] == 0) continue;
-    args->valid[i] = 0;
-    ctx->t->push_back(RTCRayN_tfar(args->ray, args->N, i));
+/// countByFilter's collector: the t of every hit.
+struct HitDistances {
+  std::vector<float>* t;
+  void operator()(const RTCFilterFunctionNArguments* args, unsigned i) const {
+    t->push_back(RTCRayN_tfar(args->ray, args->N, i));
   }
-}
+};
 
 /// The number of hits forEachHit reports, in one traversal of a scene built with
 /// BuildOptions::contextFilter: the number of distinct t among every hit along the ray (the
@@ -88,11 +78,8 @@ bool countByFilter(const Scene& scene, const double* origin, const double* direc
   RTCRayHit p;
   count = 0;
   if (!renderRay(scene, origin, direction, p)) return false;
-  CountContext ctx;
-  rtcInitIntersectContext(&ctx.base);
-  ctx.base.filter = collectHitDistance;
+  CollectingContext<HitDistances> ctx(HitDistances{&t});
   t.clear();
-  ctx.t = &t;
   p.ray.tnear = 0.0f, p.ray.tfar = std::numeric_limits<float>::infinity();
   clearHits<1>(p);
   int valid = -1;
