@@ -21,11 +21,10 @@ Plane worldPlane(const glm::dvec3& n, double c, const glm::dvec3& eye) {
   return {n / len, c / len + glm::dot(n / len, eye), c / len};
 }
 
-}  // namespace
-
-ViewVolume ViewVolume::planar(Kind kind, const glm::dvec3& eye, const glm::dvec3& u,
-                              const glm::dvec3& v, const glm::dvec3& w, double nearDist,
-                              double farDist, Linear xLo, Linear xHi, Linear yLo, Linear yHi) {
+/// A view volume of `kind` with the camera frame (eye, U, V, W) and the checked depth range:
+/// what both kinds hold before their corners and planes.
+ViewVolume framedVolume(ViewVolume::Kind kind, const glm::dvec3& eye, const glm::dvec3& u,
+                        const glm::dvec3& v, const glm::dvec3& w, double nearDist, double farDist) {
   checkRange(nearDist, farDist);
   ViewVolume vv;
   vv.kind = kind;
@@ -35,6 +34,15 @@ ViewVolume ViewVolume::planar(Kind kind, const glm::dvec3& eye, const glm::dvec3
   vv.u = u;
   vv.v = v;
   vv.w = w;
+  return vv;
+}
+
+}  // namespace
+
+ViewVolume ViewVolume::planar(Kind kind, const glm::dvec3& eye, const glm::dvec3& u,
+                              const glm::dvec3& v, const glm::dvec3& w, double nearDist,
+                              double farDist, Linear xLo, Linear xHi, Linear yLo, Linear yHi) {
+  ViewVolume vv = framedVolume(kind, eye, u, v, w, nearDist, farDist);
   vv.xLo = xLo;
   vv.xHi = xHi;
   vv.yLo = yLo;
@@ -60,15 +68,7 @@ ViewVolume ViewVolume::planar(Kind kind, const glm::dvec3& eye, const glm::dvec3
 
 ViewVolume ViewVolume::allSpace(const glm::dvec3& eye, const glm::dvec3& u, const glm::dvec3& v,
                                 const glm::dvec3& w, double nearDist, double farDist) {
-  checkRange(nearDist, farDist);
-  ViewVolume vv;
-  vv.kind = Kind::AllSpace;
-  vv.nearDist = nearDist;
-  vv.farDist = farDist;
-  vv.eye = eye;
-  vv.u = u;
-  vv.v = v;
-  vv.w = w;
+  ViewVolume vv = framedVolume(Kind::AllSpace, eye, u, v, w, nearDist, farDist);
   for (int c = 0; c < 8; ++c) {
     const double sx = (c == 1 || c == 2 || c == 5 || c == 6) ? 1 : -1;
     const double sy = (c % 4 >= 2) ? 1 : -1;

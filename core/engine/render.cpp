@@ -1074,19 +1074,21 @@ TileRenderer tileRendererFor(const RenderSettings& settings) {
                             : tileRendererOfWidth<false>(settings.packetWidth);
 }
 
-/// Throws Error when the frame's storage is empty, lacks a channel's storage, or does not
-/// match the camera's image size and spp.
-void checkFrame(const Camera& camera, const RenderSettings& settings, const FramePixels& px) {
+/// Throws Error, its message starting with `who`, unless `px` can hold `frames` frames of the
+/// camera image `image` stacked as rows: some pixel and some AOV, storage for every channel and
+/// `image.width` x (`frames` · `image.height`) pixels. The one check of a frame's storage that
+/// renderImage, renderImages and renderImagesStacked share.
+void checkFrameStorage(const std::string& who, const FramePixels& px,
+                       const CameraDescription& image, size_t frames) {
   if (px.width <= 0 || px.height <= 0 || px.aovs.empty())
-    throw Error(cat("framebuffer ", px.width, "x", px.height, " with AOVs '",
+    throw Error(cat(who, ": framebuffer ", px.width, "x", px.height, " with AOVs '",
                     aovListString(px.aovs), "' is empty"));
   for (const PixelChannel& c : px.channels)
-    if (!c.data) throw Error(cat("framebuffer: AOV '", c.name, "' has no storage"));
-  const CameraDescription desc = camera.describe();
-  if (desc.width != px.width || desc.height != px.height || desc.spp != settings.spp)
-    throw Error(cat("camera image ", desc.width, "x", desc.height, " spp ", desc.spp,
-                    " does not match the framebuffer ", px.width, "x", px.height, " spp ",
-                    settings.spp));
+    if (!c.data) throw Error(cat(who, ": AOV '", c.name, "' has no storage"));
+  if (px.width != image.width || size_t(px.height) != size_t(image.height) * frames)
+    throw Error(cat(who, ": framebuffer ", px.width, "x", px.height, " does not hold ", frames,
+                    frames == 1 ? " frame" : " frames", " of the camera image ", image.width, "x",
+                    image.height));
 }
 
 /// Writes the miss value of every value of the tile of columns [x0, x1) and rows [y0, y1) of
@@ -1187,7 +1189,11 @@ RenderStats renderImage(const Scene& scene, const Camera& camera, const RenderSe
   const TimePoint start = std::chrono::steady_clock::now();
   validateRenderSettings(settings);
   const FramePixels px = framePixelsOf(fb);
-  checkFrame(camera, settings, px);
+  const CameraDescription image = camera.describe();
+  checkFrameStorage("renderImage", px, image, 1);
+  if (image.spp != settings.spp)
+    throw Error(cat("renderImage: the camera's spp ", image.spp,
+                    " does not match the settings' spp ", settings.spp));
   std::deque<ImagePlan> plans;
   plans.emplace_back(scene, camera, settings, px);
   return renderPlans(plans, {}, start).front();
@@ -1215,7 +1221,7 @@ std::vector<RenderStats> renderImages(const Scene& scene, const std::vector<cons
   for (size_t k = 0; k < cameras.size(); ++k) {
     APERTURE_CHECK_OP(cameras[k], !=, nullptr);
     const RenderSettings forCamera = settingsFor(*cameras[k], settings);
-    checkFrame(*cameras[k], forCamera, frames[k]);
+    checkFrameStorage(cat("renderImages: frame ", k), frames[k], cameras[k]->describe(), 1);
     plans.emplace_back(scene, *cameras[k], forCamera, frames[k]);
   }
   return renderPlans(plans, progress, start);
@@ -1236,15 +1242,8 @@ std::vector<RenderStats> renderImagesStacked(const Scene& scene,
   const TimePoint start = std::chrono::steady_clock::now();
   validateRenderSettings(settings);
   if (cameras.empty()) throw Error("renderImagesStacked: no camera");
-  if (stacked.aovs.empty()) throw Error("renderImagesStacked: the framebuffer holds no AOV");
   const CameraDescription first = cameras.front()->describe();
-  if (stacked.width != first.width ||
-      size_t(stacked.height) != size_t(first.height) * cameras.size())
-    throw Error(cat("renderImagesStacked: framebuffer ", stacked.width, "x", stacked.height,
-                    " does not hold ", cameras.size(), " frames of ", first.width, "x",
-                    first.height));
-  for (const PixelChannel& c : stacked.channels)
-    if (!c.data) throw Error(cat("renderImagesStacked: AOV '", c.name, "' has no storage"));
+  checkFrameStorage("renderImagesStacked", stacked, first, cameras.size());
   const size_t framePixels = size_t(first.width) * size_t(first.height);
   std::deque<ImagePlan> plans;
   for (size_t k = 0; k < cameras.size(); ++k) {

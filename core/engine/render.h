@@ -70,7 +70,8 @@ struct RenderStats {
 /// Renders one frame into `fb` (its size and AOV set decide what is computed). Threads come
 /// from the ambient TBB arena (limit them with tbb::global_control). The result is
 /// bit-identical for any thread count, tile size and packet width. FTZ/DAZ are set on every
-/// worker. Throws Error for bad settings.
+/// worker. Throws Error for bad settings, a framebuffer that is empty or not the camera's image
+/// size, or settings.spp other than the camera's.
 RenderStats renderImage(const Scene& scene, const Camera& camera, const RenderSettings& settings,
                         Framebuffer& fb);
 

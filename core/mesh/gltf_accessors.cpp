@@ -2,6 +2,8 @@
 // attributes of KHR_mesh_quantization, byteStride, sparse accessors and index types.
 #include <algorithm>
 #include <cstring>
+#include <limits>
+#include <type_traits>
 
 #include "core/mesh/gltf.h"
 #include "core/util/error.h"
@@ -56,25 +58,28 @@ T load(const unsigned char* p) {
   return v;
 }
 
+/// Component `p`, an integer of 8 or 16 bits, as a float; when `normalized`, by the glTF
+/// formulas: c / (2^b − 1) unsigned, max(c / (2^(b−1) − 1), −1) signed.
+template <class T>
+float smallIntegerComponent(const unsigned char* p, bool normalized) {
+  static_assert(sizeof(T) <= 2, "the largest value must be exact in a float");
+  const float c = load<T>(p);
+  if (!normalized) return c;
+  const float scaled = c / float(std::numeric_limits<T>::max());
+  return std::is_signed_v<T> ? std::max(scaled, -1.0f) : scaled;
+}
+
 /// Component `p` of type `type` as a float: normalized by the glTF formulas when `normalized`.
 float component(const unsigned char* p, int type, bool normalized) {
   switch (type) {
-    case TINYGLTF_COMPONENT_TYPE_BYTE: {
-      const float c = load<int8_t>(p);
-      return normalized ? std::max(c / 127.0f, -1.0f) : c;
-    }
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: {
-      const float c = load<uint8_t>(p);
-      return normalized ? c / 255.0f : c;
-    }
-    case TINYGLTF_COMPONENT_TYPE_SHORT: {
-      const float c = load<int16_t>(p);
-      return normalized ? std::max(c / 32767.0f, -1.0f) : c;
-    }
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
-      const float c = load<uint16_t>(p);
-      return normalized ? c / 65535.0f : c;
-    }
+    case TINYGLTF_COMPONENT_TYPE_BYTE:
+      return smallIntegerComponent<int8_t>(p, normalized);
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+      return smallIntegerComponent<uint8_t>(p, normalized);
+    case TINYGLTF_COMPONENT_TYPE_SHORT:
+      return smallIntegerComponent<int16_t>(p, normalized);
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+      return smallIntegerComponent<uint16_t>(p, normalized);
     case TINYGLTF_COMPONENT_TYPE_INT:
       return float(load<int32_t>(p));
     case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:

@@ -276,3 +276,31 @@ TEST(RenderImages, StorageWithoutAChannelIsRefused) {
   EXPECT_THROW(renderImagesStacked(*s.scene, {camera.get()}, RenderSettings{}, px), Error);
   EXPECT_THROW(renderImages(*s.scene, {camera.get()}, RenderSettings{}, {px}), Error);
 }
+
+TEST(RenderImages, EveryPathRefusesTheSameBadStorageNamingIt) {
+  TwoObjects s;
+  const auto camera = makeCamera(cameraOf("perspective", 32, 20, 1));
+  const std::vector<const Camera*> one = {camera.get()};
+  // Storage with no AOV, then one row short of the camera's 32x20: each path says which call
+  // refused it and the storage's size.
+  for (const auto& [fb, sizeText] :
+       {std::pair<Framebuffer, std::string>{Framebuffer(32, 20, AovSet()), "32x20 with AOVs ''"},
+        {Framebuffer(32, 19, AovSet(kAovDepth)), "32x19 does not"}}) {
+    Framebuffer single = fb, stacked = fb;
+    std::vector<Framebuffer> frames = {fb};
+    const std::string a = test::errorOf([&] { renderImage(*s.scene, *camera, {}, single); });
+    const std::string b = test::errorOf([&] { renderImages(*s.scene, one, {}, frames); });
+    const std::string c = test::errorOf([&] { renderImagesStacked(*s.scene, one, {}, stacked); });
+    EXPECT_NE(a.find("renderImage: framebuffer " + sizeText), std::string::npos) << a;
+    EXPECT_NE(b.find("renderImages: frame 0: framebuffer " + sizeText), std::string::npos) << b;
+    EXPECT_NE(c.find("renderImagesStacked: framebuffer " + sizeText), std::string::npos) << c;
+  }
+  Framebuffer fb(32, 20, AovSet(kAovDepth));
+  RenderSettings fourSpp;
+  fourSpp.spp = 4;
+  const std::string spp = test::errorOf([&] { renderImage(*s.scene, *camera, fourSpp, fb); });
+  EXPECT_NE(spp.find("the camera's spp 1 does not match the settings' spp 4"), std::string::npos)
+      << spp;
+  EXPECT_EQ(test::errorOf([&] { renderImagesStacked(*s.scene, {}, {}, fb); }),
+            "renderImagesStacked: no camera");
+}
