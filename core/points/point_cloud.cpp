@@ -93,16 +93,9 @@ PointField* PointCloud::find(const std::string& name) {
 }
 
 PointField& PointCloud::addField(const std::string& name, PointType type, bool zeroed) {
-  if (find(name)) throw Error(cat("point field '", name, "' is given twice"));
-  PointField f;
-  f.name = name;
-  f.type = type;
-  if (zeroed)
-    f.bytes.assign(size * pointTypeSize(type), 0);
-  else
-    resizeOnHugePages(f.bytes, size * pointTypeSize(type));
-  fields.push_back(std::move(f));
-  return fields.back();
+  LargeBuffer<unsigned char> bytes;
+  if (zeroed) bytes.assign(size * pointTypeSize(type), 0);
+  return addField(name, type, std::move(bytes));
 }
 
 PointField& PointCloud::addField(const std::string& name, PointType type,
