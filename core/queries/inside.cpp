@@ -451,10 +451,7 @@ float sceneDiagonal(const Scene& scene) {
 }
 
 void checkOptions(const InsideOptions& options) {
-  if (options.parityDirections < 1 || options.parityDirections > kMaxParityDirections ||
-      options.parityDirections % 2 == 0)
-    throw Error(cat("insideOf: parityDirections ", options.parityDirections,
-                    " is not an odd number from 1 to ", kMaxParityDirections));
+  checkParityDirections(options.parityDirections, "insideOf: parityDirections");
   if (!(options.windingBeta > 1.0) || !std::isfinite(options.windingBeta))
     throw Error(
         cat("insideOf: windingBeta ", options.windingBeta, " must be a finite number above 1"));
@@ -534,6 +531,11 @@ void insideByWinding(const Scene& scene, const double* points, size_t count,
 }
 
 }  // namespace
+
+void checkParityDirections(int directions, const char* name) {
+  if (directions < 1 || directions % 2 == 0 || directions > kMaxParityDirections)
+    throw Error(cat(name, " ", directions, " must be odd, in [1, ", kMaxParityDirections, "]"));
+}
 
 glm::vec3 parityDirection(int k) {
   if (k < 0 || k >= kParityDirectionCount)
