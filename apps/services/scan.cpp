@@ -50,7 +50,7 @@ struct ScanObjectFields {
   const uint32_t* reflectance;      ///< the face property, percent; null: 1
   const uint32_t* sourceTriangles;  ///< Mesh::sourceTriangles; null: the identity
   const uint32_t* faceGroups;       ///< Mesh::faceGroups; null: none
-  uint32_t instance;                ///< ObjectIds::instance
+  ObjectIds ids;                    ///< Scene::objectIds
   const glm::mat3* normalFromMesh;  ///< Scene::normalFromMesh; null: the identity
 };
 
@@ -96,7 +96,7 @@ struct SweepContext {
   /// The instance: the object's, plus the triangle's OBJ group.
   uint32_t instanceOf(const Surface& s) const {
     const ScanObjectFields& o = objects[s.object];
-    return o.instance + (o.faceGroups ? o.faceGroups[s.triangle] : 0u);
+    return o.ids.instanceOfTriangle(o.faceGroups, s.triangle);
   }
   /// Where the ray of `s` met the surface, in world coordinates.
   glm::dvec3 worldPointOf(const Surface& s) const {
@@ -545,7 +545,7 @@ SweepScanner::SweepScanner(const Scene& scene, const LidarSensor& sensor,
     state_->objects.push_back({r ? r->values.data() : nullptr,
                                mesh.sourceTriangles.empty() ? nullptr : mesh.sourceTriangles.data(),
                                mesh.faceGroups.empty() ? nullptr : mesh.faceGroups.data(),
-                               scene.objectIds(unsigned(o)).instance,
+                               scene.objectIds(unsigned(o)),
                                scene.normalFromMesh(unsigned(o)) == glm::mat3(1.0f)
                                    ? nullptr
                                    : &scene.normalFromMesh(unsigned(o))});

@@ -760,8 +760,7 @@ inline void storeSurfaceLane(const ImagePlan& plan, unsigned object, uint32_t pr
                              size_t px) {
   const AovStores& out = plan.out;
   const ObjectIds& ids = plan.scene.objectIds(object);
-  if (plan.instanceId)
-    out.instanceId[px] = ids.instance + (mesh.faceGroups.empty() ? 0u : mesh.faceGroups[prim]);
+  if (plan.instanceId) out.instanceId[px] = ids.instanceOfTriangle(mesh.faceGroups, prim);
   if (plan.meshId) out.meshId[px] = ids.mesh;
   const uint32_t material =
       ids.materialBase + (mesh.faceMaterials.empty() ? 0u : mesh.faceMaterials[prim]);

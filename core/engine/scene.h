@@ -134,6 +134,15 @@ struct TriangleSubset {
 /// has them), mesh = `mesh`, material = `materialBase` (plus the mesh's faceMaterials[t]).
 struct ObjectIds {
   uint32_t instance = 0, mesh = 0, materialBase = 0;
+
+  /// The instance id of stored triangle `t` of the object's mesh, whose faceGroups are
+  /// `groups` (null when it has none).
+  uint32_t instanceOfTriangle(const uint32_t* groups, uint32_t t) const {
+    return instance + (groups ? groups[t] : 0u);
+  }
+  uint32_t instanceOfTriangle(const std::vector<uint32_t>& groups, uint32_t t) const {
+    return instanceOfTriangle(groups.empty() ? nullptr : groups.data(), t);
+  }
 };
 
 /// One placement of a mesh: world = worldFromMesh · (mesh.anchor + position).

@@ -189,8 +189,7 @@ void storeFound(const Scene& scene, const QueryState& st, ClosestPoints& out, si
   out.geomId[k] = st.object;
   const Mesh& mesh = scene.objectMesh(st.object);
   const uint32_t tri = scene.meshTriangle(st.object, st.prim);
-  out.instance[k] =
-      scene.objectIds(st.object).instance + (mesh.faceGroups.empty() ? 0u : mesh.faceGroups[tri]);
+  out.instance[k] = scene.objectIds(st.object).instanceOfTriangle(mesh.faceGroups, tri);
 }
 
 /// The answer of a nearby query, whose triangle starts the next search: its distance bounds
