@@ -518,6 +518,10 @@ const char* scanReturnsName(ScanReturns returns) {
   return "first";
 }
 
+void checkSurfacesPerRay(int surfaces, const char* what) {
+  if (surfaces < 1 || surfaces > 64) throw Error(cat(what, " ", surfaces, " is outside 1..64"));
+}
+
 struct SweepScanner::State {
   std::vector<ScanObjectFields> objects;
   std::vector<const MeshProperty*> properties;  ///< object-major: [object · P + p]
@@ -537,8 +541,7 @@ void SweepScanner::recycle(ScanSweep&& done) {
 SweepScanner::SweepScanner(const Scene& scene, const LidarSensor& sensor,
                            const ScanOptions& options)
     : scene_(scene), sensor_(sensor), options_(options), state_(std::make_unique<State>()) {
-  if (options.maxSurfaces < 1 || options.maxSurfaces > 64)
-    throw Error(cat("surfaces per ray ", options.maxSurfaces, " is outside 1..64"));
+  checkSurfacesPerRay(options.maxSurfaces, "surfaces per ray");
   for (size_t o = 0; o < scene.objectCount(); ++o) {
     const Mesh& mesh = scene.objectMesh(unsigned(o));
     const MeshProperty* r = mesh.property(PropertyDomain::Face, kReflectanceProperty);
@@ -791,8 +794,7 @@ PreparedScan prepareScan(const ScanRequest& r) {
     throw Error(cat("'", r.out,
                     "': a range image holds one return per ray; --returns all needs "
                     ".ply, .pcd, .las or .bin"));
-  if (r.options.maxSurfaces < 1 || r.options.maxSurfaces > 64)
-    throw Error(cat("--surfaces ", r.options.maxSurfaces, " is outside 1..64"));
+  checkSurfacesPerRay(r.options.maxSurfaces, "--surfaces");
   if (r.sweeps > 1 && expandSweepPattern(r.out, 0) == expandSweepPattern(r.out, 1))
     throw Error(cat("--out '", r.out, "': ", r.sweeps, " sweeps need {sweep} in the path"));
   applyRangeNoise(r.options.noise, 1.0, 0, 0);  // checks σ and the dropout

@@ -33,6 +33,10 @@ const char* scanReturnsName(ScanReturns returns);
 /// The face property a scan reads as reflectance when the mesh has it: percent (0..100 → 0..1).
 inline constexpr const char* kReflectanceProperty = "reflectance";
 
+/// Throws Error "`what` N is outside 1..64" unless 1 <= `surfaces` <= 64, the surfaces a ray
+/// looks for (ScanOptions::maxSurfaces); `what` names the argument ("--surfaces").
+void checkSurfacesPerRay(int surfaces, const char* what);
+
 /// How one sweep is traced and what its points hold.
 struct ScanOptions {
   ScanFrame frame = ScanFrame::Sensor;

@@ -164,7 +164,13 @@ const std::vector<uint32_t>& layerUintPixels(const Framebuffer& fb, const AovRow
   return fb.*row.layerU32;
 }
 
-std::string layerAovName(const AovRow& row) { return "layers." + row.name; }
+namespace {
+constexpr const char* kLayerAovPrefix = "layers.";
+}  // namespace
+
+std::string layerAovName(const AovRow& row) { return kLayerAovPrefix + row.name; }
+
+bool isLayerAovName(const std::string& aovName) { return aovName.rfind(kLayerAovPrefix, 0) == 0; }
 
 std::string layerChannelName(int layer, const AovRow& row) {
   return cat("hit", layer, ".", row.exrChannels.front());

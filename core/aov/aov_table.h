@@ -81,6 +81,8 @@ const std::vector<float>& layerFloatPixels(const Framebuffer& fb, const AovRow& 
 const std::vector<uint32_t>& layerUintPixels(const Framebuffer& fb, const AovRow& row);
 /// "layers.depth": the AOV name of a layered row's hits (aovView, the Python arrays).
 std::string layerAovName(const AovRow& row);
+/// Whether `aovName` names a row's layered hits ("layers.depth"), as layerAovName spells them.
+bool isLayerAovName(const std::string& aovName);
 /// "hit2.Z": the EXR channel of layer k of a layered row.
 std::string layerChannelName(int layer, const AovRow& row);
 

@@ -29,7 +29,6 @@ from ._aperture import (
     Camera,
     __version__,
     _Scene,
-    _is_standard_scan_field,
     _write,
     camera_parameters,
     camera_types,

@@ -26,8 +26,12 @@ struct ArrayLayout {
 };
 ArrayLayout layoutOf(const FramePixels& px, const PixelChannel& c, size_t frames);
 
-/// name -> array of every channel of `px`, pointing into its storage, which `owner` keeps alive
-/// (the arrays hold a reference to it).
+/// The array of channel `c` of `px`, pointing into its storage, which `owner` keeps alive (the
+/// array holds a reference to it).
+nanobind::object channelArray(const FramePixels& px, const PixelChannel& c, size_t frames,
+                              nanobind::handle owner);
+
+/// name -> array of every channel of `px` (channelArray).
 nanobind::dict pixelArrays(const FramePixels& px, size_t frames, nanobind::handle owner);
 
 /// name -> array of the frames `fb` holds, float32 or uint32, with no copy: every array points
@@ -36,24 +40,5 @@ nanobind::dict pixelArrays(const FramePixels& px, size_t frames, nanobind::handl
 /// 1). `frames` = N >= 1: N frames of H rows stacked in `fb` (renderImagesStacked), (N, H, W[, C])
 /// (layered hits: (N, K, H, W), a strided view of the layer-major storage).
 nanobind::dict frameArrays(std::shared_ptr<Framebuffer> fb, size_t frames);
-
-/// Storage for frame arrays that nothing has written: one LargeBuffer block per channel
-/// (core/util/huge_pages.h: from 2 MB up on a 2 MB boundary, advised onto huge pages), so that
-/// the render threads are the first to touch its pages. Freed with the last array.
-class UnwrittenStorage {
- public:
-  UnwrittenStorage() = default;
-  UnwrittenStorage(const UnwrittenStorage&) = delete;
-  UnwrittenStorage& operator=(const UnwrittenStorage&) = delete;
-  ~UnwrittenStorage();
-  /// `bytes` bytes, unwritten.
-  void* allocate(size_t bytes);
-
- private:
-  std::vector<std::pair<void*, size_t>> blocks_;
-};
-
-/// A capsule owning `storage`: the owner handed to pixelArrays.
-nanobind::capsule ownerOf(std::unique_ptr<UnwrittenStorage> storage);
 
 }  // namespace aperture::python

@@ -6,11 +6,21 @@
 
 #include <string>
 
+#include "apps/services/render_options.h"
 #include "cameras/schema/params.h"
 
 namespace aperture::python {
 
 namespace nb = nanobind;
+
+/// Runs f() with the GIL released and TBB limited to `threads` (0: every core): how every long
+/// call of a Scene (render, queries, scan) runs, so other Python threads go on meanwhile.
+template <class F>
+void withoutGil(int threads, const F& f) {
+  nb::gil_scoped_release release;
+  app::ThreadLimit limit(threads);
+  f();
+}
 
 /// A Python `aperture.Camera`: resolved parameters (checked by the camera schema) and, for a
 /// camera read from a file, the image's name.
@@ -24,7 +34,6 @@ void bindCamera(nb::module_& m);       ///< Camera, load_cameras
 void bindScene(nb::module_& m);        ///< Scene, Scene.render
 void bindImageIo(nb::module_& m);      ///< read_exr, write, read
 void bindAovTable(nb::module_& m);     ///< _aov_table, _AovRegistration (for the tests)
-void bindScan(nb::module_& m);         ///< _ScanScene: Scene.scan (LiDAR sweeps)
 void bindDistributed(nb::module_& m);  ///< _parse_temporary_name (aperture.distributed)
 
 }  // namespace aperture::python

@@ -11,6 +11,5 @@ NB_MODULE(_aperture, m) {
   aperture::python::bindScene(m);
   aperture::python::bindImageIo(m);
   aperture::python::bindAovTable(m);
-  aperture::python::bindScan(m);
   aperture::python::bindDistributed(m);
 }

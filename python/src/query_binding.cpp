@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "apps/queries/point_queries.h"
-#include "apps/services/render_options.h"
+#include "bindings.h"
 #include "core/queries/ray_hits.h"
 #include "core/util/error.h"
 #include "named_arrays.h"
@@ -14,14 +14,6 @@
 namespace aperture::python {
 
 namespace {
-
-/// Runs f() with the GIL released and TBB limited to `threads` (0: every core).
-template <class F>
-void released(int threads, const F& f) {
-  nb::gil_scoped_release release;
-  app::ThreadLimit limit(threads);
-  f();
-}
 
 void checkSameCount(const Points& origins, const Points& directions, const char* what) {
   if (origins.shape(0) != directions.shape(0))
@@ -40,7 +32,7 @@ nb::tuple pointQueries(const Scene& scene, app::KeptInsideAnswers& kept, const P
   request.inside.parityDirections = parityDirections;
   auto r = std::make_shared<app::PointQueryResults>();
   const size_t n = points.shape(0);
-  released(threads, [&] {
+  withoutGil(threads, [&] {
     if (request.needsInside()) request.inside = kept.prepare(scene, request.inside);
     *r = app::runPointQueries(scene, points.data(), n, request);
   });
@@ -54,7 +46,7 @@ nb::tuple countIntersections(const Scene& scene, const Points& origins, const Po
   checkSameCount(origins, directions, "count_intersections");
   auto counts = std::make_shared<std::vector<uint32_t>>();
   size_t nonFinite = 0;
-  released(threads, [&] {
+  withoutGil(threads, [&] {
     *counts = aperture::countIntersections(scene, origins.data(), directions.data(),
                                            origins.shape(0), &nonFinite);
   });
@@ -71,7 +63,7 @@ nb::tuple listIntersections(const Scene& scene, const Points& origins, const Poi
     std::vector<uint32_t> rayIds;
   };
   auto l = std::make_shared<Lists>();
-  released(threads, [&] {
+  withoutGil(threads, [&] {
     l->hits =
         aperture::listIntersections(scene, origins.data(), directions.data(), origins.shape(0));
     l->rayIds.resize(l->hits.t.size());

@@ -5,7 +5,9 @@
 #include <memory>
 
 #include "aov_arrays.h"
+#include "core/aov/aov_table.h"
 #include "core/util/error.h"
+#include "core/util/huge_pages.h"
 #include "core/util/spelling.h"
 
 namespace aperture::python {
@@ -74,6 +76,25 @@ void checkDisjoint(const char* what, const FramePixels& px,
                                 .c_str());
 }
 
+/// Storage for frame arrays that nothing has written: one LargeBuffer block per channel
+/// (core/util/huge_pages.h: from 2 MB up on a 2 MB boundary, advised onto huge pages, its
+/// resize leaving the values unwritten), so that the render threads are the first to touch its
+/// pages. Freed with the last array.
+class UnwrittenStorage {
+ public:
+  /// `bytes` bytes (a multiple of 4), unwritten.
+  void* allocate(size_t bytes) { return blocks_.emplace_back(bytes / sizeof(uint32_t)).data(); }
+
+ private:
+  std::vector<LargeBuffer<uint32_t>> blocks_;
+};
+
+/// A capsule owning `storage`: the owner handed to channelArray.
+nb::capsule ownerOf(std::unique_ptr<UnwrittenStorage> storage) {
+  return nb::capsule(storage.release(),
+                     [](void* p) noexcept { delete static_cast<UnwrittenStorage*>(p); });
+}
+
 std::vector<std::string> channelNames(const FramePixels& px) {
   std::vector<std::string> names;
   for (const PixelChannel& c : px.channels) names.push_back(c.name);
@@ -98,7 +119,7 @@ RenderStorage renderStorage(int width, int height, const AovSet& aovs, size_t fr
                                   didYouMean(name, names), " (it renders: ", join(names, ", "), ")")
                                   .c_str());
       }
-      if (c->layers > 1 || name.rfind("layers.", 0) == 0)
+      if (isLayerAovName(name))
         throw nb::value_error(
             cat(what, ": out['", name, "']: layered hits are not written into given arrays")
                 .c_str());
@@ -120,14 +141,16 @@ RenderStorage renderStorage(int width, int height, const AovSet& aovs, size_t fr
 }
 
 nb::dict renderedArrays(const RenderStorage& storage, size_t frames) {
-  nb::dict out =
-      storage.owner.is_none() ? nb::dict() : pixelArrays(storage.pixels, frames, storage.owner);
-  for (const auto& [name, array] : storage.given) out[name.c_str()] = array;
   // In the channels' order, as a render without out= gives them.
-  nb::dict ordered;
-  for (const PixelChannel& c : storage.pixels.channels)
-    ordered[c.name.c_str()] = out[c.name.c_str()];
-  return ordered;
+  nb::dict out;
+  for (const PixelChannel& c : storage.pixels.channels) {
+    const auto given = std::find_if(storage.given.begin(), storage.given.end(),
+                                    [&](const auto& g) { return g.first == c.name; });
+    out[c.name.c_str()] = given != storage.given.end()
+                              ? given->second
+                              : channelArray(storage.pixels, c, frames, storage.owner);
+  }
+  return out;
 }
 
 }  // namespace aperture::python

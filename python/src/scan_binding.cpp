@@ -13,7 +13,6 @@
 #include <memory>
 #include <optional>
 
-#include "apps/services/render_options.h"
 #include "apps/services/scan.h"
 #include "bindings.h"
 #include "core/io/npz.h"
@@ -70,8 +69,7 @@ ScanCall scanCallOf(const std::string& lidar, const std::optional<std::string>& 
   o.frame = app::parseScanFrame(frame);
   o.returns = app::parseScanReturns(returns);
   o.maxSurfaces = o.returns == app::ScanReturns::First ? 1 : surfaces;
-  if (o.maxSurfaces < 1 || o.maxSurfaces > 64)
-    throw Error(cat("Scene.scan: surfaces ", surfaces, " is outside 1..64"));
+  app::checkSurfacesPerRay(o.maxSurfaces, "Scene.scan: surfaces");  // first: 1, else surfaces
   o.noise = {sigma, dropout, seed};
   applyRangeNoise(o.noise, 1.0, 0, 0);  // checks σ and the dropout
   call.fields = fields;
@@ -79,21 +77,18 @@ ScanCall scanCallOf(const std::string& lidar, const std::optional<std::string>& 
     // Only the fields asked for are computed.
     o.fields.everyField = false;
     o.fields.names = *fields;
-  }
-  if (fields)
     for (const std::string& name : *fields)
       if (!isStandardField(name) && std::find(o.faceProperties.begin(), o.faceProperties.end(),
                                               name) == o.faceProperties.end())
         o.faceProperties.push_back(name);
+  }
   call.threads = threads;
   return call;
 }
 
 nb::dict scanArrays(const Scene& scene, const ScanCall& call) {
   std::shared_ptr<PointCloud> cloud;
-  {
-    nb::gil_scoped_release release;
-    const app::ThreadLimit limit(call.threads);
+  withoutGil(call.threads, [&] {
     const LidarSensor sensor = loadLidar(call.lidar);
     const Trajectory path =
         call.trajectory ? loadTrajectory(*call.trajectory, call.trajectoryTimes) : Trajectory();
@@ -105,7 +100,7 @@ nb::dict scanArrays(const Scene& scene, const ScanCall& call) {
       results.push_back(scanner.scan(rays));
     }
     cloud = std::make_shared<PointCloud>(concatenated(results));
-  }
+  });
   std::vector<NpzArray> arrays;
   const std::vector<std::string> names = call.fields ? *call.fields : [&] {
     std::vector<std::string> all;
@@ -127,7 +122,5 @@ nb::dict scanArrays(const Scene& scene, const ScanCall& call) {
   }
   return namedArrays(cloud, arrays);
 }
-
-void bindScan(nb::module_& m) { m.def("_is_standard_scan_field", &isStandardField); }
 
 }  // namespace aperture::python

@@ -54,15 +54,6 @@ struct RenderTotals {
   size_t frames = 0;
 };
 
-/// Runs f() with the GIL released and TBB limited to `threads` (0: every core): how every long
-/// call of the scene runs, so other Python threads go on meanwhile.
-template <class F>
-void withoutGil(int threads, const F& f) {
-  nb::gil_scoped_release release;
-  app::ThreadLimit limit(threads);
-  f();
-}
-
 /// Thrown on a render thread to stop the frame loop once the progress callback raised.
 struct ProgressRaised {};
 
