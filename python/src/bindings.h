@@ -25,6 +25,6 @@ void bindScene(nb::module_& m);        ///< Scene, Scene.render
 void bindImageIo(nb::module_& m);      ///< read_exr, write, read
 void bindAovTable(nb::module_& m);     ///< _aov_table, _AovRegistration (for the tests)
 void bindScan(nb::module_& m);         ///< _ScanScene: Scene.scan (LiDAR sweeps)
-void bindDistributed(nb::module_& m);  ///< _parse_temporary_name (aperture.distributed)
+void bindDistributed(nb::module_& m);  ///< _dead_temporaries, _dataset_extensions (distributed)
 
 }  // namespace aperture::python
