@@ -14,8 +14,12 @@
 #include "core/engine/scene.h"
 #include "core/mesh/mesh.h"
 #include "tests/numerics_support.h"
+#include "tests/query_support.h"
 
 namespace aperture::test::inside {
+
+using test::Loaded;  // a mesh and its scene: sceneOf(mesh)
+using test::sceneOf;
 
 /// An indexed mesh under construction (shared vertices), world coordinates in double.
 struct MeshBuilder {
@@ -107,18 +111,6 @@ inline Mesh holesFilled(const Mesh& mesh) {
   return filled;
 }
 
-/// A mesh and its scene (the mesh must outlive the scene).
-struct SceneOf {
-  std::unique_ptr<Mesh> mesh;
-  std::unique_ptr<Scene> scene;
-};
-inline SceneOf sceneOf(Mesh m) {
-  SceneOf s;
-  s.mesh = std::make_unique<Mesh>(std::move(m));
-  s.scene = std::make_unique<Scene>(numericsDevice(), std::vector<const Mesh*>{s.mesh.get()});
-  return s;
-}
-
 /// The world corners of the scene's one mesh, 3 per triangle (an independent reading of the
 /// mesh for the exact references).
 inline std::vector<glm::dvec3> cornersOf(const Mesh& m) {
@@ -127,36 +119,13 @@ inline std::vector<glm::dvec3> cornersOf(const Mesh& m) {
   return corners;
 }
 
-/// The distance from p to triangle (a, b, c): the closest point by the Voronoi regions of its
-/// corners, edges and face (Ericson, Real-Time Collision Detection, 5.1.5), in double.
-inline double pointTriangleDistance(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b,
-                                    const glm::dvec3& c) {
-  const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) return glm::length(p - a);
-  const glm::dvec3 bp = p - b;
-  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return glm::length(p - b);
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return glm::length(p - (a + ab * (d1 / (d1 - d3))));
-  const glm::dvec3 cp = p - c;
-  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return glm::length(p - c);
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return glm::length(p - (a + ac * (d2 / (d2 - d6))));
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-    return glm::length(p - (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)))));
-  const double denom = 1.0 / (va + vb + vc);
-  return glm::length(p - (a + ab * (vb * denom) + ac * (vc * denom)));
-}
-
 /// The distance from p to the nearest of the triangles of `corners` (3 per triangle), by
-/// brute force.
+/// brute force over query_support's triangleDistance (not core's closest-point method).
 inline double distanceToSoup(const std::vector<glm::dvec3>& corners, const glm::dvec3& p) {
   double best = INFINITY;
   for (size_t k = 0; k + 2 < corners.size(); k += 3)
-    best = std::min(best, pointTriangleDistance(p, corners[k], corners[k + 1], corners[k + 2]));
+    best =
+        std::min(best, queries::triangleDistance(p, {corners[k], corners[k + 1], corners[k + 2]}));
   return best;
 }
 

@@ -13,8 +13,12 @@ Device& numericsDevice() {
 }
 
 Loaded load(const std::string& spec, const LoadOptions& lo, const BuildOptions& bo) {
+  return sceneOf(loadMesh(spec, lo), bo);
+}
+
+Loaded sceneOf(Mesh m, const BuildOptions& bo) {
   Loaded l;
-  l.mesh = std::make_unique<Mesh>(loadMesh(spec, lo));
+  l.mesh = std::make_unique<Mesh>(std::move(m));
   l.scene = std::make_unique<Scene>(numericsDevice(), std::vector<const Mesh*>{l.mesh.get()}, bo);
   return l;
 }

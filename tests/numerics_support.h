@@ -26,6 +26,8 @@ struct Loaded {
   std::unique_ptr<Scene> scene;
 };
 Loaded load(const std::string& spec, const LoadOptions& lo = {}, const BuildOptions& bo = {});
+/// `m` and the scene over it.
+Loaded sceneOf(Mesh m, const BuildOptions& bo = {});
 
 /// Renders `p` (its size and spp) into a fresh framebuffer of `aovs`, with `settings` (whose
 /// spp is taken from `p`).

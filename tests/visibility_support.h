@@ -15,6 +15,9 @@
 
 namespace aperture::test::visibility {
 
+using test::Loaded;  // a mesh and its scene: sceneOf(mesh)
+using test::sceneOf;
+
 /// Triangles in world space, each added with its corners in the order given.
 struct MeshBuilder {
   std::vector<glm::dvec3> vertices;
@@ -43,18 +46,6 @@ struct MeshBuilder {
     return m;
   }
 };
-
-/// A mesh and its scene (the mesh must outlive the scene).
-struct Built {
-  std::unique_ptr<Mesh> mesh;
-  std::unique_ptr<Scene> scene;
-};
-inline Built build(Mesh m) {
-  Built b;
-  b.mesh = std::make_unique<Mesh>(std::move(m));
-  b.scene = std::make_unique<Scene>(test::numericsDevice(), std::vector<const Mesh*>{b.mesh.get()});
-  return b;
-}
 
 /// Cameras built with the scene's render origin, and the pointers the API takes.
 struct Cameras {

@@ -31,10 +31,7 @@ struct QueryArgs {
 PointQueryRequest checkedRequest(const QueryArgs& a) {
   PointQueryRequest r = parsePointQueries(a.what, "--what");
   r.inside.method = parseInsideMethod(a.method);
-  if (a.parityDirections < 1 || a.parityDirections % 2 == 0 ||
-      a.parityDirections > kMaxParityDirections)
-    throw Error(cat("--parity-directions ", a.parityDirections, " must be odd, in [1, ",
-                    kMaxParityDirections, "]"));
+  checkParityDirections(a.parityDirections, "--parity-directions");
   r.inside.parityDirections = a.parityDirections;
   checkOutputPath("--out", a.out, OutputKind::Query);
   if (a.threads < 0 || a.threads > 4096)

@@ -90,27 +90,19 @@ TrianglePoint closestPointOnTriangle(const double* pp, const double* pa, const d
 
 namespace {
 
-/// What the point-query callback reads of one object.
-struct ObjectFrame {
-  const Mesh* mesh = nullptr;
-  glm::dmat4 worldFromMesh{1.0};
-  bool identity = true;  ///< worldFromMesh is the identity: world = anchor + position
-};
-
 /// Shared by every query of one closestPoints call.
 struct QueryScene {
   const Scene* scene = nullptr;
-  std::vector<ObjectFrame> objects;
-  glm::dvec3 origin{0.0};  ///< Scene::renderOrigin: render space = world − origin
+  std::vector<WorldObject> objects;  ///< per object (worldObjects)
+  std::vector<char> identity;        ///< per object: worldFromMesh is the identity
+  glm::dvec3 origin{0.0};            ///< Scene::renderOrigin: render space = world − origin
 
-  /// World position of corner `corner` of the stored triangle `tri` of object `object`.
+  /// World position of corner `corner` of the stored triangle `tri` of object `object`
+  /// (anchor + position where the object is not moved, without the matrix).
   dvec3 corner(unsigned object, uint32_t tri, int corner) const {
-    const ObjectFrame& o = objects[object];
-    const Mesh& m = *o.mesh;
-    const size_t v = m.indices[3 * size_t(tri) + size_t(corner)];
-    const dvec3 local =
-        m.anchor + dvec3(m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]);
-    return o.identity ? local : dvec3(o.worldFromMesh * glm::dvec4(local, 1.0));
+    const WorldObject& o = objects[object];
+    const size_t v = o.mesh->indices[3 * size_t(tri) + size_t(corner)];
+    return identity[object] ? o.anchor + dvec3(o.mesh->vertex(v)) : o.vertex(v);
   }
 };
 
@@ -171,15 +163,10 @@ QueryScene queryScene(const Scene& scene) {
   QueryScene qs;
   qs.scene = &scene;
   qs.origin = scene.renderOrigin();
-  for (const SceneObject& o : scene.objects()) {
-    ObjectFrame f;
-    f.mesh = o.mesh;
-    f.worldFromMesh = o.worldFromMesh;
-    f.identity = o.worldFromMesh == glm::dmat4(1.0);
-    qs.objects.push_back(f);
-  }
-  if (worldObjects(scene).triangles == 0)
-    throw Error("closest points: the scene holds no triangle");
+  WorldObjects world = worldObjects(scene);
+  if (world.triangles == 0) throw Error("closest points: the scene holds no triangle");
+  qs.objects = std::move(world.objects);
+  for (const WorldObject& o : qs.objects) qs.identity.push_back(o.worldFromMesh == glm::dmat4(1.0));
   return qs;
 }
 

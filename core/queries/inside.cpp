@@ -331,7 +331,6 @@ class ParityStream {
 
   size_t discarded() const { return discarded_; }
   size_t undecided() const { return undecided_; }
-  size_t nonFinite() const { return nonFinite_; }
 
  private:
   const Scene& scene_;
@@ -343,36 +342,18 @@ class ParityStream {
   ParityLane lanes_[N];
   std::vector<ParityHit> hits_[N];  ///< traceByFilter's hits of each lane
   size_t next_ = 0, end_ = 0;
-  size_t discarded_ = 0, undecided_ = 0, nonFinite_ = 0;
+  size_t discarded_ = 0, undecided_ = 0;
 
-  /// Gives the lane the next finite point inside the scene's box, or leaves it dead. Points
-  /// outside the box (which holds every triangle) are outside, without a ray: no surface
-  /// can enclose them. Rays therefore start within a box diagonal of the surface, and
-  /// Embree's rounding, which grows with the distance from the ray's origin, stays at the
-  /// scene's scale.
+  /// Gives the lane the next point, or leaves it dead. The stream holds only points inside
+  /// the scene's box (ParityOrder::inBox).
   void start(ParityLane& lane) {
-    const std::optional<SceneBox>& box = scene_.box();
-    while (next_ < end_) {
-      const size_t i = order_[next_++];
-      const glm::dvec3 p(points_[3 * i], points_[3 * i + 1], points_[3 * i + 2]);
-      if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) {
-        result_.inside[i] = 0;
-        ++nonFinite_;
-        continue;
-      }
-      const glm::dvec3 org = p - scene_.renderOrigin();
-      if (box && (glm::any(glm::lessThan(org, glm::dvec3(box->lo))) ||
-                  glm::any(glm::greaterThan(org, glm::dvec3(box->hi))))) {
-        result_.inside[i] = 0;
-        continue;
-      }
-      lane = ParityLane{};
-      lane.point = i;
-      lane.org = glm::vec3(org);
-      lane.live = true;
-      return;
-    }
     lane = ParityLane{};
+    if (next_ == end_) return;
+    const size_t i = order_[next_++];
+    const glm::dvec3 p(points_[3 * i], points_[3 * i + 1], points_[3 * i + 2]);
+    lane.point = i;
+    lane.org = glm::vec3(p - scene_.renderOrigin());
+    lane.live = true;
   }
 
   /// Writes the lane's verdict; true.
@@ -451,10 +432,7 @@ float sceneDiagonal(const Scene& scene) {
 }
 
 void checkOptions(const InsideOptions& options) {
-  if (options.parityDirections < 1 || options.parityDirections > kMaxParityDirections ||
-      options.parityDirections % 2 == 0)
-    throw Error(cat("insideOf: parityDirections ", options.parityDirections,
-                    " is not an odd number from 1 to ", kMaxParityDirections));
+  checkParityDirections(options.parityDirections, "insideOf: parityDirections");
   if (!(options.windingBeta > 1.0) || !std::isfinite(options.windingBeta))
     throw Error(
         cat("insideOf: windingBeta ", options.windingBeta, " must be a finite number above 1"));
@@ -465,10 +443,18 @@ constexpr int kParityOrderBits = 6;
 
 /// The order parity takes the points in: those inside the scene's box (the only ones that
 /// trace rays) by cell of a 64³ grid over the box, cells in Morton order, so that a packet's
-/// lanes hold neighbouring rays; then the others (outside the box or not finite). A counting
-/// sort: linear, where a full Morton sort of a million points took a tenth of parity's time.
-/// Each point's answer does not depend on the order, only the speed does.
-std::vector<size_t> parityOrder(const Scene& scene, const double* points, size_t count) {
+/// lanes hold neighbouring rays; then the others. Points outside the box (which holds every
+/// triangle) are outside without a ray: no surface can enclose them, so rays start within a
+/// box diagonal of the surface and Embree's rounding, which grows with the distance from the
+/// ray's origin, stays at the scene's scale. A counting sort: linear, where a full Morton sort
+/// of a million points took a tenth of parity's time. Each point's answer does not depend on
+/// the order, only the speed does.
+struct ParityOrder {
+  std::vector<size_t> order;
+  size_t inBox = 0;      ///< order[0, inBox) are inside the box
+  size_t nonFinite = 0;  ///< points with a coordinate not finite (among the others)
+};
+ParityOrder parityOrder(const Scene& scene, const double* points, size_t count) {
   const std::optional<SceneBox>& box = scene.box();
   constexpr uint32_t cells = 1u << (3 * kParityOrderBits), outside = cells;
   std::vector<uint32_t> key(count, outside);
@@ -494,26 +480,32 @@ std::vector<size_t> parityOrder(const Scene& scene, const double* points, size_t
   std::vector<size_t> start(cells + 2, 0);
   for (uint32_t k : key) ++start[k + 1];
   for (size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
-  std::vector<size_t> order(count);
-  for (size_t i = 0; i < count; ++i) order[start[key[i]]++] = i;
-  return order;
+  ParityOrder po;
+  po.inBox = start[outside];
+  po.order.resize(count);
+  for (size_t i = 0; i < count; ++i) po.order[start[key[i]]++] = i;
+  for (size_t n = po.inBox; n < count; ++n) {
+    const double* p = points + 3 * po.order[n];
+    po.nonFinite += !(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]));
+  }
+  return po;
 }
 
 void insideByParity(const Scene& scene, const double* points, size_t count,
                     const InsideOptions& options, InsideResult& result) {
   const float diagonal = sceneDiagonal(scene);
-  const std::vector<size_t> order = parityOrder(scene, points, count);
-  std::atomic<size_t> discarded{0}, undecided{0}, nonFinite{0};
-  parallelFor(count, 1024, [&](size_t begin, size_t end) {
-    ParityStream<kParityPacket> stream(scene, points, order.data(), options, diagonal, result);
+  // The points outside the box keep insideOf's 0.
+  const ParityOrder po = parityOrder(scene, points, count);
+  std::atomic<size_t> discarded{0}, undecided{0};
+  parallelFor(po.inBox, 1024, [&](size_t begin, size_t end) {
+    ParityStream<kParityPacket> stream(scene, points, po.order.data(), options, diagonal, result);
     stream.run(begin, end);
     discarded += stream.discarded();
     undecided += stream.undecided();
-    nonFinite += stream.nonFinite();
   });
   result.discardedRays = discarded;
   result.undecided = undecided;
-  result.nonFinite = nonFinite;
+  result.nonFinite = po.nonFinite;
 }
 
 void insideByWinding(const Scene& scene, const double* points, size_t count,
@@ -534,6 +526,11 @@ void insideByWinding(const Scene& scene, const double* points, size_t count,
 }
 
 }  // namespace
+
+void checkParityDirections(int directions, const char* name) {
+  if (directions < 1 || directions % 2 == 0 || directions > kMaxParityDirections)
+    throw Error(cat(name, " ", directions, " must be odd, in [1, ", kMaxParityDirections, "]"));
+}
 
 glm::vec3 parityDirection(int k) {
   if (k < 0 || k >= kParityDirectionCount)

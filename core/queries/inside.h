@@ -62,6 +62,9 @@ ClosedCheck checkClosed(const Scene& scene);
 inline constexpr int kParityDirectionCount = 32;
 /// The largest InsideOptions::parityDirections.
 inline constexpr int kMaxParityDirections = 15;
+/// Throws Error ("NAME D must be odd, in [1, 15]") unless `directions` is a parity vote
+/// InsideOptions takes; `name` is how the caller's user gave it.
+void checkParityDirections(int directions, const char* name);
 /// Direction k (0 <= k < kParityDirectionCount) as traced (float, unit length).
 glm::vec3 parityDirection(int k);
 

@@ -1,20 +1,20 @@
 #pragma once
 // Points in Morton (Z-order) order: queries over many points visit them so that consecutive
-// points are neighbours in space, sharing Embree's packet traversal (parity) or the cached
-// nodes of a tree (winding numbers).
+// points are neighbours in space and share cached nodes: winding numbers and closest points
+// (mortonOrder), parity (its own bucketed order over spreadBits' codes, inside.cpp).
 #include <cstddef>
 #include <glm/glm.hpp>
 #include <vector>
 
 namespace aperture {
 
+/// x's low 21 bits spread to every third bit (bit b to bit 3b): one axis of a Morton code.
+uint64_t spreadBits(uint64_t x);
+
 /// The indices of `count` points (3 doubles each) sorted by the Morton code of their cell in a
 /// 2^21-per-axis grid over the box [lo, hi] (points outside it clamped to it, non-finite
 /// coordinates to its low side). Parallel; ties keep index order, so the result is the same
 /// for any thread count.
-/// x's low 21 bits spread to every third bit (bit b to bit 3b): one axis of a Morton code.
-uint64_t spreadBits(uint64_t x);
-
 std::vector<size_t> mortonOrder(const double* points, size_t count, const glm::dvec3& lo,
                                 const glm::dvec3& hi);
 

@@ -9,7 +9,7 @@
 //
 // The fast evaluation (WindingNumberTree) sums over a BVH of the triangles: a node of radius R
 // (every corner of its triangles within R of its centre c) whose centre is farther from p than
-// beta·R is replaced by the first two terms of the Taylor expansion of its double-layer
+// beta·R is replaced by the first three terms of the Taylor expansion of its double-layer
 // potential about c (the dipole, second- and third-order terms); nodes closer than that are
 // opened, and leaves (at most kWindingLeafTriangles triangles) are summed exactly. Scenes of
 // at most kWindingExactBelow triangles are always summed exactly.

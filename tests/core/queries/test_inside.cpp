@@ -31,21 +31,21 @@ using namespace test::inside;
 TEST(CheckClosed, ClosedMeshesAreClosedWithThreeHalvesEdgesPerTriangle) {
   for (const std::string spec :
        {"procedural:cube?size=2", "procedural:sphere?segments=24&rings=12"}) {
-    const SceneOf s = sceneOf(loadMesh(spec));
+    const Loaded s = sceneOf(loadMesh(spec));
     const ClosedCheck c = checkClosed(*s.scene);
     EXPECT_TRUE(c.closed) << spec;
     EXPECT_EQ(c.edges, 3 * s.mesh->triangleCount() / 2) << spec;
     EXPECT_EQ(c.boundaryEdges + c.nonManifoldEdges + c.misorientedEdges, 0u) << spec;
   }
   // Sides with vertices of their own join by position.
-  const SceneOf box = sceneOf(subdividedBox(4, false));
+  const Loaded box = sceneOf(subdividedBox(4, false));
   const ClosedCheck c = checkClosed(*box.scene);
   EXPECT_TRUE(c.closed);
   EXPECT_EQ(c.edges, 3 * box.mesh->triangleCount() / 2);
 }
 
 TEST(CheckClosed, BoxWithoutTopHasItsRimAsBoundary) {
-  const SceneOf box = sceneOf(subdividedBox(4, true));
+  const Loaded box = sceneOf(subdividedBox(4, true));
   const ClosedCheck c = checkClosed(*box.scene);
   EXPECT_FALSE(c.closed);
   EXPECT_EQ(c.boundaryEdges, 16u);  // 4 sides x 4 segments of the rim
@@ -57,7 +57,7 @@ TEST(CheckClosed, BoxWithoutTopHasItsRimAsBoundary) {
 TEST(CheckClosed, FlippedTriangleIsMisorientedOnItsThreeEdges) {
   Mesh m = subdividedBox(2, false);
   std::swap(m.indices[3 * 5 + 1], m.indices[3 * 5 + 2]);
-  const SceneOf s = sceneOf(std::move(m));
+  const Loaded s = sceneOf(std::move(m));
   const ClosedCheck c = checkClosed(*s.scene);
   EXPECT_FALSE(c.closed);
   EXPECT_EQ(c.misorientedEdges, 3u);
@@ -70,7 +70,7 @@ TEST(CheckClosed, ThreeTrianglesOnOneEdgeAreNonManifold) {
   b.triangle(a, e, b.vertex({0, 1, 0}));
   b.triangle(e, a, b.vertex({0, -1, 0}));
   b.triangle(a, e, b.vertex({0, 0, 1}));
-  const SceneOf s = sceneOf(b.mesh());
+  const Loaded s = sceneOf(b.mesh());
   const ClosedCheck c = checkClosed(*s.scene);
   EXPECT_FALSE(c.closed);
   EXPECT_EQ(c.nonManifoldEdges, 1u);
@@ -188,7 +188,7 @@ std::vector<double> joined(std::vector<double> a, const std::vector<double>& b) 
 }
 
 TEST(InsideParity, CubeHasNoErrorsWhereNaiveParityHasSome) {
-  const SceneOf cube = sceneOf(loadMesh("procedural:cube?size=2"));
+  const Loaded cube = sceneOf(loadMesh("procedural:cube?size=2"));
   const std::vector<double> points = joined(cubeGrid(), pointsAimedAt(cubeTargets(), 0, 2.0));
   const std::vector<int> truth = cubeTruth(points);
   for (int directions : {1, 5}) {
@@ -214,7 +214,7 @@ TEST(InsideParity, CubeHasNoErrorsWhereNaiveParityHasSome) {
 }
 
 TEST(InsideParity, SphereHasNoErrorsThroughPolesAndVertices) {
-  const SceneOf sphere = sceneOf(loadMesh("procedural:sphere?segments=32&rings=16"));
+  const Loaded sphere = sceneOf(loadMesh("procedural:sphere?segments=32&rings=16"));
   std::vector<glm::dvec3> targets;
   for (size_t v = 0; v < sphere.mesh->vertexCount; v += 7)
     targets.push_back(sphere.mesh->anchor + glm::dvec3(sphere.mesh->vertex(v)));
@@ -240,7 +240,7 @@ TEST(InsideParity, SphereHasNoErrorsThroughPolesAndVertices) {
 
 TEST(InsideParity, HoleFilledBunnyHasNoErrors) {
   APERTURE_REQUIRE_SHARED_MESH(path, "stanford/bun_zipper.ply");
-  const SceneOf bunny = sceneOf(holesFilled(loadMesh(path)));
+  const Loaded bunny = sceneOf(holesFilled(loadMesh(path)));
   const ClosedCheck closed = checkClosed(*bunny.scene);
   std::printf("filled bunny: %zu boundary, %zu non-manifold, %zu misoriented edges\n",
               closed.boundaryEdges, closed.nonManifoldEdges, closed.misorientedEdges);
@@ -298,7 +298,7 @@ TEST(InsideParity, InstancedCubesAreBothSolid) {
 }
 
 TEST(InsideParity, AnswersAreDeterministicOnTheSurfaceAndAlonePerPoint) {
-  const SceneOf cube = sceneOf(loadMesh("procedural:cube?size=2"));
+  const Loaded cube = sceneOf(loadMesh("procedural:cube?size=2"));
   const std::vector<double> points = cubeGrid();  // 1/4 of them on the surface
   InsideOptions o;
   o.method = InsideMethod::Parity;
@@ -341,12 +341,12 @@ void expectOneTraversalEqualsRetrace(const Scene& scene, const std::vector<doubl
 }
 
 TEST(InsideParity, OneTraversalEqualsRetraceThroughEdgesAndVertices) {
-  const SceneOf cube = sceneOf(loadMesh("procedural:cube?size=2"));
+  const Loaded cube = sceneOf(loadMesh("procedural:cube?size=2"));
   std::vector<double> cubePoints = cubeGrid();
   for (int k : {0, 1, 2}) cubePoints = joined(cubePoints, pointsAimedAt(cubeTargets(), k, 2.0));
   expectOneTraversalEqualsRetrace(*cube.scene, cubePoints, "cube");
 
-  const SceneOf sphere = sceneOf(loadMesh("procedural:sphere?segments=32&rings=16"));
+  const Loaded sphere = sceneOf(loadMesh("procedural:sphere?segments=32&rings=16"));
   std::vector<glm::dvec3> targets;
   for (size_t v = 0; v < sphere.mesh->vertexCount; ++v)
     targets.push_back(sphere.mesh->anchor + glm::dvec3(sphere.mesh->vertex(v)));
@@ -386,8 +386,8 @@ TEST(InsideParity, OneTraversalEqualsRetraceOnChunksAndInstances) {
 // The automatic choice, winding, bad input
 
 TEST(InsideOf, AutomaticIsParityWhenClosedAndWindingWhenOpen) {
-  const SceneOf closed = sceneOf(subdividedBox(8, false));
-  const SceneOf open = sceneOf(subdividedBox(8, true));
+  const Loaded closed = sceneOf(subdividedBox(8, false));
+  const Loaded open = sceneOf(subdividedBox(8, true));
   const std::vector<double> points = gridPoints(-1.3, 1.3, 9);
   const InsideResult a = insideOf(*closed.scene, points.data(), points.size() / 3);
   EXPECT_EQ(a.method, InsideMethod::Parity);
@@ -408,7 +408,7 @@ TEST(InsideOf, AutomaticIsParityWhenClosedAndWindingWhenOpen) {
 }
 
 TEST(InsideOf, KeptClosedCheckAndTreeAreUsed) {
-  const SceneOf open = sceneOf(subdividedBox(8, true));
+  const Loaded open = sceneOf(subdividedBox(8, true));
   const std::vector<double> points = gridPoints(-1.3, 1.3, 7);
   // A closedness the caller claims is taken as given: parity runs on the open box.
   ClosedCheck claimed;
@@ -429,7 +429,7 @@ TEST(InsideOf, KeptClosedCheckAndTreeAreUsed) {
 }
 
 TEST(InsideOf, NonFinitePointsAreOutsideAndCounted) {
-  const SceneOf cube = sceneOf(loadMesh("procedural:cube?size=2"));
+  const Loaded cube = sceneOf(loadMesh("procedural:cube?size=2"));
   const double nan = std::nan(""), inf = INFINITY;
   const std::vector<double> points = {0, 0, 0, nan, 0, 0, 0, inf, 0, 0.5, 0.5, 0.5};
   for (InsideMethod m : {InsideMethod::Parity, InsideMethod::Winding}) {
@@ -447,7 +447,7 @@ TEST(InsideOf, NonFinitePointsAreOutsideAndCounted) {
 }
 
 TEST(InsideOf, BadOptionsAndNamesAreErrors) {
-  const SceneOf cube = sceneOf(loadMesh("procedural:cube?size=2"));
+  const Loaded cube = sceneOf(loadMesh("procedural:cube?size=2"));
   const double p[3] = {0, 0, 0};
   for (int directions : {0, 2, 17}) {
     InsideOptions o;

@@ -111,7 +111,7 @@ std::vector<CameraParams> axisCameras() {
 }  // namespace
 
 TEST(Visibility, CubeWithPlateMatchesTheHandCount) {
-  const Built cube = build(cubeWithPlate());
+  const Loaded cube = sceneOf(cubeWithPlate());
   const Cameras cams(*cube.scene, axisCameras());
   const FaceVisibility v = faceVisibility(*cube.scene, cams.list);
 
@@ -137,7 +137,7 @@ TEST(Visibility, CubeWithPlateMatchesTheHandCount) {
 // The tiny triangle's pixel count of 0 is the renders' own: an independent bincount of the
 // six primID images agrees, and no pixel shows face 14.
 TEST(Visibility, TinyFaceIsSeenWithoutAPixel) {
-  const Built cube = build(cubeWithPlate());
+  const Loaded cube = sceneOf(cubeWithPlate());
   const Cameras cams(*cube.scene, axisCameras());
   const FaceVisibility v = faceVisibility(*cube.scene, cams.list);
   uint64_t tinyPixels = 0;
@@ -155,7 +155,7 @@ TEST(Visibility, TinyFaceIsSeenWithoutAPixel) {
 TEST(Visibility, FrontOnlyCountsTheWindingSide) {
   MeshBuilder b;
   b.triangle({-1, -1, 0}, {1, -1, 0}, {0, 1, 0});  // counter-clockwise seen from +z
-  const Built tri = build(b.mesh());
+  const Loaded tri = sceneOf(b.mesh());
   const Cameras cams(*tri.scene, {perspective({0, 0, 3}, {0, 0, 0}, {0, 1, 0}, 8, 8, 60),
                                   perspective({0, 0, -3}, {0, 0, 0}, {0, 1, 0}, 8, 8, 60)});
   const FaceVisibility both = faceVisibility(*tri.scene, cams.list);
@@ -177,7 +177,7 @@ TEST(Visibility, FrontOnlyCountsTheWindingSide) {
 TEST(Visibility, BestViewIsTheLargestProjectionTiesToTheLowerIndex) {
   MeshBuilder b;
   b.triangle({-0.5, -0.5, 0}, {0.5, -0.5, 0}, {0, 0.5, 0});
-  const Built tri = build(b.mesh());
+  const Loaded tri = sceneOf(b.mesh());
   const CameraParams far = perspective({0, 0, 6}, {0, 0, 0}, {0, 1, 0}, 32, 32, 40);
   const CameraParams near = perspective({0, 0, 3}, {0, 0, 0}, {0, 1, 0}, 32, 32, 40);
   const Cameras cams(*tri.scene, {far, near, near});
@@ -288,7 +288,7 @@ TEST(Visibility, SeenFacesAgreeWithAnIndependentPinholeAndRay) {
 TEST(Visibility, ProjectedAreaOfAFrontoParallelTriangleIsTheClosedForm) {
   MeshBuilder b;
   b.triangle({0, 0, -1}, {1, 0, -1}, {0, 1, -1});
-  const Built any = build(b.mesh());
+  const Loaded any = sceneOf(b.mesh());
   const CameraParams p = perspective({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 200, 100, 60);
   const auto cam = makeCamera(p, any.scene->renderOrigin());
   const double f = 50 / std::tan(30 * test::kDeg);
@@ -307,7 +307,7 @@ TEST(Visibility, ProjectedAreaOfAFrontoParallelTriangleIsTheClosedForm) {
 TEST(Visibility, ProjectedAreaShrinksATriangleCrossingBehindTheCamera) {
   MeshBuilder b;
   b.triangle({0, 0, -1}, {1, 0, -1}, {0, 1, -1});
-  const Built any = build(b.mesh());
+  const Loaded any = sceneOf(b.mesh());
   const CameraParams p = perspective({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 200, 100, 60);
   const auto cam = makeCamera(p, any.scene->renderOrigin());
   const Pinhole pin(p);
@@ -335,7 +335,7 @@ TEST(Visibility, BadInputsAreErrorsNamingTheValue) {
   e = test::errorOf([&] { pointVisibility(two, cams.list, {}); });
   EXPECT_NE(e.find("2 objects"), std::string::npos) << e;
 
-  const Built one = build(b.mesh());
+  const Loaded one = sceneOf(b.mesh());
   PointVisibilityOptions o;
   o.tolerance = 1.0;
   e = test::errorOf([&] { pointVisibility(*one.scene, cams.list, {{0, 0, 1}}, o); });
@@ -352,7 +352,7 @@ TEST(Visibility, BadInputsAreErrorsNamingTheValue) {
 
 // No camera: nothing is seen, every face has an empty row; progress reports each camera once.
 TEST(Visibility, EmptyCameraListAndProgress) {
-  const Built cube = build(cubeWithPlate());
+  const Loaded cube = sceneOf(cubeWithPlate());
   const FaceVisibility none = faceVisibility(*cube.scene, {});
   EXPECT_EQ(none.viewCount, std::vector<uint32_t>(15, 0));
   EXPECT_EQ(none.bestView, std::vector<int32_t>(15, -1));

@@ -113,7 +113,7 @@ Mesh sphereAndPlate(const glm::dvec3& anchor) {
 
 TEST(Visibility, PointsAgreeWithBruteForceInDouble) {
   const glm::dvec3 centre(10, -4, 3);
-  const Built scene = build(sphereAndPlate(centre));
+  const Loaded scene = sceneOf(sphereAndPlate(centre));
   const std::vector<CameraParams> params = {
       perspective(centre + glm::dvec3(0.2, 0.3, 3), centre, {0, 1, 0}, 64, 48, 30),
       perspective(centre + glm::dvec3(-2.5, 0.5, 1.5), centre, {0, 1, 0}, 40, 40, 45),
@@ -186,7 +186,7 @@ TEST(Visibility, PointsAgreeWithBruteForceInDouble) {
 TEST(Visibility, PointToleranceIsRelativeAndTowardsTheCamera) {
   MeshBuilder b;
   b.quad({-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0});
-  const Built wall = build(b.mesh());
+  const Loaded wall = sceneOf(b.mesh());
   const Cameras cams(*wall.scene, {perspective({0, 0, 5}, {0, 0, 0}, {0, 1, 0}, 32, 32, 40)});
   const std::vector<glm::dvec3> points = {
       {0.1, 0.15, 0.01}, {0.1, 0.15, -0.1}, {0.1, 0.15, 0.0}, {0.1, 0.15, -0.03}};
@@ -225,7 +225,7 @@ TEST(Visibility, TransposeRowsOfAHandMadeExample) {
 TEST(Visibility, ClassifyObservationsCountsAHandMadeScene) {
   MeshBuilder b;
   b.quad({-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0});
-  const Built wall = build(b.mesh());
+  const Loaded wall = sceneOf(b.mesh());
   const Cameras cams(*wall.scene, {perspective({0, 0, 5}, {0, 0, 0}, {0, 1, 0}, 32, 32, 60),
                                    perspective({0, 0, -5}, {0, 0, 0}, {0, 1, 0}, 32, 32, 60)});
   const std::vector<glm::dvec3> points = {{0, 0, 1}, {0, 0, -1}, {0, 0, 6}, {10, 0, 0}};

@@ -139,7 +139,7 @@ std::vector<CameraParams> sheetCameras() {
 }  // namespace
 
 TEST(VisibilityRays, NeededEqualsAllOnAWavySheetAndASphereSmallerThanPixels) {
-  const Built built = build(sheetAndSphere(150, 60));
+  const Loaded built = sceneOf(sheetAndSphere(150, 60));
   const Cameras cams(*built.scene, sheetCameras());
   expectNeededEqualsAll(*built.scene, cams);
 }
