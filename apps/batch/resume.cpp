@@ -1,18 +1,11 @@
 #include "apps/batch/resume.h"
 
-#include <signal.h>
-
 #include <algorithm>
-#include <cerrno>
-#include <climits>
 #include <filesystem>
-#include <map>
-#include <set>
 
 #include "cameras/registry/registry.h"
 #include "core/exr/exr.h"
 #include "core/exr/exr_deep.h"
-#include "core/io/atomic_file.h"
 #include "core/io/image_codec.h"
 #include "core/util/error.h"
 
@@ -170,32 +163,4 @@ std::string cameraDifference(const CameraDescription& file, const CameraDescript
     if (!d.empty()) return d;
   return "";
 }
-
-bool processAlive(long pid) {
-  if (pid <= 0 || pid > long(INT_MAX)) return false;
-  return !(::kill(pid_t(pid), 0) == -1 && errno == ESRCH);
-}
-
-std::vector<TemporaryFile> findTemporaries(const std::vector<std::string>& finalPaths,
-                                           const std::function<bool(long)>& alive) {
-  std::map<std::string, std::set<std::string>> namesByDirectory;
-  for (const std::string& path : finalPaths) {
-    const fs::path p(path);
-    namesByDirectory[p.parent_path().empty() ? "." : p.parent_path().string()].insert(
-        p.filename().string());
-  }
-  std::vector<TemporaryFile> found;
-  for (const auto& [directory, names] : namesByDirectory) {
-    std::error_code ec;
-    for (fs::directory_iterator it(directory, ec), end; !ec && it != end; it.increment(ec)) {
-      const std::optional<TemporaryName> t = parseTemporaryName(it->path().filename().string());
-      if (t && names.count(t->finalName))
-        found.push_back({it->path().string(), t->pid, alive(t->pid)});
-    }
-  }
-  std::sort(found.begin(), found.end(),
-            [](const TemporaryFile& a, const TemporaryFile& b) { return a.path < b.path; });
-  return found;
-}
-
 }  // namespace aperture::app

@@ -1,9 +1,8 @@
 #pragma once
 // `aperture batch --resume`: whether an image's existing output can be kept (it must match
-// the job, not merely exist), and the temporaries that killed processes left behind.
-#include <functional>
+// the job, not merely exist). The temporaries that killed processes left behind are found by
+// core/io/atomic_file.h (findTemporaries).
 #include <string>
-#include <vector>
 
 #include "apps/jobs/job.h"
 #include "core/engine/camera.h"
@@ -34,22 +33,5 @@ OutputCheck checkOutput(const Job& job, const JobImage& image);
 /// a calibrated camera's lens (model, parameters, pixel convention) are all equal. Matrices are
 /// not compared.
 std::string cameraDifference(const CameraDescription& file, const CameraDescription& job);
-
-/// True unless kill(pid, 0) says that no process `pid` exists (ESRCH); a PID that cannot be a
-/// process (<= 0 or beyond pid_t) counts as dead.
-bool processAlive(long pid);
-
-/// A temporary file (".NAME.tmp-PID-N…", see parseTemporaryName) found beside an output.
-struct TemporaryFile {
-  std::string path;
-  long pid = 0;
-  bool alive = false;  ///< its process still exists
-};
-
-/// The temporaries of the files `finalPaths` (those whose NAME is one of them), searched in
-/// each of their directories once; `alive` decides whether a PID's process still exists.
-/// Other files, including temporaries of other names, are not listed.
-std::vector<TemporaryFile> findTemporaries(const std::vector<std::string>& finalPaths,
-                                           const std::function<bool(long)>& alive = processAlive);
 
 }  // namespace aperture::app

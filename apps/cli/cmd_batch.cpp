@@ -29,6 +29,7 @@
 #include "cameras/files/camera_file.h"
 #include "cameras/models/calibrated.h"
 #include "cameras/registry/registry.h"
+#include "core/io/atomic_file.h"
 #include "core/io/image_codec.h"
 #include "core/util/error.h"
 

@@ -1,14 +1,20 @@
 #include "core/io/atomic_file.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <climits>
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <filesystem>
+#include <map>
+#include <set>
 
 #include "core/util/error.h"
 
@@ -167,4 +173,31 @@ void writePiecesAtomically(const std::string& finalPath, const std::vector<ByteP
   });
 }
 
+bool processAlive(long pid) {
+  if (pid <= 0 || pid > long(INT_MAX)) return false;
+  return !(::kill(pid_t(pid), 0) == -1 && errno == ESRCH);
+}
+
+std::vector<TemporaryFile> findTemporaries(const std::vector<std::string>& finalPaths,
+                                           const std::function<bool(long)>& alive) {
+  std::map<std::string, std::set<std::string>> namesByDirectory;
+  for (const std::string& path : finalPaths) {
+    const std::filesystem::path p(path);
+    namesByDirectory[p.parent_path().empty() ? "." : p.parent_path().string()].insert(
+        p.filename().string());
+  }
+  std::vector<TemporaryFile> found;
+  for (const auto& [directory, names] : namesByDirectory) {
+    std::error_code ec;
+    for (std::filesystem::directory_iterator it(directory, ec), end; !ec && it != end;
+         it.increment(ec)) {
+      const std::optional<TemporaryName> t = parseTemporaryName(it->path().filename().string());
+      if (t && names.count(t->finalName))
+        found.push_back({it->path().string(), t->pid, alive(t->pid)});
+    }
+  }
+  std::sort(found.begin(), found.end(),
+            [](const TemporaryFile& a, const TemporaryFile& b) { return a.path < b.path; });
+  return found;
+}
 }  // namespace aperture

@@ -1,5 +1,7 @@
 #pragma once
-// Write-to-temporary-then-rename, so a final name only ever holds a complete file.
+// Write-to-temporary-then-rename, so a final name only ever holds a complete file; and the
+// temporaries that killed processes left behind (findTemporaries), for batch --resume and
+// aperture.distributed.
 #include <cstddef>
 #include <functional>
 #include <optional>
@@ -51,5 +53,22 @@ struct BytePiece {
 /// Writes the pieces one after the other to `finalPath` atomically, each write checked, without
 /// joining them in memory first (large arrays go to the file from where they are).
 void writePiecesAtomically(const std::string& finalPath, const std::vector<BytePiece>& pieces);
+
+/// True unless kill(pid, 0) says that no process `pid` exists (ESRCH); a PID that cannot be a
+/// process (<= 0 or beyond pid_t) counts as dead.
+bool processAlive(long pid);
+
+/// A temporary file (".NAME.tmp-PID-N…", see parseTemporaryName) found beside an output.
+struct TemporaryFile {
+  std::string path;
+  long pid = 0;
+  bool alive = false;  ///< its process still exists
+};
+
+/// The temporaries of the files `finalPaths` (those whose NAME is one of them), searched in
+/// each of their directories once; `alive` decides whether a PID's process still exists.
+/// Other files, including temporaries of other names, are not listed.
+std::vector<TemporaryFile> findTemporaries(const std::vector<std::string>& finalPaths,
+                                           const std::function<bool(long)>& alive = processAlive);
 
 }  // namespace aperture

@@ -30,6 +30,7 @@ from ._aperture import (
     __version__,
     _Scene,
     _write,
+    _write_npy,
     camera_parameters,
     camera_types,
     load_cameras as _load_cameras,
@@ -472,7 +473,7 @@ class Scene:
         self._last_query = {"what": "signed_distance_grid", "points": out.size,
                             "non_finite": 0, "method": methods.pop() if methods else None}
         if path is not None:
-            _save_npy_atomically(os.fspath(path), out)
+            _write_npy(os.fspath(path), out)
         return out
 
     def _point_queries(
@@ -577,20 +578,6 @@ def _grid_resolution(resolution: int | Sequence[int]) -> tuple[int, int, int]:
     if len(r) != 3 or any(int(v) != v or v < 2 for v in r):
         raise ValueError(f"signed_distance_grid: resolution must be an int >= 2 or three of them, not {resolution!r}")
     return int(r[0]), int(r[1]), int(r[2])
-
-
-def _save_npy_atomically(path: str, array: np.ndarray) -> None:
-    """np.save to a temporary file beside ``path``, then renamed over it: no partial file."""
-    directory = os.path.dirname(os.path.abspath(path))
-    tmp = os.path.join(directory, f".{os.path.basename(path)}.{os.getpid()}.tmp")
-    try:
-        with open(tmp, "wb") as f:
-            np.save(f, array)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
 
 
 def _reusable(previous: dict[str, Any] | None, chunk: list[Camera]) -> dict[str, np.ndarray] | None:

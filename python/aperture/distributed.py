@@ -29,12 +29,12 @@ import numpy as np
 import aperture as _package
 
 from . import Camera, Scene, _aov_list, _scene_of_spec, write
-from ._aperture import _parse_temporary_name
+from ._aperture import _dataset_extensions, _dead_temporaries
 
 __all__ = ["Renderer", "camera_rows", "forget_scenes", "scene_builds"]
 
 # The dataset formats a Renderer writes (core/io/dataset_image.h, as batch's `outputs`).
-_DATASET_EXTENSIONS = (".png", ".pfm", ".npy", ".tif", ".tiff")
+_DATASET_EXTENSIONS = tuple(_dataset_extensions())
 
 # The scenes this process built for Renderers, by Renderer key, most recently used last: a
 # worker that runs many tasks of one Renderer builds its scene once.
@@ -176,34 +176,14 @@ def _fill(pattern: str, aov: str, name: str) -> str:
     return pattern.replace("{name}", name).replace("{image}", image).replace("{aov}", aov)
 
 
-def _process_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return pid > 0
-
-
 def _remove_dead_temporaries(paths: list[str]) -> None:
     """Removes the temporaries of `paths` (".NAME.tmp-PID-N...") whose process is gone on this
     host, as ``batch --resume`` does: what a worker killed while writing left behind."""
-    wanted: dict[str, set[str]] = {}
-    for p in paths:
-        wanted.setdefault(os.path.dirname(p), set()).add(os.path.basename(p))
-    for directory, names in wanted.items():
+    for temporary in _dead_temporaries(paths):
         try:
-            entries = os.listdir(directory)
+            os.remove(temporary)
         except FileNotFoundError:
-            continue
-        for entry in entries:
-            parsed = _parse_temporary_name(entry)
-            if parsed and parsed[0] in names and not _process_alive(parsed[1]):
-                try:
-                    os.remove(os.path.join(directory, entry))
-                except FileNotFoundError:
-                    pass
+            pass
 
 
 class Renderer:

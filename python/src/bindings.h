@@ -34,6 +34,6 @@ void bindCamera(nb::module_& m);       ///< Camera, load_cameras
 void bindScene(nb::module_& m);        ///< Scene, Scene.render
 void bindImageIo(nb::module_& m);      ///< read_exr, write, read
 void bindAovTable(nb::module_& m);     ///< _aov_table, _AovRegistration (for the tests)
-void bindDistributed(nb::module_& m);  ///< _parse_temporary_name (aperture.distributed)
+void bindDistributed(nb::module_& m);  ///< _dead_temporaries, _dataset_extensions (distributed)
 
 }  // namespace aperture::python

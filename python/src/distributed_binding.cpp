@@ -1,30 +1,35 @@
-// What aperture.distributed needs of the core beyond rendering and writing: the one definition
-// of a temporary file's name (core/io/atomic_file.h), so that a worker can find the
-// temporaries a killed worker left beside the files it is about to write.
-#include <nanobind/stl/optional.h>
-#include <nanobind/stl/pair.h>
+// What aperture.distributed needs of the core beyond rendering and writing: the temporaries a
+// killed worker left beside the files it is about to write (core/io/atomic_file.h, the one
+// definition of a temporary file's name and of when its process is gone), and the dataset
+// formats a Renderer writes (core/io/dataset_image.h).
 #include <nanobind/stl/string.h>
+#include <nanobind/stl/vector.h>
 
-#include <optional>
 #include <string>
-#include <utility>
+#include <vector>
 
 #include "bindings.h"
 #include "core/io/atomic_file.h"
+#include "core/io/dataset_image.h"
 
 namespace aperture::python {
 
 void bindDistributed(nb::module_& m) {
   m.def(
-      "_parse_temporary_name",
-      [](const std::string& fileName) -> std::optional<std::pair<std::string, long>> {
-        const std::optional<TemporaryName> t = parseTemporaryName(fileName);
-        if (!t) return std::nullopt;
-        return std::make_pair(t->finalName, t->pid);
+      "_dead_temporaries",
+      [](const std::vector<std::string>& paths) {
+        std::vector<std::string> dead;
+        for (const TemporaryFile& t : findTemporaries(paths))
+          if (!t.alive) dead.push_back(t.path);
+        return dead;
       },
-      nb::arg("file_name"),
-      "(NAME, PID) of a temporary file name '.NAME.tmp-PID-N...' made by an atomic write, "
-      "None for any other name.");
+      nb::arg("paths"),
+      "The temporaries ('.NAME.tmp-PID-N...') of the files `paths` whose process is gone on "
+      "this host (a PID that cannot be a process counts as gone), sorted; as batch --resume "
+      "finds them.");
+  m.def(
+      "_dataset_extensions", [] { return datasetExtensions(); },
+      "The extensions (lower case, with the dot) of the dataset formats a Renderer writes.");
 }
 
 }  // namespace aperture::python

@@ -1,17 +1,21 @@
 // Image files from Python: read_exr (core/exr/exr.h, every AOV of an EXR the CLI wrote), write
-// and read (the dataset formats of core/io/dataset_image.h: .png .pfm .npy .tif).
+// and read (the dataset formats of core/io/dataset_image.h: .png .pfm .npy .tif), and _write_npy
+// (an array of any shape as .npy: core/io/npy.h's header, written atomically).
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
 
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "aov_arrays.h"
 #include "bindings.h"
 #include "core/aov/aov_table.h"
 #include "core/exr/exr.h"
+#include "core/io/atomic_file.h"
 #include "core/io/dataset_image.h"
+#include "core/io/npy.h"
 #include "core/util/error.h"
 #include "file_errors.h"
 
@@ -73,6 +77,20 @@ nb::object readArray(const std::string& path) {
                                          isFloat ? nb::dtype<float>() : nb::dtype<uint32_t>()));
 }
 
+/// Writes a C-order float32 or uint32 array of any shape to `path` as .npy, atomically.
+void writeNpy(const std::string& path, const AnyArray& array) {
+  const bool isFloat = array.dtype() == nb::dtype<float>();
+  if (!isFloat && array.dtype() != nb::dtype<uint32_t>())
+    throw Error(cat(path, ": the array must be float32 or uint32"));
+  std::vector<uint64_t> shape;
+  for (size_t d = 0; d < array.ndim(); ++d) shape.push_back(uint64_t(array.shape(d)));
+  const std::string header = npyHeader(isFloat ? "<f4" : "<u4", shape);
+  nb::gil_scoped_release release;
+  writingFile(path, [&] {
+    writePiecesAtomically(path, {{header.data(), header.size()}, {array.data(), array.nbytes()}});
+  });
+}
+
 nb::dict readExrArrays(const std::string& path) {
   auto fb = std::make_shared<Framebuffer>();
   readingFiles({path}, [&] { *fb = readExr(path); });
@@ -87,6 +105,9 @@ void bindImageIo(nb::module_& m) {
         "float32 or uint32 arrays (H, W[, C]).");
   m.def("_write", &writeArray, nb::arg("path"), nb::arg("array"), nb::arg("depth_scale"),
         nb::arg("aov").none());
+  m.def("_write_npy", &writeNpy, nb::arg("path"), nb::arg("array"),
+        "A C-contiguous float32 or uint32 array of any shape written to `path` as .npy, "
+        "atomically (no partial file, temporaries named as every atomic write's).");
   m.def("read", &readArray, nb::arg("path"),
         "A .pfm or .npy written by aperture.write (or the CLI) as an array (H, W[, C]).");
 }

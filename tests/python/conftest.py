@@ -12,6 +12,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
@@ -29,6 +30,46 @@ def cli() -> Path:
 def run_cli(cli: Path, *args: str) -> subprocess.CompletedProcess[str]:
     """Runs the command line; returns the finished process (stdout, stderr as text)."""
     return subprocess.run([str(cli), *args], capture_output=True, text=True, timeout=300)
+
+
+def uv_sphere(
+    rings: int = 24,
+    segments: int = 48,
+    radius: float = 1.0,
+    bumps: float = 0.0,
+    seed: int = 7,
+    centre: tuple[float, float, float] = (0.0, 0.0, 0.0),
+) -> tuple[np.ndarray, np.ndarray]:
+    """A UV sphere built here (not by aperture): float64 vertices (rings + 1 rows of `segments`,
+    y up, at `centre`) and int64 faces. `bumps` > 0 scales each vertex's radius by 1 + bumps
+    times a standard normal drawn with `seed`."""
+    theta = np.linspace(0, np.pi, rings + 1)[:, None]
+    phi = np.linspace(0, 2 * np.pi, segments, endpoint=False)[None, :]
+    r = np.full((rings + 1, segments), radius)
+    if bumps:
+        r = radius * (1.0 + bumps * np.random.default_rng(seed).standard_normal((rings + 1, segments)))
+    v = np.stack([r * np.sin(theta) * np.cos(phi), r * np.cos(theta), r * np.sin(theta) * np.sin(phi)], -1)
+    faces = []
+    for i in range(rings):
+        for j in range(segments):
+            a, b = i * segments + j, i * segments + (j + 1) % segments
+            c, d = a + segments, b + segments
+            faces += [(a, c, b), (b, c, d)]
+    return v.reshape(-1, 3) + np.asarray(centre, dtype=np.float64), np.array(faces, dtype=np.int64)
+
+
+def bits(a: np.ndarray) -> np.ndarray:
+    """The array's values as raw bits: equal bits means equal floats, NaN and inf included."""
+    return a.view(np.uint32)
+
+
+def assert_same_bits(a: dict[str, np.ndarray], b: dict[str, np.ndarray], same_order: bool = False) -> None:
+    """The two dicts hold the same names (in the same order with `same_order`) and, per name,
+    arrays of one dtype and shape with equal bits."""
+    assert (list(a) == list(b)) if same_order else (sorted(a) == sorted(b)), (list(a), list(b))
+    for name in a:
+        assert a[name].dtype == b[name].dtype and a[name].shape == b[name].shape, name
+        assert np.array_equal(bits(a[name]), bits(b[name])), name
 
 
 def cli_error(cli: Path, *args: str) -> str:

@@ -186,6 +186,18 @@ def test_temporaries_of_dead_processes_are_removed(tmp_path: Path, batch_files: 
     assert_equals_batch(tmp_path, batch_files)
 
 
+def test_a_temporary_of_a_pid_beyond_any_process_counts_as_dead(tmp_path: Path) -> None:
+    """A PID that cannot be a process (2**40, beyond pid_t) is gone, as for batch --resume: the
+    temporary is removed and the camera renders."""
+    (tmp_path / "depth").mkdir()
+    impossible = tmp_path / "depth" / f".view02.png.tmp-{2**40}-0.png"
+    impossible.write_bytes(b"partial")
+    out = renderer(tmp_path)(batches()[0])
+    assert out["rendered"].all()
+    assert not impossible.exists()
+    assert (tmp_path / "depth" / "view02.png").exists()
+
+
 def test_a_pickled_renderer_builds_once_per_process(tmp_path: Path) -> None:
     r = renderer(tmp_path)
     data = pickle.dumps(r)

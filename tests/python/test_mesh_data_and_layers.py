@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import aperture
-from conftest import run_cli
+from conftest import assert_same_bits, run_cli
 
 EYE, AT = (0.3, 0.4, 3.0), (0.0, 0.0, -0.5)
 
@@ -48,10 +48,6 @@ def vec(v: tuple[float, ...]) -> str:
     return ",".join(repr(float(x)) for x in v)
 
 
-def same_bits(a: np.ndarray, b: np.ndarray) -> bool:
-    return a.dtype == b.dtype and a.shape == b.shape and np.array_equal(a.view(np.uint32), b.view(np.uint32))
-
-
 AOVS = "depth,normal,shading-normal,primid,face.object_id,vertex.label"
 
 
@@ -70,9 +66,7 @@ def test_mesh_data_and_layers_equal_the_cli(tmp_path: Path, cli: Path, frame: st
     scene = aperture.Scene(mesh)
     camera = aperture.Camera(eye=EYE, at=AT, fov=50, size=(48, 40))
     mine = scene.render(camera, aovs=AOVS, layers=3, normal_frame=frame)
-    assert sorted(mine) == sorted(reference)
-    for name, ref in reference.items():
-        assert same_bits(mine[name], ref), name
+    assert_same_bits(mine, reference)
     # The scene really shows what the test is about: both ids, two layers, tilted normals.
     ids = set(np.unique(mine["face.object_id"]).tolist())
     assert {10, 11, 12, 13, 20} <= ids
@@ -95,8 +89,7 @@ def test_stacked_frames_equal_single_renders(tmp_path: Path) -> None:
     assert together["layers.primid"].shape == (5, 2, 28, 36)
     for k, cam in enumerate(cams):
         alone = scene.render(cam, aovs=AOVS + ",color", layers=2)
-        for name, a in alone.items():
-            assert same_bits(together[name][k], a), (name, k)
+        assert_same_bits({name: together[name][k] for name in alone}, alone)
     assert not np.array_equal(together["depth"][0], together["depth"][4]), "the cameras differ"
 
 

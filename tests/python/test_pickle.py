@@ -16,6 +16,7 @@ import pytest
 
 import aperture
 from aperture import distributed
+from conftest import assert_same_bits, uv_sphere
 
 AOVS = "depth,normal,primid"
 EYE, AT = (0.4, 1.1, 4.0), (0.0, 0.2, 0.0)
@@ -32,13 +33,6 @@ CAMERAS = [
 ]
 
 
-def same_bits(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> None:
-    assert sorted(a) == sorted(b)
-    for name in a:
-        assert a[name].dtype == b[name].dtype and a[name].shape == b[name].shape, name
-        assert np.array_equal(a[name].view(np.uint32), b[name].view(np.uint32)), name
-
-
 def views() -> list[aperture.Camera]:
     return [aperture.Camera(eye=EYE, at=AT, fov=40, size=(40, 30)),
             aperture.Camera(eye=(-3.0, 0.5, 2.0), at=AT, fov=30, size=(40, 30))]
@@ -46,18 +40,8 @@ def views() -> list[aperture.Camera]:
 
 def sphere_arrays(dtype: type) -> tuple[np.ndarray, np.ndarray]:
     """A UV sphere of radius 1.2, built here (not by aperture)."""
-    rings, segments = 12, 24
-    theta = np.linspace(0, np.pi, rings + 1)
-    phi = np.linspace(0, 2 * np.pi, segments, endpoint=False)
-    t, p = np.meshgrid(theta, phi, indexing="ij")
-    v = 1.2 * np.stack([np.sin(t) * np.cos(p), np.cos(t), np.sin(t) * np.sin(p)], axis=-1).reshape(-1, 3)
-    faces = []
-    for i in range(rings):
-        for j in range(segments):
-            a, b = i * segments + j, i * segments + (j + 1) % segments
-            c, d = a + segments, b + segments
-            faces += [(a, c, b), (b, c, d)]
-    return v.astype(dtype), np.array(faces, dtype=np.int64)
+    v, f = uv_sphere(rings=12, segments=24, radius=1.2)
+    return v.astype(dtype), f
 
 
 @pytest.mark.parametrize("spec", ["procedural:default", "procedural:sphere?radius=1.5"])
@@ -68,7 +52,7 @@ def test_a_pickled_path_scene_renders_the_same_bits(spec: str) -> None:
     again = pickle.loads(data)
     assert again is not scene and again.triangle_count == scene.triangle_count
     assert again._spec["quality"] == "medium" and again._spec["compact"] is True
-    same_bits(scene.render(views(), aovs=AOVS), again.render(views(), aovs=AOVS))
+    assert_same_bits(scene.render(views(), aovs=AOVS), again.render(views(), aovs=AOVS))
 
 
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
@@ -79,7 +63,7 @@ def test_a_pickled_array_scene_renders_the_same_bits(dtype: type) -> None:
     assert again._spec["vertices"].dtype == dtype and again._spec["robust"] is False
     out = scene.render(views(), aovs=AOVS)
     assert np.isfinite(out["depth"]).sum() > 500, "the views should see the sphere"
-    same_bits(out, again.render(views(), aovs=AOVS))
+    assert_same_bits(out, again.render(views(), aovs=AOVS))
 
 
 def test_a_scene_copies() -> None:
@@ -89,7 +73,7 @@ def test_a_scene_copies() -> None:
     scene = aperture.Scene("procedural:default", world_space=True)
     for other in (copy.copy(scene), copy.deepcopy(scene)):
         assert other._scene is not scene._scene
-        same_bits(scene.render(views(), aovs=AOVS), other.render(views(), aovs=AOVS))
+        assert_same_bits(scene.render(views(), aovs=AOVS), other.render(views(), aovs=AOVS))
 
 
 def test_a_pickled_file_scene_is_found_from_another_directory(
@@ -102,7 +86,7 @@ def test_a_pickled_file_scene_is_found_from_another_directory(
     monkeypatch.chdir(tmp_path)
     again = pickle.loads(data)
     camera = aperture.Camera(eye=(-0.02, 0.11, 0.22), at=(-0.02, 0.11, 0.0), fov=40, size=(40, 30))
-    same_bits(scene.render(camera, aovs=AOVS), again.render(camera, aovs=AOVS))
+    assert_same_bits(scene.render(camera, aovs=AOVS), again.render(camera, aovs=AOVS))
 
 
 def test_unpickling_builds_once_and_counts(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -149,8 +133,8 @@ def test_a_camera_round_trips(keywords: dict) -> None:
     assert again.name == "left/0001.jpg"
     scene = aperture.Scene("procedural:sphere?radius=1.5")
     reference = scene.render(camera, aovs=AOVS)
-    same_bits(reference, scene.render(again, aovs=AOVS))
-    same_bits(reference, scene.render(rebuilt, aovs=AOVS))
+    assert_same_bits(reference, scene.render(again, aovs=AOVS))
+    assert_same_bits(reference, scene.render(rebuilt, aovs=AOVS))
 
 
 def test_a_camera_of_a_file_round_trips(tmp_path: Path, cli: Path) -> None:

@@ -9,23 +9,12 @@ import numpy as np
 import pytest
 
 import aperture
+from conftest import uv_sphere
 
 
-def bumpy_sphere(rings: int = 24, segments: int = 48, seed: int = 7) -> tuple[np.ndarray, np.ndarray]:
+def bumpy_sphere(rings: int = 24, segments: int = 48) -> tuple[np.ndarray, np.ndarray]:
     """A UV sphere with random radial bumps, far from the origin (so anchoring matters)."""
-    rng = np.random.default_rng(seed)
-    theta = np.linspace(0, np.pi, rings + 1)[:, None]
-    phi = np.linspace(0, 2 * np.pi, segments, endpoint=False)[None, :]
-    r = 1.0 + 0.05 * rng.standard_normal((rings + 1, segments))
-    v = np.stack([r * np.sin(theta) * np.cos(phi), r * np.cos(theta), r * np.sin(theta) * np.sin(phi)], -1)
-    v = v.reshape(-1, 3) + np.array([1000.25, -3.5, 2.0])
-    faces = []
-    for i in range(rings):
-        for j in range(segments):
-            a, b = i * segments + j, i * segments + (j + 1) % segments
-            c, d = a + segments, b + segments
-            faces += [(a, c, b), (b, c, d)]
-    return v, np.array(faces, dtype=np.int64)
+    return uv_sphere(rings, segments, bumps=0.05, centre=(1000.25, -3.5, 2.0))
 
 
 def write_ply(path: Path, v: np.ndarray, f: np.ndarray) -> None:

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <climits>
 #include <cstring>
 #include <exception>
 #include <filesystem>
@@ -54,6 +55,26 @@ TEST(ResumeIo, TemporaryNamesParseBackToTheirParts) {
                            ".frame.exr.tmp-4242-17x", ".tmp-4242-1", "d/.f.exr.tmp-1-2",
                            ".frame.exr", ".frame.exr.tmp--1"})
     EXPECT_FALSE(parseTemporaryName(name).has_value()) << name;
+}
+
+TEST(ResumeIo, APidThatCannotBeAProcessCountsAsDead) {
+  EXPECT_TRUE(processAlive(long(::getpid())));
+  for (const long pid : {0L, -1L, long(INT_MAX) + 1, 1L << 40})
+    EXPECT_FALSE(processAlive(pid)) << pid;
+}
+
+TEST(ResumeIo, TemporariesAreFoundOnlyForTheGivenNames) {
+  const std::string dir = test::scratchDir();
+  for (const char* name : {".a.exr.tmp-5-0", ".a.exr.tmp-6-1.png", ".b.exr.tmp-5-0", "a.exr"})
+    test::writeFile(dir + "/" + name, "partial");
+  const std::vector<TemporaryFile> found =
+      findTemporaries({dir + "/a.exr"}, [](long pid) { return pid == 6; });
+  ASSERT_EQ(found.size(), 2u);
+  EXPECT_EQ(found[0].path, dir + "/.a.exr.tmp-5-0");
+  EXPECT_EQ(found[0].pid, 5);
+  EXPECT_FALSE(found[0].alive);
+  EXPECT_EQ(found[1].path, dir + "/.a.exr.tmp-6-1.png");
+  EXPECT_TRUE(found[1].alive);
 }
 
 TEST(Atomic, TemporaryPathIsAHiddenSiblingWithSuffix) {
