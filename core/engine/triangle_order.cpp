@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "core/util/huge_pages.h"
+#include "core/util/morton.h"
 #include "core/util/parallel.h"
 
 namespace aperture {
@@ -15,13 +16,6 @@ constexpr int kAxisBits = 5;  // 32 cells per axis: 15-bit Morton codes
 constexpr uint16_t kNonFiniteKey = uint16_t(1) << (3 * kAxisBits);  // sorts last
 constexpr size_t kBuckets = size_t(kNonFiniteKey) + 1;
 constexpr size_t kTrianglesPerBlock = size_t(1) << 22;
-
-/// The bits of `v` (kAxisBits of them) spread to every third bit.
-uint32_t spreadBits(uint32_t v) {
-  uint32_t spread = 0;
-  for (int b = 0; b < kAxisBits; ++b) spread |= ((v >> b) & 1u) << (3 * b);
-  return spread;
-}
 
 /// The Morton code of the 32³ cell holding each centroid, from its centroidCells cell (the
 /// 64³ grid's cells, two to a side in each of ours).

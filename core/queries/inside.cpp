@@ -11,10 +11,10 @@
 
 #include "core/engine/intersect_scene.h"
 #include "core/engine/packet.h"
-#include "core/queries/morton_order.h"
 #include "core/queries/winding_number.h"
 #include "core/queries/world_triangles.h"
 #include "core/util/error.h"
+#include "core/util/morton.h"
 #include "core/util/parallel.h"
 #include "core/util/spelling.h"
 

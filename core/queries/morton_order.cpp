@@ -7,19 +7,10 @@
 #include <cstdint>
 #include <utility>
 
+#include "core/util/morton.h"
 #include "core/util/parallel.h"
 
 namespace aperture {
-
-uint64_t spreadBits(uint64_t x) {
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffull;
-  x = (x | x << 16) & 0x1f0000ff0000ffull;
-  x = (x | x << 8) & 0x100f00f00f00f00full;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-  x = (x | x << 2) & 0x1249249249249249ull;
-  return x;
-}
 
 std::vector<size_t> mortonOrder(const double* points, size_t count, const glm::dvec3& lo,
                                 const glm::dvec3& hi) {

@@ -1,15 +1,12 @@
 #pragma once
 // Points in Morton (Z-order) order: queries over many points visit them so that consecutive
 // points are neighbours in space and share cached nodes: winding numbers and closest points
-// (mortonOrder), parity (its own bucketed order over spreadBits' codes, inside.cpp).
+// (mortonOrder), parity (its own bucketed order over core/util/morton.h's codes, inside.cpp).
 #include <cstddef>
 #include <glm/glm.hpp>
 #include <vector>
 
 namespace aperture {
-
-/// x's low 21 bits spread to every third bit (bit b to bit 3b): one axis of a Morton code.
-uint64_t spreadBits(uint64_t x);
 
 /// The indices of `count` points (3 doubles each) sorted by the Morton code of their cell in a
 /// 2^21-per-axis grid over the box [lo, hi] (points outside it clamped to it, non-finite
