@@ -47,8 +47,8 @@ InsideOptions KeptInsideAnswers::prepare(const Scene& scene, InsideOptions optio
     options.closed = &*closed_;
   }
   const bool winding =
-      options.method == InsideMethod::Winding ||
-      (options.method == InsideMethod::Automatic && options.closed && !options.closed->closed);
+      resolvedInsideMethod(options.method, options.closed && options.closed->closed) ==
+      InsideMethod::Winding;
   if (winding && !options.windingTree) {
     if (!tree_) tree_ = std::make_unique<WindingNumberTree>(worldTriangleCorners(scene));
     options.windingTree = tree_.get();

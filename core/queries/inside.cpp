@@ -538,16 +538,20 @@ glm::vec3 parityDirection(int k) {
   return parityDirections().d[k];
 }
 
+InsideMethod resolvedInsideMethod(InsideMethod asked, bool closed) {
+  if (asked != InsideMethod::Automatic) return asked;
+  return closed ? InsideMethod::Parity : InsideMethod::Winding;
+}
+
 InsideResult insideOf(const Scene& scene, const double* points, size_t count,
                       const InsideOptions& options) {
   checkOptions(options);
   if (worldObjects(scene).triangles == 0) throw Error("insideOf: the scene has no triangles");
   InsideResult result;
-  result.method = options.method;
-  if (result.method == InsideMethod::Automatic)
-    result.method = (options.closed ? options.closed->closed : checkClosed(scene).closed)
-                        ? InsideMethod::Parity
-                        : InsideMethod::Winding;
+  const bool automatic = options.method == InsideMethod::Automatic;
+  const bool closed =
+      automatic && (options.closed ? options.closed->closed : checkClosed(scene).closed);
+  result.method = resolvedInsideMethod(options.method, closed);
   result.inside.assign(count, 0);
   if (result.method == InsideMethod::Parity)
     insideByParity(scene, points, count, options, result);

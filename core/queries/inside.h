@@ -41,6 +41,9 @@ enum class InsideMethod { Automatic, Parity, Winding };
 /// with "did you mean".
 const char* insideMethodName(InsideMethod method);
 InsideMethod parseInsideMethod(const std::string& name);
+/// The method insideOf runs when asked for `asked` on a scene that is `closed` (checkClosed):
+/// `asked`, or for Automatic parity when closed and winding otherwise.
+InsideMethod resolvedInsideMethod(InsideMethod asked, bool closed);
 
 /// Whether the scene's surface is closed: every edge of every object (edges by vertex
 /// position in world space, double, so that split vertices of a PLY or glTF still join) is
